@@ -1,0 +1,54 @@
+//! The visibility-backend interface that hierarchical methods are written
+//! against (DESIGN.md, "The backend interface").
+//!
+//! A backend owns the scene's geometry, a depth buffer and a clock. Methods
+//! issue draws and occlusion queries in order; the backend answers queries as a
+//! GPU would: exactly (pixel counts), but only after the query has passed
+//! through the GPU queue plus a read-back latency.
+
+use crate::camera::Camera;
+use crate::geometry::Aabb;
+use crate::stats::FrameStats;
+
+/// Handle of an issued occlusion query, valid until the frame ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct QueryHandle(pub u32);
+
+/// A renderer that can draw instances and answer occlusion queries.
+pub trait Backend {
+    /// Starts a frame seen by `camera`: clears depth and statistics.
+    fn begin_frame(&mut self, camera: &Camera);
+
+    /// Draws the given instances in order, one draw call each. Counts draw
+    /// calls, triangles and state changes (material switches).
+    fn draw(&mut self, instances: &[u32]);
+
+    /// Issues one occlusion query over the union of the boxes' surfaces (a
+    /// multi-query when there are several): the result is the number of pixels
+    /// of the boxes that pass the depth test, with depth writes off. A box that
+    /// touches the camera's near region ([`Camera::box_touches_near_region`])
+    /// cannot be rasterized soundly and makes the query count as visible.
+    fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle;
+
+    /// Whether the query's result can be read without waiting. Never blocks.
+    fn is_available(&mut self, query: QueryHandle) -> bool;
+
+    /// The query's visible-pixel count, waiting for it if needed; the time
+    /// spent waiting is the frame's wait time.
+    fn result(&mut self, query: QueryHandle) -> u64;
+
+    /// Charges the CPU cost of visiting `nodes` hierarchy nodes.
+    fn traverse(&mut self, nodes: u64);
+
+    /// Ends the frame and returns its statistics.
+    fn end_frame(&mut self) -> FrameStats;
+
+    /// The depth image of the last finished frame, row by row, for the
+    /// correctness rule (DESIGN.md). Costs nothing on the frame's clock.
+    fn depth_image(&mut self) -> Vec<f32>;
+
+    /// Oracle pass, outside any frame's clock: of `candidates`, the instances
+    /// with at least one pixel in the final depth image of drawing all of them
+    /// from `camera` (ties included). Used by `opt`.
+    fn visible_instances(&mut self, camera: &Camera, candidates: &[u32]) -> Vec<u32>;
+}

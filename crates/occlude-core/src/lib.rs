@@ -1,0 +1,22 @@
+//! Core of `occlude`: geometry, the scene model, spatial hierarchies, the
+//! visibility-backend interface and the culling methods written once against it.
+//!
+//! Data flows top to bottom (see `docs/architecture.md`):
+//! scene -> hierarchy -> culling method -> backend -> frame statistics.
+
+pub mod backend;
+pub mod camera;
+pub mod geometry;
+pub mod hierarchy;
+pub mod methods;
+pub mod path;
+pub mod scene;
+pub mod stats;
+
+pub use backend::{Backend, QueryHandle};
+pub use camera::{Camera, Frustum, Visibility};
+pub use geometry::Aabb;
+pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use path::{CameraPath, Keyframe};
+pub use scene::{Instance, Mesh, Scene, SceneError};
+pub use stats::FrameStats;

@@ -1,0 +1,125 @@
+//! Camera paths: keyframes with smooth (Catmull-Rom) interpolation, sampled to
+//! a fixed number of frames so every method sees the same walkthrough.
+
+use crate::camera::Camera;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// One keyframe of a walkthrough.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Keyframe {
+    /// Time in seconds (strictly increasing along a path).
+    pub time: f32,
+    /// Eye position.
+    pub position: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f32,
+}
+
+/// A walkthrough: keyframes in time order.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CameraPath {
+    /// The keyframes, sorted by time.
+    pub keyframes: Vec<Keyframe>,
+}
+
+/// Catmull-Rom spline through `p1..p2` with neighbours `p0`, `p3`, at `t` in `[0, 1]`.
+fn catmull_rom(p0: Vec3, p1: Vec3, p2: Vec3, p3: Vec3, t: f32) -> Vec3 {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    0.5 * ((2.0 * p1)
+        + (p2 - p0) * t
+        + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
+        + (3.0 * p1 - p0 - 3.0 * p2 + p3) * t3)
+}
+
+impl CameraPath {
+    /// A path through the given keyframes, evenly spaced one second apart.
+    pub fn through(points: impl IntoIterator<Item = (Vec3, Vec3)>, fov_y_deg: f32) -> Self {
+        let keyframes = points
+            .into_iter()
+            .enumerate()
+            .map(|(i, (position, target))| Keyframe { time: i as f32, position, target, fov_y_deg })
+            .collect();
+        Self { keyframes }
+    }
+
+    /// Duration from the first to the last keyframe.
+    pub fn duration(&self) -> f32 {
+        match (self.keyframes.first(), self.keyframes.last()) {
+            (Some(a), Some(b)) => b.time - a.time,
+            _ => 0.0,
+        }
+    }
+
+    /// The interpolated keyframe at time `t` (clamped to the path).
+    pub fn at(&self, t: f32) -> Option<Keyframe> {
+        let k = &self.keyframes;
+        let first = k.first()?;
+        if k.len() == 1 || t <= first.time {
+            return Some(*first);
+        }
+        let last = k.last()?;
+        if t >= last.time {
+            return Some(*last);
+        }
+        let i = k.partition_point(|f| f.time <= t).clamp(1, k.len() - 1) - 1;
+        let (a, b) = (k[i], k[i + 1]);
+        let p0 = k[i.saturating_sub(1)];
+        let p3 = k[(i + 2).min(k.len() - 1)];
+        let s = ((t - a.time) / (b.time - a.time).max(f32::EPSILON)).clamp(0.0, 1.0);
+        Some(Keyframe {
+            time: t,
+            position: catmull_rom(p0.position, a.position, b.position, p3.position, s),
+            target: catmull_rom(p0.target, a.target, b.target, p3.target, s),
+            fov_y_deg: a.fov_y_deg + (b.fov_y_deg - a.fov_y_deg) * s,
+        })
+    }
+
+    /// `frames` cameras evenly spaced in time over the whole path.
+    pub fn sample(&self, frames: usize, aspect: f32, near: f32, far: f32) -> Vec<Camera> {
+        let start = self.keyframes.first().map_or(0.0, |k| k.time);
+        let span = self.duration();
+        (0..frames)
+            .filter_map(|f| {
+                let t = if frames > 1 { start + span * f as f32 / (frames - 1) as f32 } else { start };
+                self.at(t)
+            })
+            .map(|k| Camera {
+                position: k.position,
+                target: k.target,
+                up: Vec3::Y,
+                fov_y_deg: k.fov_y_deg,
+                aspect,
+                near,
+                far,
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampling_hits_keyframes_at_ends_and_interpolates_between() {
+        let path = CameraPath::through(
+            [(Vec3::ZERO, Vec3::X), (Vec3::new(10.0, 0.0, 0.0), Vec3::X * 20.0), (Vec3::new(20.0, 0.0, 0.0), Vec3::X * 30.0)],
+            60.0,
+        );
+        let cams = path.sample(5, 1.0, 0.1, 100.0);
+        assert_eq!(cams.len(), 5);
+        assert_eq!(cams[0].position, Vec3::ZERO);
+        assert_eq!(cams[4].position, Vec3::new(20.0, 0.0, 0.0));
+        assert!((cams[2].position - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-4);
+        assert!(cams[1].position.x > 0.0 && cams[1].position.x < 10.0);
+    }
+
+    #[test]
+    fn empty_path_samples_nothing() {
+        assert!(CameraPath::default().sample(10, 1.0, 0.1, 1.0).is_empty());
+    }
+}

@@ -1,0 +1,170 @@
+//! The scene model: indexed triangle meshes shared by instances.
+
+use crate::geometry::Aabb;
+use crate::path::CameraPath;
+use glam::{Mat4, Vec3};
+use thiserror::Error;
+
+/// An indexed triangle mesh in its own (object) space.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Three indices per triangle, counter-clockwise seen from outside.
+    pub indices: Vec<u32>,
+    /// Box of `positions`.
+    pub bounds: Aabb,
+}
+
+impl Mesh {
+    /// A mesh with its bounds computed.
+    pub fn new(positions: Vec<Vec3>, indices: Vec<u32>) -> Self {
+        let bounds = Aabb::from_points(&positions);
+        Self { positions, indices, bounds }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// One placed copy of a mesh: the unit the methods draw (one draw call each).
+#[derive(Clone, Debug)]
+pub struct Instance {
+    /// Index into [`Scene::meshes`].
+    pub mesh: u32,
+    /// Object-to-world transform.
+    pub transform: Mat4,
+    /// Material id; drawing a different material than the previous draw is a
+    /// state change.
+    pub material: u32,
+    /// World-space box of the transformed mesh.
+    pub bounds: Aabb,
+}
+
+/// Errors found by [`Scene::validate`].
+#[derive(Debug, Error, PartialEq)]
+pub enum SceneError {
+    /// The scene has no instance or no triangle.
+    #[error("scene '{0}' is empty: it has no triangles to render")]
+    Empty(String),
+    /// A mesh has a position that is NaN or infinite.
+    #[error("mesh {mesh} has a non-finite vertex position at index {vertex}")]
+    NonFiniteVertex { mesh: usize, vertex: usize },
+    /// A mesh index points past its vertices.
+    #[error("mesh {mesh} has index {index} but only {vertices} vertices")]
+    IndexOutOfRange { mesh: usize, index: u32, vertices: usize },
+    /// A mesh's index count is not a multiple of three.
+    #[error("mesh {mesh} has {count} indices, not a multiple of 3")]
+    PartialTriangle { mesh: usize, count: usize },
+    /// An instance refers to a mesh that does not exist.
+    #[error("instance {instance} refers to mesh {mesh}, but the scene has {meshes} meshes")]
+    MissingMesh { instance: usize, mesh: u32, meshes: usize },
+    /// An instance transform is not finite.
+    #[error("instance {0} has a non-finite transform")]
+    NonFiniteTransform(usize),
+}
+
+/// A complete scene: meshes, their instances and a default walkthrough.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Short name (`city`, a file name, ...).
+    pub name: String,
+    /// Shared geometry.
+    pub meshes: Vec<Mesh>,
+    /// Placed objects.
+    pub instances: Vec<Instance>,
+    /// Number of distinct materials (ids are `0..material_count`).
+    pub material_count: u32,
+    /// The scene's default walkthrough.
+    pub path: CameraPath,
+}
+
+impl Scene {
+    /// Adds a mesh and returns its index.
+    pub fn add_mesh(&mut self, mesh: Mesh) -> u32 {
+        self.meshes.push(mesh);
+        (self.meshes.len() - 1) as u32
+    }
+
+    /// Places mesh `mesh` with `transform` and `material`, computing its world box.
+    pub fn add_instance(&mut self, mesh: u32, transform: Mat4, material: u32) {
+        let bounds = self.meshes[mesh as usize].bounds.transformed(&transform);
+        self.material_count = self.material_count.max(material + 1);
+        self.instances.push(Instance { mesh, transform, material, bounds });
+    }
+
+    /// Triangles over all instances (what view-frustum culling would draw with
+    /// everything in view).
+    pub fn triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh as usize].triangle_count())
+            .sum()
+    }
+
+    /// Triangles stored once per mesh (memory footprint).
+    pub fn unique_triangle_count(&self) -> usize {
+        self.meshes.iter().map(Mesh::triangle_count).sum()
+    }
+
+    /// Box of all instances.
+    pub fn bounds(&self) -> Aabb {
+        self.instances.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds))
+    }
+
+    /// Checks everything a renderer relies on, so that bad input gets a clear
+    /// error instead of a panic or a silent wrong image.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        for (m, mesh) in self.meshes.iter().enumerate() {
+            if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
+                return Err(SceneError::NonFiniteVertex { mesh: m, vertex: v });
+            }
+            if mesh.indices.len() % 3 != 0 {
+                return Err(SceneError::PartialTriangle { mesh: m, count: mesh.indices.len() });
+            }
+            if let Some(&index) = mesh.indices.iter().find(|&&i| i as usize >= mesh.positions.len()) {
+                return Err(SceneError::IndexOutOfRange { mesh: m, index, vertices: mesh.positions.len() });
+            }
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            if inst.mesh as usize >= self.meshes.len() {
+                return Err(SceneError::MissingMesh { instance: i, mesh: inst.mesh, meshes: self.meshes.len() });
+            }
+            if !inst.transform.is_finite() {
+                return Err(SceneError::NonFiniteTransform(i));
+            }
+        }
+        if self.triangle_count() == 0 {
+            return Err(SceneError::Empty(self.name.clone()));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle_scene(p: Vec3, indices: Vec<u32>) -> Scene {
+        let mut s = Scene { name: "t".into(), meshes: vec![], instances: vec![], material_count: 0, path: CameraPath::default() };
+        let m = s.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, p], indices));
+        s.add_instance(m, Mat4::IDENTITY, 0);
+        s
+    }
+
+    #[test]
+    fn validate_reports_bad_input() {
+        assert_eq!(triangle_scene(Vec3::Y, vec![0, 1, 2]).validate(), Ok(()));
+        assert_eq!(
+            triangle_scene(Vec3::NAN, vec![0, 1, 2]).validate(),
+            Err(SceneError::NonFiniteVertex { mesh: 0, vertex: 2 })
+        );
+        assert_eq!(
+            triangle_scene(Vec3::Y, vec![0, 1, 7]).validate(),
+            Err(SceneError::IndexOutOfRange { mesh: 0, index: 7, vertices: 3 })
+        );
+        assert_eq!(triangle_scene(Vec3::Y, vec![]).validate(), Err(SceneError::Empty("t".into())));
+    }
+}
