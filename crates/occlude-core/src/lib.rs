@@ -16,7 +16,7 @@ pub mod stats;
 pub use backend::{Backend, QueryHandle};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
-pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+
 pub use path::{CameraPath, Keyframe};
 pub use scene::{Instance, Mesh, Scene, SceneError};
 pub use stats::FrameStats;
