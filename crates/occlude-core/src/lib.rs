@@ -14,6 +14,8 @@ pub mod scene;
 pub mod stats;
 
 pub use backend::{Backend, QueryHandle};
+pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use methods::{CullingMethod, FrameContext};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
 

@@ -1,1 +1,160 @@
-fn main() {}
+//! The `occlude` command line: `bench` compares culling methods on a scene
+//! and walkthrough, `scenes` lists the procedural scenes.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use occlude::bench::{self, config::parse_resolution, BenchConfig};
+use occlude_core::hierarchy::BuildOptions;
+use occlude_core::HierarchyKind;
+use occlude_scenes::{Size, SCENE_NAMES};
+use occlude_soft::GpuModel;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "occlude", version, about = "Occlusion-culling methods compared on the same scene and camera path")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run culling methods over a walkthrough and print the comparison table.
+    Bench(BenchArgs),
+    /// List the procedural scenes with triangle, instance and node counts.
+    Scenes {
+        /// Sizes to list: small, medium, paper or all.
+        #[arg(long, default_value = "all")]
+        size: String,
+        /// Generator seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scene: teapots, city, plant or figures.
+    #[arg(long, default_value = "city")]
+    scene: String,
+    /// Scene size: small, medium or paper.
+    #[arg(long, default_value = "small")]
+    size: String,
+    /// Seed of the procedural generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Comma-separated methods, in table order.
+    #[arg(long, default_value = "vfc,sw,opt", value_delimiter = ',')]
+    methods: Vec<String>,
+    /// Frames sampled along the walkthrough.
+    #[arg(long, default_value_t = 300)]
+    frames: usize,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Hierarchy: bvh or kdtree.
+    #[arg(long, default_value = "bvh")]
+    hierarchy: HierarchyKind,
+    /// Most instances per hierarchy leaf.
+    #[arg(long, default_value_t = BuildOptions::default().leaf_size)]
+    leaf_size: usize,
+    /// Simulated GPU: a preset (gpu-2004, modern) or a TOML file.
+    #[arg(long, default_value = "modern")]
+    gpu_model: String,
+    /// Write the full report as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write one CSV row per method and frame.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Worker threads for the rasterizer (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// Why a command failed: what the user asked for is wrong (exit code 2), or
+/// doing it failed (exit code 1).
+enum Failure {
+    Usage(anyhow::Error),
+    Run(anyhow::Error),
+}
+
+fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
+    let usage = Failure::Usage;
+    if !SCENE_NAMES.contains(&args.scene.as_str()) {
+        return Err(usage(anyhow::anyhow!("unknown scene '{}': expected one of {}", args.scene, SCENE_NAMES.join(", "))));
+    }
+    let config = BenchConfig {
+        scene: args.scene.clone(),
+        size: args.size.parse::<Size>().map_err(|e| usage(e.into()))?,
+        seed: args.seed,
+        methods: args.methods.iter().map(|m| m.trim().to_string()).collect(),
+        frames: args.frames,
+        resolution: args.resolution,
+        hierarchy: args.hierarchy,
+        build: BuildOptions { leaf_size: args.leaf_size, ..BuildOptions::default() },
+        gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
+    };
+    config.validate().map_err(usage)?;
+    if args.threads == Some(0) {
+        return Err(usage(anyhow::anyhow!("--threads must be at least 1")));
+    }
+    Ok(config)
+}
+
+fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
+    if let Some(threads) = args.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build_global().context("cannot start the thread pool")?;
+    }
+    let progress = ProgressBar::new(config.frames as u64).with_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames, {elapsed} (eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    progress.set_message(format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
+    let run = bench::run(config, &progress)?;
+    progress.finish_and_clear();
+    let report = run.report(config);
+    print!("{}", bench::table::render(&report));
+    if let Some(path) = &args.json {
+        bench::output::write_json(&report, path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.csv {
+        bench::output::write_csv(&report, path)?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
+    let sizes = if size == "all" {
+        vec![Size::Small, Size::Medium, Size::Paper]
+    } else {
+        vec![size.parse::<Size>().map_err(|e| Failure::Usage(e.into()))?]
+    };
+    let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude::scenes::rows(s, seed)).collect();
+    print!("{}", occlude::scenes::render(&rows));
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let outcome = match &cli.command {
+        Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(Failure::Run)),
+        Command::Scenes { size, seed } => scenes(size, *seed),
+    };
+    match outcome {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Usage(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,1 +1,127 @@
-//! wip
+//! Culling methods, each written once against [`Backend`].
+//!
+//! A method decides, frame by frame, which hierarchy leaves to draw. The
+//! runner calls [`CullingMethod::prepare`] before the frame's clock starts,
+//! then `Backend::begin_frame`, [`CullingMethod::render`] and
+//! `Backend::end_frame`.
+
+mod front_to_back;
+pub mod opt;
+pub mod sw;
+pub mod vfc;
+
+pub use front_to_back::FrontToBack;
+
+use crate::backend::Backend;
+use crate::camera::{Camera, Frustum};
+use crate::hierarchy::{Hierarchy, NodeId};
+use crate::scene::Scene;
+use thiserror::Error;
+
+/// Names accepted by [`create`], in the order tables list them.
+pub const METHOD_NAMES: [&str; 3] = ["vfc", "sw", "opt"];
+
+/// A method name that [`create`] does not know.
+#[derive(Debug, Error, PartialEq)]
+#[error("unknown method '{0}': expected one of {names}", names = METHOD_NAMES.join(", "))]
+pub struct UnknownMethod(pub String);
+
+/// The method called `name`, freshly constructed (no state from earlier frames).
+pub fn create(name: &str) -> Result<Box<dyn CullingMethod>, UnknownMethod> {
+    match name {
+        "vfc" => Ok(Box::new(vfc::ViewFrustumCulling)),
+        "sw" => Ok(Box::new(sw::StopAndWait)),
+        "opt" => Ok(Box::new(opt::Optimal::default())),
+        _ => Err(UnknownMethod(name.to_string())),
+    }
+}
+
+/// A visibility-culling method. Implementations keep whatever they carry from
+/// frame to frame (temporal coherence) in `self`.
+pub trait CullingMethod {
+    /// The method's name as used on the command line and in JSON.
+    fn name(&self) -> &'static str;
+
+    /// Work done before the frame's clock starts (an oracle pass); most
+    /// methods need none.
+    fn prepare(&mut self, _ctx: &mut FrameContext<'_>, _backend: &mut dyn Backend) {}
+
+    /// Draws the frame: everything visible must reach `backend.draw`.
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend);
+}
+
+/// Remembers which instances were drawn in the current frame, so an instance
+/// referenced by several kD-tree leaves is drawn once.
+#[derive(Clone, Debug, Default)]
+pub struct DrawnSet {
+    stamp: Vec<u32>,
+    frame: u32,
+    batch: Vec<u32>,
+}
+
+impl DrawnSet {
+    /// Forgets the previous frame's draws.
+    pub fn next_frame(&mut self, instances: usize) {
+        self.stamp.resize(instances, 0);
+        self.frame = self.frame.wrapping_add(1);
+        if self.frame == 0 {
+            self.stamp.fill(0);
+            self.frame = 1;
+        }
+    }
+
+    /// True when `instance` was drawn this frame.
+    pub fn contains(&self, instance: u32) -> bool {
+        self.stamp[instance as usize] == self.frame
+    }
+}
+
+/// Everything a method sees of one frame.
+pub struct FrameContext<'a> {
+    /// The scene being drawn.
+    pub scene: &'a Scene,
+    /// The hierarchy over its instances.
+    pub hierarchy: &'a Hierarchy,
+    /// This frame's camera.
+    pub camera: Camera,
+    /// This frame's view frustum.
+    pub frustum: Frustum,
+    drawn: &'a mut DrawnSet,
+}
+
+impl<'a> FrameContext<'a> {
+    /// The context of a new frame seen by `camera`.
+    pub fn new(scene: &'a Scene, hierarchy: &'a Hierarchy, camera: Camera, drawn: &'a mut DrawnSet) -> Self {
+        drawn.next_frame(scene.instances.len());
+        Self { scene, hierarchy, frustum: camera.frustum(), camera, drawn }
+    }
+
+    /// Draws the instances of leaf `node` not yet drawn this frame; returns
+    /// how many were drawn.
+    pub fn draw_leaf(&mut self, backend: &mut dyn Backend, node: NodeId) -> usize {
+        let d = &mut *self.drawn;
+        d.batch.clear();
+        for &i in self.hierarchy.instances(node) {
+            if d.stamp[i as usize] != d.frame {
+                d.stamp[i as usize] = d.frame;
+                d.batch.push(i);
+            }
+        }
+        if !d.batch.is_empty() {
+            backend.draw(&d.batch);
+        }
+        d.batch.len()
+    }
+
+    /// True when `instance` was drawn this frame.
+    pub fn was_drawn(&self, instance: u32) -> bool {
+        self.drawn.contains(instance)
+    }
+
+    /// True when node `id` has something in view (non-empty and not outside
+    /// the frustum).
+    pub fn in_frustum(&self, id: NodeId) -> bool {
+        let b = self.hierarchy.bounds(id);
+        !b.is_empty() && self.frustum.intersects(b)
+    }
+}

@@ -1,0 +1,110 @@
+//! What a benchmark run is asked to do, checked before any work starts.
+
+use anyhow::{bail, Result};
+use occlude_core::hierarchy::BuildOptions;
+use occlude_core::methods::{create, METHOD_NAMES};
+use occlude_core::HierarchyKind;
+use occlude_scenes::Size;
+use occlude_soft::GpuModel;
+
+/// Near clipping distance of every walkthrough camera, metres.
+pub const NEAR_PLANE: f32 = 0.25;
+
+/// A validated benchmark configuration.
+#[derive(Clone, Debug)]
+pub struct BenchConfig {
+    /// Scene name (see `occlude scenes`).
+    pub scene: String,
+    /// Scene size.
+    pub size: Size,
+    /// Seed of the procedural generator.
+    pub seed: u64,
+    /// Methods to compare, in table order.
+    pub methods: Vec<String>,
+    /// Frames sampled along the walkthrough.
+    pub frames: usize,
+    /// Image size in pixels.
+    pub resolution: (u32, u32),
+    /// Hierarchy builder.
+    pub hierarchy: HierarchyKind,
+    /// Hierarchy build options.
+    pub build: BuildOptions,
+    /// Cost model of the simulated GPU.
+    pub gpu_model: GpuModel,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        Self {
+            scene: "city".into(),
+            size: Size::Small,
+            seed: 1,
+            methods: METHOD_NAMES.iter().map(|s| s.to_string()).collect(),
+            frames: 300,
+            resolution: (1024, 768),
+            hierarchy: HierarchyKind::Bvh,
+            build: BuildOptions::default(),
+            gpu_model: GpuModel::modern(),
+        }
+    }
+}
+
+impl BenchConfig {
+    /// Rejects configurations that cannot run, with a message naming the
+    /// offending value.
+    pub fn validate(&self) -> Result<()> {
+        if self.methods.is_empty() {
+            bail!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
+        }
+        for m in &self.methods {
+            create(m)?;
+        }
+        if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
+            bail!("method '{}' is listed twice", dup.1);
+        }
+        if self.frames == 0 {
+            bail!("--frames must be at least 1");
+        }
+        let (w, h) = self.resolution;
+        if w == 0 || h == 0 || w > 16384 || h > 16384 {
+            bail!("resolution {w}x{h} is out of range: each side must be 1 to 16384 pixels");
+        }
+        if self.build.leaf_size == 0 {
+            bail!("--leaf-size must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 1024x768)"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}' is not WIDTHxHEIGHT (e.g. 1024x768)"));
+    Ok((parse(w)?, parse(h)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolution_parses_and_rejects() {
+        assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
+        assert!(parse_resolution("640").is_err());
+        assert!(parse_resolution("ax480").is_err());
+    }
+
+    #[test]
+    fn validation_names_the_bad_value() {
+        let mut c = BenchConfig::default();
+        c.validate().unwrap();
+        c.methods = vec!["vfc".into(), "magic".into()];
+        assert!(c.validate().unwrap_err().to_string().contains("magic"));
+        c.methods = vec!["vfc".into(), "vfc".into()];
+        assert!(c.validate().unwrap_err().to_string().contains("twice"));
+        c = BenchConfig { resolution: (0, 10), ..BenchConfig::default() };
+        assert!(c.validate().unwrap_err().to_string().contains("0x10"));
+        c = BenchConfig { frames: 0, ..BenchConfig::default() };
+        assert!(c.validate().is_err());
+    }
+}

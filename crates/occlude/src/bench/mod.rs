@@ -1,0 +1,13 @@
+//! `occlude bench`: every method on the same scene, hierarchy and camera path,
+//! with the comparison table of the CHC paper (Table 1) and JSON/CSV output in
+//! the schema of DESIGN.md.
+
+pub mod config;
+pub mod output;
+pub mod runner;
+pub mod summary;
+pub mod table;
+
+pub use config::BenchConfig;
+pub use runner::{run, BenchRun};
+pub use summary::{BenchReport, MethodSummary};

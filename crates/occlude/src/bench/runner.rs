@@ -1,0 +1,118 @@
+//! Runs the methods frame by frame and checks each against view-frustum
+//! culling's depth image (the correctness rule of DESIGN.md).
+
+use super::config::{BenchConfig, NEAR_PLANE};
+use super::summary::{BenchReport, SceneStats};
+use anyhow::{Context, Result};
+use indicatif::ProgressBar;
+use occlude_core::methods::{create, vfc::ViewFrustumCulling, CullingMethod, DrawnSet};
+use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, Scene};
+use occlude_soft::SoftBackend;
+
+/// Everything a run measured, before summarising.
+pub struct BenchRun {
+    /// Scene, hierarchy and path figures.
+    pub scene: SceneStats,
+    /// Per method (in configuration order), its per-frame statistics.
+    pub methods: Vec<(String, Vec<FrameStats>)>,
+    /// View-frustum culling's frames (the reference, always run).
+    pub reference: Vec<FrameStats>,
+}
+
+/// One method with its own backend and state across frames.
+struct Lane<'s> {
+    method: Box<dyn CullingMethod>,
+    backend: SoftBackend<'s>,
+    drawn: DrawnSet,
+    frames: Vec<FrameStats>,
+}
+
+impl<'s> Lane<'s> {
+    fn new(method: Box<dyn CullingMethod>, scene: &'s Scene, config: &BenchConfig) -> Self {
+        let (w, h) = config.resolution;
+        Self {
+            method,
+            backend: SoftBackend::new(scene, w, h, config.gpu_model.clone()),
+            drawn: DrawnSet::default(),
+            frames: Vec::with_capacity(config.frames),
+        }
+    }
+
+    /// Renders one frame; returns its statistics.
+    fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> FrameStats {
+        let mut ctx = FrameContext::new(scene, hierarchy, *camera, &mut self.drawn);
+        self.method.prepare(&mut ctx, &mut self.backend);
+        self.backend.begin_frame(camera);
+        self.method.render(&mut ctx, &mut self.backend);
+        self.backend.end_frame()
+    }
+}
+
+/// The walkthrough's cameras for `scene` at the configured resolution.
+pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
+    let (w, h) = config.resolution;
+    let far = (scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0);
+    scene.path.sample(config.frames, w as f32 / h as f32, NEAR_PLANE, far)
+}
+
+/// Generates the scene, builds the hierarchy and runs every method over the
+/// walkthrough; `progress` advances once per frame.
+pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+    config.validate()?;
+    let scene = occlude_scenes::generate(&config.scene, config.size, config.seed)?;
+    scene.validate().with_context(|| format!("scene '{}' is not usable", config.scene))?;
+    run_scene(&scene, config, progress)
+}
+
+/// Runs every method of `config` on an existing scene.
+pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+    config.validate()?;
+    let hierarchy = Hierarchy::build(scene, config.hierarchy, config.build);
+    let cameras = cameras(scene, config);
+    anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
+
+    let mut reference = Lane::new(Box::new(ViewFrustumCulling), scene, config);
+    let mut lanes = config
+        .methods
+        .iter()
+        .filter(|m| m.as_str() != "vfc")
+        .map(|m| Ok(Lane::new(create(m)?, scene, config)))
+        .collect::<Result<Vec<_>>>()?;
+
+    progress.set_length(cameras.len() as u64);
+    for camera in &cameras {
+        let stats = reference.frame(scene, &hierarchy, camera);
+        reference.frames.push(stats);
+        let expected = reference.backend.depth_image();
+        for lane in &mut lanes {
+            let mut stats = lane.frame(scene, &hierarchy, camera);
+            stats.missing_pixels = differing_pixels(&expected, &lane.backend.depth_image());
+            lane.frames.push(stats);
+        }
+        progress.inc(1);
+    }
+
+    let mut lanes = lanes.into_iter().map(|l| (l.method.name().to_string(), l.frames));
+    let methods = config
+        .methods
+        .iter()
+        .map(|m| if m == "vfc" { (m.clone(), reference.frames.clone()) } else { lanes.next().expect("one lane per method") })
+        .collect();
+    Ok(BenchRun {
+        scene: SceneStats::new(scene, &hierarchy, cameras.len()),
+        methods,
+        reference: reference.frames,
+    })
+}
+
+/// Pixels whose depth bits differ between two images.
+pub fn differing_pixels(a: &[f32], b: &[f32]) -> u64 {
+    a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count() as u64
+}
+
+impl BenchRun {
+    /// The summary tables and JSON are made from.
+    pub fn report(&self, config: &BenchConfig) -> BenchReport {
+        BenchReport::new(self, config)
+    }
+}

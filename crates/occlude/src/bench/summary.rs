@@ -1,0 +1,181 @@
+//! Per-method averages over a walkthrough, in the JSON schema of DESIGN.md.
+
+use super::config::BenchConfig;
+use super::runner::BenchRun;
+use occlude_core::{FrameStats, Hierarchy, Scene};
+use serde::{Deserialize, Serialize};
+
+/// Figures about the scene and hierarchy a run used.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneStats {
+    /// Triangles over all instances.
+    pub triangles: u64,
+    /// Triangles stored once per mesh.
+    pub unique_triangles: u64,
+    /// Instances (objects).
+    pub instances: u64,
+    /// Distinct materials.
+    pub materials: u32,
+    /// Hierarchy nodes.
+    pub nodes: u64,
+    /// Hierarchy leaves.
+    pub leaves: u64,
+    /// Deepest hierarchy level.
+    pub depth: u32,
+    /// Frames in the walkthrough.
+    pub frames: usize,
+    /// Real time the hierarchy build took (varies between runs).
+    pub build_wall_ms: f64,
+}
+
+impl SceneStats {
+    /// Figures of `scene` under `hierarchy` over `frames` frames.
+    pub fn new(scene: &Scene, hierarchy: &Hierarchy, frames: usize) -> Self {
+        Self {
+            triangles: scene.triangle_count() as u64,
+            unique_triangles: scene.unique_triangle_count() as u64,
+            instances: scene.instances.len() as u64,
+            materials: scene.material_count,
+            nodes: hierarchy.node_count() as u64,
+            leaves: hierarchy.leaf_count() as u64,
+            depth: hierarchy.max_depth(),
+            frames,
+            build_wall_ms: hierarchy.build_time.as_secs_f64() * 1e3,
+        }
+    }
+}
+
+/// One method's averages (per frame) over the walkthrough.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MethodSummary {
+    /// Method name (`vfc`, `sw`, `opt`, ...).
+    pub name: String,
+    /// Mean frame time (simulated on the soft backend), ms.
+    pub mean_frame_ms: f64,
+    /// 95th-percentile frame time, ms.
+    pub p95_frame_ms: f64,
+    /// Occlusion queries per frame.
+    pub queries_per_frame: f64,
+    /// CPU time blocked on query results per frame, ms.
+    pub wait_ms_per_frame: f64,
+    /// Draw calls per frame.
+    pub draw_calls_per_frame: f64,
+    /// Render-state changes per frame.
+    pub state_changes_per_frame: f64,
+    /// Triangles drawn per frame.
+    pub triangles_per_frame: f64,
+    /// Objects drawn per frame.
+    pub visible_objects_per_frame: f64,
+    /// Pixels differing from view-frustum culling, summed over all frames.
+    pub missing_pixels: u64,
+    /// Mean `vfc` frame time over this method's.
+    pub speedup_vs_vfc: f64,
+    /// This method's mean frame time over `opt`'s (`null` when `opt` was not run).
+    pub ratio_to_opt: Option<f64>,
+    /// Mean CPU busy time per frame (waits excluded), ms.
+    pub cpu_ms_per_frame: f64,
+    /// Mean GPU busy time per frame, ms.
+    pub gpu_ms_per_frame: f64,
+    /// Real time per frame on this machine (rasterizing included; varies).
+    pub wall_ms: f64,
+    /// Every frame's statistics.
+    pub per_frame: Vec<FrameStats>,
+}
+
+/// The whole run: the JSON document `occlude bench --json` writes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchReport {
+    /// Scene name.
+    pub scene: String,
+    /// Scene size.
+    pub size: String,
+    /// Frames in the walkthrough.
+    pub frames: usize,
+    /// Image width and height.
+    pub resolution: [u32; 2],
+    /// `soft` (simulated clock) or `wgpu`.
+    pub backend: String,
+    /// Name of the GPU cost model.
+    pub gpu_model: String,
+    /// Hierarchy builder (`bvh` or `kdtree`).
+    pub hierarchy: String,
+    /// Generator seed.
+    pub seed: u64,
+    /// Scene and hierarchy figures.
+    pub scene_stats: SceneStats,
+    /// One entry per method, in the order asked for.
+    pub methods: Vec<MethodSummary>,
+}
+
+fn mean(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
+    if frames.is_empty() {
+        return 0.0;
+    }
+    frames.iter().map(f).sum::<f64>() / frames.len() as f64
+}
+
+/// The 95th percentile (nearest rank) of the frame times.
+fn p95(frames: &[FrameStats]) -> f64 {
+    let mut t: Vec<f64> = frames.iter().map(|f| f.frame_ms).collect();
+    t.sort_by(f64::total_cmp);
+    let rank = ((t.len() as f64 * 0.95).ceil() as usize).clamp(1, t.len().max(1));
+    t.get(rank - 1).copied().unwrap_or(0.0)
+}
+
+impl BenchReport {
+    /// Summarises a run.
+    pub fn new(run: &BenchRun, config: &BenchConfig) -> Self {
+        let vfc_ms = mean(&run.reference, |f| f.frame_ms);
+        let opt_ms = run.methods.iter().find(|(n, _)| n == "opt").map(|(_, f)| mean(f, |f| f.frame_ms));
+        let methods = run
+            .methods
+            .iter()
+            .map(|(name, frames)| {
+                let frame_ms = mean(frames, |f| f.frame_ms);
+                MethodSummary {
+                    name: name.clone(),
+                    mean_frame_ms: frame_ms,
+                    p95_frame_ms: p95(frames),
+                    queries_per_frame: mean(frames, |f| f.queries as f64),
+                    wait_ms_per_frame: mean(frames, |f| f.wait_ms),
+                    draw_calls_per_frame: mean(frames, |f| f.draw_calls as f64),
+                    state_changes_per_frame: mean(frames, |f| f.state_changes as f64),
+                    triangles_per_frame: mean(frames, |f| f.triangles as f64),
+                    visible_objects_per_frame: mean(frames, |f| f.visible_objects as f64),
+                    missing_pixels: frames.iter().map(|f| f.missing_pixels).sum(),
+                    speedup_vs_vfc: if frame_ms > 0.0 { vfc_ms / frame_ms } else { 0.0 },
+                    ratio_to_opt: opt_ms.filter(|&o| o > 0.0).map(|o| frame_ms / o),
+                    cpu_ms_per_frame: mean(frames, |f| f.cpu_ms),
+                    gpu_ms_per_frame: mean(frames, |f| f.gpu_ms),
+                    wall_ms: mean(frames, |f| f.wall_ms),
+                    per_frame: frames.clone(),
+                }
+            })
+            .collect();
+        Self {
+            scene: config.scene.clone(),
+            size: config.size.to_string(),
+            frames: run.scene.frames,
+            resolution: [config.resolution.0, config.resolution.1],
+            backend: "soft".into(),
+            gpu_model: config.gpu_model.name.clone(),
+            hierarchy: config.hierarchy.to_string(),
+            seed: config.seed,
+            scene_stats: run.scene.clone(),
+            methods,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn p95_is_nearest_rank() {
+        let frames: Vec<FrameStats> = (1..=100).map(|i| FrameStats { frame_ms: i as f64, ..Default::default() }).collect();
+        assert_eq!(p95(&frames), 95.0);
+        assert_eq!(p95(&frames[..1]), 1.0);
+        assert_eq!(p95(&[]), 0.0);
+    }
+}

@@ -1,0 +1,84 @@
+//! The comparison table printed by `occlude bench`, shaped like Table 1 of the
+//! CHC paper. Times from the soft backend are simulated and labelled so.
+
+use super::summary::BenchReport;
+use std::fmt::Write;
+
+/// Renders the report as an aligned text table.
+pub fn render(report: &BenchReport) -> String {
+    let s = &report.scene_stats;
+    let sim = if report.backend == "soft" { "sim " } else { "" };
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves), {} frames at {}x{}, backend {}, GPU model {}",
+        report.scene,
+        report.size,
+        report.seed,
+        s.triangles,
+        s.instances,
+        s.nodes,
+        report.hierarchy,
+        s.leaves,
+        report.frames,
+        report.resolution[0],
+        report.resolution[1],
+        report.backend,
+        report.gpu_model,
+    );
+    let headers = [
+        "method".to_string(),
+        format!("{sim}ms"),
+        format!("{sim}p95 ms"),
+        "speedup".into(),
+        "ratio opt".into(),
+        "queries".into(),
+        format!("{sim}wait ms"),
+        "draws".into(),
+        "states".into(),
+        "triangles".into(),
+        "missing px".into(),
+        "wall ms".into(),
+    ];
+    let rows: Vec<[String; 12]> = report
+        .methods
+        .iter()
+        .map(|m| {
+            [
+                m.name.clone(),
+                format!("{:.3}", m.mean_frame_ms),
+                format!("{:.3}", m.p95_frame_ms),
+                format!("{:.2}", m.speedup_vs_vfc),
+                m.ratio_to_opt.map_or("-".into(), |r| format!("{r:.2}")),
+                format!("{:.1}", m.queries_per_frame),
+                format!("{:.3}", m.wait_ms_per_frame),
+                format!("{:.1}", m.draw_calls_per_frame),
+                format!("{:.1}", m.state_changes_per_frame),
+                format!("{:.0}", m.triangles_per_frame),
+                m.missing_pixels.to_string(),
+                format!("{:.1}", m.wall_ms),
+            ]
+        })
+        .collect();
+    let widths: Vec<usize> =
+        (0..headers.len()).map(|c| rows.iter().map(|r| r[c].len()).chain([headers[c].len()]).max().unwrap_or(0)).collect();
+    let line = |cells: &[String]| {
+        cells
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(i, (c, w))| if i == 0 { format!("{c:<w$}") } else { format!("{c:>w$}") })
+            .collect::<Vec<_>>()
+            .join("  ")
+    };
+    let _ = writeln!(out, "{}", line(&headers));
+    for r in &rows {
+        let _ = writeln!(out, "{}", line(r));
+    }
+    let _ = writeln!(
+        out,
+        "per frame means; speedup = vfc time / method time; missing px summed over frames{}",
+        if sim.is_empty() { "" } else { "; sim = simulated GPU clock, wall = real time on this machine" }
+    );
+    out
+}

@@ -1,0 +1,5 @@
+//! The `occlude` tool as a library: the benchmark runner and its reports, so
+//! that tests drive exactly what the command line runs.
+
+pub mod bench;
+pub mod scenes;
