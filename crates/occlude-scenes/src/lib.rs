@@ -1,1 +1,113 @@
-//! Procedural scenes.
+//! Procedural, deterministic test scenes with default walkthroughs.
+//!
+//! [`generate`] builds one of [`SCENE_NAMES`] at a [`Size`] from a seed; the
+//! same `(name, size, seed)` always gives the same scene, on every machine,
+//! because all randomness comes from this crate's own [`rng::Rng`].
+//!
+//! The scenes stand in for those of the occlusion-culling papers (CHC 2004,
+//! CHC++ 2008, IOC): a long field of Utah teapots, a city of streets and
+//! buildings, a dense industrial plant, and a volume of scattered figures.
+//! Objects are instances of shared meshes (one draw call each), so even the
+//! `paper` sizes with millions of triangles stay small in memory.
+
+#![warn(missing_docs)]
+
+mod city;
+mod figures;
+pub mod newell;
+mod plant;
+pub mod rng;
+pub mod shapes;
+mod teapots;
+mod walk;
+
+use occlude_core::{Scene, SceneError};
+use std::fmt;
+use std::str::FromStr;
+use thiserror::Error;
+
+/// How big a generated scene is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Size {
+    /// For tests: at most about 200k triangles and a few thousand instances,
+    /// so a few hundred frames of several methods render in seconds on the
+    /// software rasterizer.
+    Small,
+    /// About 1-3 million triangles: a realistic load for a GPU.
+    Medium,
+    /// Near the sizes of the papers' scenes (millions of triangles, tens of
+    /// thousands of instances), kept in memory by instancing.
+    Paper,
+}
+
+impl Size {
+    /// Every size, smallest first.
+    pub const ALL: [Size; 3] = [Size::Small, Size::Medium, Size::Paper];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Size::Small => "small",
+            Size::Medium => "medium",
+            Size::Paper => "paper",
+        }
+    }
+
+    /// Picks one of three values by size (keeps the per-scene tables short).
+    pub(crate) fn pick<T>(self, small: T, medium: T, paper: T) -> T {
+        match self {
+            Size::Small => small,
+            Size::Medium => medium,
+            Size::Paper => paper,
+        }
+    }
+}
+
+impl fmt::Display for Size {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Size {
+    type Err = GenerateError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Size::ALL.into_iter().find(|size| size.name() == s).ok_or_else(|| GenerateError::UnknownSize(s.to_string()))
+    }
+}
+
+/// The scenes [`generate`] knows, by name.
+pub const SCENE_NAMES: [&str; 4] = ["teapots", "city", "plant", "figures"];
+
+/// Why a scene could not be generated.
+#[derive(Debug, Error)]
+pub enum GenerateError {
+    /// The name is not one of [`SCENE_NAMES`].
+    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures")]
+    UnknownScene(String),
+    /// The size is not one of `small`, `medium`, `paper`.
+    #[error("unknown scene size '{0}'; the sizes are: small, medium, paper")]
+    UnknownSize(String),
+    /// A generator produced an invalid scene (a bug in this crate).
+    #[error("generated scene is invalid: {0}")]
+    Invalid(#[from] SceneError),
+}
+
+/// Builds the scene `name` at `size` from `seed`, with its default
+/// walkthrough in `scene.path`. Deterministic: the same arguments always give
+/// the same meshes, instances, materials and path.
+pub fn generate(name: &str, size: Size, seed: u64) -> Result<Scene, GenerateError> {
+    let scene = match name {
+        "teapots" => teapots::generate(size, seed),
+        "city" => city::generate(size, seed),
+        "plant" => plant::generate(size, seed),
+        "figures" => figures::generate(size, seed),
+        _ => return Err(GenerateError::UnknownScene(name.to_string())),
+    };
+    scene.validate()?;
+    Ok(scene)
+}
+
+#[cfg(test)]
+mod tests;

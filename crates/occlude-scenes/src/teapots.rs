@@ -1,0 +1,125 @@
+//! `teapots`: a long, thin field of randomly placed and rotated Utah teapots
+//! floating in layers above a ground plane (the CHC 2004 teapot scene: 5000
+//! teapots, 11.5M triangles).
+//!
+//! Teapots are made of small triangles, so only many of them together occlude;
+//! there are thin gaps to see far through; and along the long side about half
+//! of the field is in view. The walkthrough looks along the field from outside
+//! (much visible), then weaves through its inside (much occluded), then flies
+//! above it.
+
+use crate::newell;
+use crate::rng::Rng;
+use crate::walk::{empty_scene, PathBuilder, PathClearance};
+use crate::Size;
+use glam::{Mat4, Vec3};
+use occlude_core::Scene;
+
+/// Grid cell of one teapot, in metres (x and z; layers are [`LAYER`] apart).
+const CELL: f32 = 1.6;
+/// Vertical distance between layers of teapots.
+const LAYER: f32 = 1.3;
+/// Height of the lowest layer's cells above the ground.
+const BASE: f32 = 0.3;
+/// Scale from Newell units to metres (a teapot about 1 m long).
+const SCALE: f32 = 0.16;
+/// Number of teapot materials (material 0 is the ground).
+const TEAPOT_MATERIALS: u32 = 6;
+
+/// The field layout and tessellations of one size.
+struct Layout {
+    /// Cells along x (the long side), z and y.
+    cells: [u32; 3],
+    /// Quads per patch edge of the shared teapot meshes.
+    divisions: &'static [u32],
+}
+
+fn layout(size: Size) -> Layout {
+    size.pick(
+        Layout { cells: [40, 5, 2], divisions: &[2, 3] },
+        Layout { cells: [80, 6, 4], divisions: &[3, 4, 5] },
+        Layout { cells: [100, 10, 5], divisions: &[5, 6, 7] },
+    )
+}
+
+/// The walkthrough for a field of `length` x `height` x `width` metres.
+fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath {
+    let (l, h, w) = (length, height, width);
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x * l, y, z * w);
+    let mid = 0.5 * h;
+    let mut b = PathBuilder::new();
+    // Outside the short end, looking along the whole field.
+    b.key(0.0, Vec3::new(-6.0, h + 1.5, 0.5 * w), p(0.5, 0.3 * h, 0.5))
+        .key(2.0, Vec3::new(-3.0, h + 0.5, -0.3 * w), p(0.4, 0.3 * h, 0.5))
+        // Along the long side: about half the field in view.
+        .key(3.0, p(0.1, h + 1.0, -1.5), p(0.45, 0.3 * h, 0.5))
+        .key(3.0, p(0.3, 0.8 * h, -1.2), p(0.55, 0.3 * h, 0.6))
+        .key(2.0, p(0.42, mid, -0.5), p(0.45, mid, 0.6))
+        // Into the field, weaving along it: restricted visibility.
+        .key(2.0, p(0.45, mid, 0.35), p(0.55, mid, 0.5))
+        .key(2.0, p(0.5, mid, 0.55), p(0.6, mid, 0.4))
+        .key(2.0, p(0.56, mid, 0.4), p(0.56, mid, 1.0))
+        .key(2.0, p(0.62, mid, 0.6), p(0.72, 0.4 * h, 0.5))
+        .key(2.0, p(0.68, 0.4 * h, 0.45), p(0.62, mid, 0.0))
+        .key(2.0, p(0.74, mid, 0.55), p(0.84, mid, 0.5))
+        // Up out of the field, looking back along it from above.
+        .key(2.0, p(0.8, h + 1.0, 0.5), p(0.4, 0.0, 0.5))
+        .key(3.0, p(0.65, h + 3.0, 0.5), p(0.2, 0.0, 0.5))
+        .key(3.0, p(0.4, h + 2.0, 1.0 + 4.0 / w), p(0.4, 0.0, 0.3))
+        .key(3.0, p(0.2, 0.6 * h, 1.0 + 3.0 / w), p(0.3, mid, 0.0));
+    b.build()
+}
+
+/// Builds the teapot field.
+pub(crate) fn generate(size: Size, seed: u64) -> Scene {
+    let layout = layout(size);
+    let [nx, nz, ny] = layout.cells;
+    let (length, width, height) = (nx as f32 * CELL, nz as f32 * CELL, BASE + ny as f32 * LAYER);
+    let mut scene = empty_scene("teapots");
+    scene.path = walkthrough(length, height, width);
+    let clearance = PathClearance::new(&scene.path);
+
+    let ground = scene
+        .add_mesh(crate::shapes::cuboid(Vec3::new(-40.0, -0.2, -40.0), Vec3::new(length + 40.0, 0.0, width + 40.0)));
+    scene.add_instance(ground, Mat4::IDENTITY, 0);
+
+    let meshes: Vec<u32> = layout.divisions.iter().map(|&d| scene.add_mesh(newell::teapot(d))).collect();
+    // The teapot's own centre, so it turns about its middle.
+    let centre = Vec3::new(0.26, 0.5 * newell::HEIGHT, 0.0);
+    let mut rng = Rng::new(seed, 0x7EA9_0775);
+    for ix in 0..nx {
+        for iy in 0..ny {
+            for iz in 0..nz {
+                let cell =
+                    Vec3::new((ix as f32 + 0.5) * CELL, BASE + (iy as f32 + 0.5) * LAYER, (iz as f32 + 0.5) * CELL);
+                let mesh = meshes[rng.below(meshes.len() as u32) as usize];
+                let material = 1 + rng.below(TEAPOT_MATERIALS);
+                // A few tries to place it clear of the walkthrough, else leave
+                // the cell empty.
+                for _ in 0..4 {
+                    let jitter = Vec3::new(rng.range(-0.4, 0.4), rng.range(-0.2, 0.2), rng.range(-0.4, 0.4));
+                    let transform = Mat4::from_translation(cell + jitter)
+                        * Mat4::from_quat(rng.rotation())
+                        * Mat4::from_scale(Vec3::splat(SCALE * rng.range(0.85, 1.15)))
+                        * Mat4::from_translation(-centre);
+                    let bounds = scene.meshes[mesh as usize].bounds.transformed(&transform);
+                    if clearance.is_clear(&bounds) && bounds.min.y > 0.0 {
+                        scene.add_instance(mesh, transform, material);
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    scene
+}
+
+/// Teapot instances and triangles of a size, without tessellating: every
+/// cell's teapot is counted (the walkthrough clears a few of them).
+#[cfg(test)]
+pub(crate) fn planned_counts(size: Size) -> (usize, usize) {
+    let layout = layout(size);
+    let cells = layout.cells.iter().product::<u32>() as usize;
+    let mean = layout.divisions.iter().map(|&d| newell::triangle_count(d)).sum::<usize>() / layout.divisions.len();
+    (cells, cells * mean)
+}

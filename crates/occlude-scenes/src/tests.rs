@@ -1,0 +1,159 @@
+//! Tests over all scenes: generation, budgets, determinism, walkthrough
+//! clearance and errors.
+
+use super::*;
+use glam::Vec3;
+use occlude_core::Scene;
+use std::collections::BTreeSet;
+use std::time::Instant;
+
+/// The most triangles a `small` scene may have (the tests render them).
+const SMALL_TRIANGLES: usize = 200_000;
+/// The most instances a `small` scene may have.
+const SMALL_INSTANCES: usize = 5_000;
+
+fn small(name: &str, seed: u64) -> Scene {
+    generate(name, Size::Small, seed).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+#[test]
+fn small_scenes_generate_valid_within_budget_with_a_walkthrough() {
+    for name in SCENE_NAMES {
+        let s = small(name, 1);
+        assert_eq!(s.name, name);
+        assert_eq!(s.validate(), Ok(()));
+        assert!(s.triangle_count() <= SMALL_TRIANGLES, "{name}: {} triangles", s.triangle_count());
+        assert!(s.triangle_count() >= SMALL_TRIANGLES / 5, "{name}: only {} triangles", s.triangle_count());
+        assert!(s.instances.len() <= SMALL_INSTANCES, "{name}: {} instances", s.instances.len());
+        assert!(s.instances.len() >= 300, "{name}: only {} instances", s.instances.len());
+        assert!(s.path.keyframes.len() >= 2, "{name}: path has {} keyframes", s.path.keyframes.len());
+        let d = s.path.duration();
+        assert!((20.0..=45.0).contains(&d), "{name}: walkthrough lasts {d} s");
+        assert!(s.path.keyframes.windows(2).all(|k| k[1].time > k[0].time), "{name}: key times must increase");
+        // Instancing: far fewer unique triangles than drawn ones.
+        assert!(s.unique_triangle_count() * 4 < s.triangle_count(), "{name}: little instancing");
+        // Materials spread over several ids, each of them used.
+        let used: BTreeSet<u32> = s.instances.iter().map(|i| i.material).collect();
+        assert!((4..=16).contains(&s.material_count), "{name}: {} materials", s.material_count);
+        assert_eq!(used.len() as u32, s.material_count, "{name}: unused material ids");
+    }
+}
+
+#[test]
+fn generation_is_deterministic_and_depends_on_the_seed() {
+    for name in SCENE_NAMES {
+        let (a, b, c) = (small(name, 7), small(name, 7), small(name, 8));
+        let transforms = |s: &Scene| s.instances.iter().map(|i| (i.mesh, i.material, i.transform)).collect::<Vec<_>>();
+        assert_eq!(transforms(&a), transforms(&b), "{name}: same seed, different instances");
+        assert_eq!(a.triangle_count(), b.triangle_count());
+        assert_eq!(a.unique_triangle_count(), b.unique_triangle_count());
+        assert_eq!(a.path, b.path, "{name}: same seed, different path");
+        assert_ne!(transforms(&a), transforms(&c), "{name}: the seed changes nothing");
+    }
+}
+
+/// Panics unless every keyframe and 1500 sampled eye positions of the
+/// walkthrough are at least 0.5 m from every instance's box (the near plane
+/// is 0.1 m: the camera must never be inside or against an object).
+fn assert_walkthrough_clear(s: &Scene) {
+    let mut eyes: Vec<Vec3> = s.path.keyframes.iter().map(|k| k.position).collect();
+    eyes.extend(s.path.sample(1500, 1.0, 0.1, 1.0).iter().map(|c| c.position));
+    for (e, eye) in eyes.iter().enumerate() {
+        for (i, inst) in s.instances.iter().enumerate() {
+            let d = inst.bounds.distance_squared(*eye).sqrt();
+            assert!(d >= 0.5, "{}: eye {e} at {eye} is {d:.2} m from instance {i} {:?}", s.name, inst.bounds);
+        }
+    }
+}
+
+#[test]
+fn walkthroughs_keep_clear_of_every_object() {
+    for name in SCENE_NAMES {
+        assert_walkthrough_clear(&small(name, 3));
+    }
+}
+
+#[test]
+fn walkthroughs_look_at_the_scene() {
+    // Every key looks somewhere (target away from the eye), and most of the
+    // walkthrough is near or inside the scene.
+    for name in SCENE_NAMES {
+        let s = small(name, 1);
+        let b = s.bounds();
+        for k in &s.path.keyframes {
+            assert!((k.target - k.position).length() > 1.0, "{name}: key at {} looks at itself", k.time);
+        }
+        let inside = s.path.keyframes.iter().filter(|k| b.contains_point(k.position)).count();
+        assert!(inside * 2 >= s.path.keyframes.len(), "{name}: only {inside} keys inside the scene's box");
+    }
+}
+
+#[test]
+fn sizes_parse_and_print() {
+    for size in Size::ALL {
+        assert_eq!(size.to_string().parse::<Size>().unwrap(), size);
+    }
+    assert_eq!("paper".parse::<Size>().unwrap(), Size::Paper);
+    let e = "huge".parse::<Size>().unwrap_err();
+    assert!(matches!(e, GenerateError::UnknownSize(ref s) if s == "huge"));
+    let message = e.to_string();
+    assert!(message.contains("huge") && message.contains("small, medium, paper"), "{message}");
+}
+
+#[test]
+fn unknown_scene_names_the_valid_ones() {
+    let e = generate("castle", Size::Small, 1).unwrap_err();
+    assert!(matches!(e, GenerateError::UnknownScene(ref s) if s == "castle"));
+    let message = e.to_string();
+    assert!(message.contains("castle"));
+    for name in SCENE_NAMES {
+        assert!(message.contains(name), "{message} does not list {name}");
+    }
+}
+
+#[test]
+fn larger_sizes_plan_the_papers_counts() {
+    // Without building the scenes: the teapot field, the city (from a sample
+    // of its building meshes) and the figures.
+    let (teapots, triangles) = teapots::planned_counts(Size::Paper);
+    assert_eq!(teapots, 5000);
+    assert!((10_500_000..=12_500_000).contains(&triangles), "paper teapots: {triangles} triangles");
+    let (teapots, triangles) = teapots::planned_counts(Size::Medium);
+    assert!(teapots > 1000 && (1_000_000..=3_000_000).contains(&triangles), "{teapots} teapots, {triangles}");
+    let (figures, triangles) = figures::planned_counts(Size::Paper);
+    assert!(figures > 72_000 && triangles > 5_000_000, "paper figures: {figures}, {triangles} triangles");
+    let (instances, triangles) = city::planned_counts(Size::Paper);
+    assert!(instances > 5_000 && (700_000..=1_500_000).contains(&triangles), "paper city: {instances}, {triangles}");
+    let (figures, triangles) = figures::planned_counts(Size::Medium);
+    assert!(figures > 10_000 && (1_000_000..=3_000_000).contains(&triangles), "{figures} figures, {triangles}");
+}
+
+/// Generates every scene at every size and prints a table of counts and
+/// generation times (`cargo test -p occlude-scenes --release -- --ignored
+/// --nocapture counts`).
+#[test]
+#[ignore = "generates the paper sizes (tens of millions of triangles); run by hand"]
+fn counts_of_every_scene_and_size() {
+    println!("| scene | size | triangles | instances | unique triangles | meshes | materials | path s | gen s |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    for name in SCENE_NAMES {
+        for size in Size::ALL {
+            let start = Instant::now();
+            let s = generate(name, size, 1).unwrap();
+            let seconds = start.elapsed().as_secs_f64();
+            println!(
+                "| {name} | {size} | {} | {} | {} | {} | {} | {:.0} | {seconds:.2} |",
+                s.triangle_count(),
+                s.instances.len(),
+                s.unique_triangle_count(),
+                s.meshes.len(),
+                s.material_count,
+                s.path.duration()
+            );
+            if size != Size::Small {
+                assert!(s.triangle_count() >= 400_000, "{name} {size}: {} triangles", s.triangle_count());
+            }
+            assert_walkthrough_clear(&s);
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Helpers shared by the scene generators: building walkthroughs and keeping
+//! scattered objects clear of them.
+
+use glam::Vec3;
+use occlude_core::{Aabb, CameraPath, Keyframe, Scene};
+
+/// Vertical field of view of every default walkthrough, in degrees.
+pub(crate) const FOV_Y_DEG: f32 = 60.0;
+
+/// Eye height above a floor, in metres.
+pub(crate) const EYE: f32 = 1.7;
+
+/// Distance every walkthrough keeps from every object (the tests check 0.5 m;
+/// generation keeps a little more so that sampling never decides it).
+pub(crate) const CLEARANCE: f32 = 0.6;
+
+/// An empty scene called `name`.
+pub(crate) fn empty_scene(name: &str) -> Scene {
+    Scene { name: name.to_string(), meshes: vec![], instances: vec![], material_count: 0, path: CameraPath::default() }
+}
+
+/// Builds a walkthrough key by key, each key a given number of seconds after
+/// the previous one, so that a path can walk slowly in a street and fly fast
+/// over the roofs.
+pub(crate) struct PathBuilder {
+    keyframes: Vec<Keyframe>,
+}
+
+impl PathBuilder {
+    /// An empty path.
+    pub(crate) fn new() -> Self {
+        Self { keyframes: Vec::new() }
+    }
+
+    /// Adds a key `seconds` after the previous one (the first key is at 0).
+    pub(crate) fn key(&mut self, seconds: f32, position: Vec3, target: Vec3) -> &mut Self {
+        let time = self.keyframes.last().map_or(0.0, |k| k.time + seconds);
+        self.keyframes.push(Keyframe { time, position, target, fov_y_deg: FOV_Y_DEG });
+        self
+    }
+
+    /// The finished path.
+    pub(crate) fn build(&mut self) -> CameraPath {
+        CameraPath { keyframes: std::mem::take(&mut self.keyframes) }
+    }
+}
+
+/// Eye positions along `path`, `per_second` of them per second of walkthrough.
+pub(crate) fn eye_positions(path: &CameraPath, per_second: f32) -> Vec<Vec3> {
+    let count = (path.duration() * per_second).ceil() as usize + 1;
+    path.sample(count, 1.0, 0.1, 1.0).into_iter().map(|c| c.position).collect()
+}
+
+/// Answers "does this box keep [`CLEARANCE`] from the walkthrough?" quickly,
+/// by grouping dense samples of the path under boxes.
+pub(crate) struct PathClearance {
+    groups: Vec<(Aabb, Vec<Vec3>)>,
+}
+
+impl PathClearance {
+    /// Samples `path` densely (a few centimetres apart at walking and flying
+    /// speeds).
+    pub(crate) fn new(path: &CameraPath) -> Self {
+        let groups = eye_positions(path, 400.0)
+            .chunks(64)
+            .map(|c| (Aabb::from_points(c).expanded(0.0, CLEARANCE), c.to_vec()))
+            .collect();
+        Self { groups }
+    }
+
+    /// True when every sampled eye position is at least [`CLEARANCE`] from `b`.
+    pub(crate) fn is_clear(&self, b: &Aabb) -> bool {
+        let limit = CLEARANCE * CLEARANCE;
+        self.groups
+            .iter()
+            .filter(|(g, _)| g.overlaps(b))
+            .all(|(_, points)| points.iter().all(|&p| b.distance_squared(p) >= limit))
+    }
+}
