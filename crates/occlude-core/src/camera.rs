@@ -95,8 +95,8 @@ impl Frustum {
     /// Planes of the clip volume of `m`.
     pub fn from_view_projection(m: &Mat4) -> Self {
         let r = [m.row(0), m.row(1), m.row(2), m.row(3)];
-        let planes = [r[3] + r[0], r[3] - r[0], r[3] + r[1], r[3] - r[1], r[2], r[3] - r[2]]
-            .map(|p| p / p.xyz().length());
+        let planes =
+            [r[3] + r[0], r[3] - r[0], r[3] + r[1], r[3] - r[1], r[2], r[3] - r[2]].map(|p| p / p.xyz().length());
         Self { planes }
     }
 

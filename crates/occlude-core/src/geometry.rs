@@ -20,10 +20,7 @@ impl Default for Aabb {
 
 impl Aabb {
     /// The empty box: the identity of [`Aabb::union`].
-    pub const EMPTY: Aabb = Aabb {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
 
     /// A box from two corners (`min <= max` on every axis).
     pub fn new(min: Vec3, max: Vec3) -> Self {
@@ -32,9 +29,7 @@ impl Aabb {
 
     /// The smallest box holding every point.
     pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Self {
-        points
-            .into_iter()
-            .fold(Self::EMPTY, |b, p| b.union_point(*p))
+        points.into_iter().fold(Self::EMPTY, |b, p| b.union_point(*p))
     }
 
     /// True when the box holds no point.

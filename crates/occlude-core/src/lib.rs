@@ -14,10 +14,10 @@ pub mod scene;
 pub mod stats;
 
 pub use backend::{Backend, QueryHandle};
-pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
-pub use methods::{CullingMethod, FrameContext};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
+pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use methods::{CullingMethod, FrameContext};
 
 pub use path::{CameraPath, Keyframe};
 pub use scene::{Instance, Mesh, Scene, SceneError};

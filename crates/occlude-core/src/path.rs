@@ -107,7 +107,11 @@ mod tests {
     #[test]
     fn sampling_hits_keyframes_at_ends_and_interpolates_between() {
         let path = CameraPath::through(
-            [(Vec3::ZERO, Vec3::X), (Vec3::new(10.0, 0.0, 0.0), Vec3::X * 20.0), (Vec3::new(20.0, 0.0, 0.0), Vec3::X * 30.0)],
+            [
+                (Vec3::ZERO, Vec3::X),
+                (Vec3::new(10.0, 0.0, 0.0), Vec3::X * 20.0),
+                (Vec3::new(20.0, 0.0, 0.0), Vec3::X * 30.0),
+            ],
             60.0,
         );
         let cams = path.sample(5, 1.0, 0.1, 100.0);

@@ -98,10 +98,7 @@ impl Scene {
     /// Triangles over all instances (what view-frustum culling would draw with
     /// everything in view).
     pub fn triangle_count(&self) -> usize {
-        self.instances
-            .iter()
-            .map(|i| self.meshes[i.mesh as usize].triangle_count())
-            .sum()
+        self.instances.iter().map(|i| self.meshes[i.mesh as usize].triangle_count()).sum()
     }
 
     /// Triangles stored once per mesh (memory footprint).
@@ -148,7 +145,13 @@ mod tests {
     use super::*;
 
     fn triangle_scene(p: Vec3, indices: Vec<u32>) -> Scene {
-        let mut s = Scene { name: "t".into(), meshes: vec![], instances: vec![], material_count: 0, path: CameraPath::default() };
+        let mut s = Scene {
+            name: "t".into(),
+            meshes: vec![],
+            instances: vec![],
+            material_count: 0,
+            path: CameraPath::default(),
+        };
         let m = s.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, p], indices));
         s.add_instance(m, Mat4::IDENTITY, 0);
         s

@@ -1,4 +1,10 @@
 //! The software backend: an exact depth rasterizer, parallel over screen tiles,
 //! driven by a simulated GPU clock so that results are deterministic.
 
+pub mod backend;
+pub mod clock;
+pub mod gpu_model;
 pub mod raster;
+
+pub use backend::SoftBackend;
+pub use gpu_model::{GpuModel, GpuModelError};

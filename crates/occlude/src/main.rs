@@ -84,7 +84,11 @@ enum Failure {
 fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     let usage = Failure::Usage;
     if !SCENE_NAMES.contains(&args.scene.as_str()) {
-        return Err(usage(anyhow::anyhow!("unknown scene '{}': expected one of {}", args.scene, SCENE_NAMES.join(", "))));
+        return Err(usage(anyhow::anyhow!(
+            "unknown scene '{}': expected one of {}",
+            args.scene,
+            SCENE_NAMES.join(", ")
+        )));
     }
     let config = BenchConfig {
         scene: args.scene.clone(),

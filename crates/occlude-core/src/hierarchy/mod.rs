@@ -218,12 +218,17 @@ mod tests {
             material_count: 0,
             path: Default::default(),
         };
-        let m = s.add_mesh(crate::scene::Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![0, 1, 2, 1, 3, 2]));
+        let m =
+            s.add_mesh(crate::scene::Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![0, 1, 2, 1, 3, 2]));
         let mut x = 12345u64;
         for _ in 0..n {
             x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             let p = Vec3::new((x >> 40) as f32 % 97.0, (x >> 20) as f32 % 13.0, (x >> 8) as f32 % 89.0);
-            s.add_instance(m, Mat4::from_scale_rotation_translation(Vec3::splat(1.0 + (x % 5) as f32), glam::Quat::IDENTITY, p), 0);
+            s.add_instance(
+                m,
+                Mat4::from_scale_rotation_translation(Vec3::splat(1.0 + (x % 5) as f32), glam::Quat::IDENTITY, p),
+                0,
+            );
         }
         s
     }
@@ -238,7 +243,11 @@ mod tests {
                     let inside = scene.instances[i as usize].bounds.intersection(&n.bounds);
                     assert!(!inside.is_empty(), "leaf {id} box misses its instance {i}");
                 }
-                assert!(n.count as usize <= leaf_size || n.depth >= BuildOptions::default().max_depth || h.kind == HierarchyKind::KdTree);
+                assert!(
+                    n.count as usize <= leaf_size
+                        || n.depth >= BuildOptions::default().max_depth
+                        || h.kind == HierarchyKind::KdTree
+                );
             } else {
                 for &c in h.children(id as NodeId) {
                     let child = h.node(c);

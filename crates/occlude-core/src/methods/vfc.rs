@@ -26,11 +26,12 @@ impl CullingMethod for ViewFrustumCulling {
             if bounds.is_empty() {
                 continue;
             }
-            let inside = inside || match ctx.frustum.classify(bounds) {
-                Visibility::Outside => continue,
-                Visibility::Inside => true,
-                Visibility::Intersecting => false,
-            };
+            let inside = inside
+                || match ctx.frustum.classify(bounds) {
+                    Visibility::Outside => continue,
+                    Visibility::Inside => true,
+                    Visibility::Intersecting => false,
+                };
             if h.is_leaf(node) {
                 ctx.draw_leaf(backend, node);
                 continue;

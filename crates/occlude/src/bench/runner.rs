@@ -96,13 +96,15 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
     let methods = config
         .methods
         .iter()
-        .map(|m| if m == "vfc" { (m.clone(), reference.frames.clone()) } else { lanes.next().expect("one lane per method") })
+        .map(|m| {
+            if m == "vfc" {
+                (m.clone(), reference.frames.clone())
+            } else {
+                lanes.next().expect("one lane per method")
+            }
+        })
         .collect();
-    Ok(BenchRun {
-        scene: SceneStats::new(scene, &hierarchy, cameras.len()),
-        methods,
-        reference: reference.frames,
-    })
+    Ok(BenchRun { scene: SceneStats::new(scene, &hierarchy, cameras.len()), methods, reference: reference.frames })
 }
 
 /// Pixels whose depth bits differ between two images.

@@ -173,7 +173,8 @@ mod tests {
 
     #[test]
     fn p95_is_nearest_rank() {
-        let frames: Vec<FrameStats> = (1..=100).map(|i| FrameStats { frame_ms: i as f64, ..Default::default() }).collect();
+        let frames: Vec<FrameStats> =
+            (1..=100).map(|i| FrameStats { frame_ms: i as f64, ..Default::default() }).collect();
         assert_eq!(p95(&frames), 95.0);
         assert_eq!(p95(&frames[..1]), 1.0);
         assert_eq!(p95(&[]), 0.0);

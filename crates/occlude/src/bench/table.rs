@@ -60,8 +60,9 @@ pub fn render(report: &BenchReport) -> String {
             ]
         })
         .collect();
-    let widths: Vec<usize> =
-        (0..headers.len()).map(|c| rows.iter().map(|r| r[c].len()).chain([headers[c].len()]).max().unwrap_or(0)).collect();
+    let widths: Vec<usize> = (0..headers.len())
+        .map(|c| rows.iter().map(|r| r[c].len()).chain([headers[c].len()]).max().unwrap_or(0))
+        .collect();
     let line = |cells: &[String]| {
         cells
             .iter()

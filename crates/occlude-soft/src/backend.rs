@@ -1,0 +1,305 @@
+//! [`SoftBackend`]: the [`Backend`] interface on the exact CPU rasterizer and
+//! the simulated GPU clock.
+//!
+//! Commands are recorded with the CPU time they were issued at and rasterized
+//! lazily, in order, when a result is needed (a query check, the end of the
+//! frame). The GPU time line is then replayed: each command starts at
+//! max(issued, GPU free) and costs its fixed part plus its fragments. Pixel
+//! counts are always exact; only the times are modelled.
+
+use crate::clock::SimClock;
+use crate::gpu_model::GpuModel;
+use crate::raster::{self, Command, CommandKind, DepthBuffer, DepthTest};
+use glam::{Mat4, Vec4};
+use occlude_core::{Aabb, Backend, Camera, FrameStats, QueryHandle, Scene};
+use std::time::Instant;
+
+/// Relative growth of query boxes, so geometry lying on a box face or edge
+/// can never round to outside the box's pixels.
+const QUERY_BOX_PAD: f32 = 1e-5;
+/// Depth bias of query boxes in normalized device depth (about 64 float
+/// steps near 1.0): the box's depth always rounds in front of geometry that
+/// lies on its faces, so a visible object's box is never reported hidden.
+const QUERY_DEPTH_BIAS: f32 = 4e-6;
+
+/// The render state a command needs; switching it is a state change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RenderState {
+    Material(u32),
+    Query,
+}
+
+/// A recorded command's place on the simulated GPU time line.
+#[derive(Clone, Copy, Debug)]
+struct GpuOp {
+    issued_us: f64,
+    fixed_us: f64,
+    fragment_ns: f64,
+    query: Option<u32>,
+}
+
+/// What is known about an issued query.
+#[derive(Clone, Copy, Debug)]
+struct QueryState {
+    /// Still waiting to be rasterized.
+    pending: bool,
+    /// Treated as visible without rasterizing (a box touches the near region).
+    forced_visible: bool,
+    available_at_us: f64,
+    pixels: u64,
+}
+
+/// Software backend over one scene.
+pub struct SoftBackend<'s> {
+    scene: &'s Scene,
+    model: GpuModel,
+    depth: DepthBuffer,
+    camera: Option<Camera>,
+    view_projection: Mat4,
+    clock: SimClock,
+    stats: FrameStats,
+    state: Option<RenderState>,
+    pending_state_us: f64,
+    triangles: Vec<[Vec4; 3]>,
+    clip_scratch: Vec<Vec4>,
+    commands: Vec<Command>,
+    ops: Vec<GpuOp>,
+    queries: Vec<QueryState>,
+    drawn: Vec<bool>,
+    frame_start: Instant,
+}
+
+impl<'s> SoftBackend<'s> {
+    /// A backend drawing `scene` at `width` x `height` pixels with the costs
+    /// of `model`.
+    pub fn new(scene: &'s Scene, width: u32, height: u32, model: GpuModel) -> Self {
+        Self {
+            scene,
+            model,
+            depth: DepthBuffer::new(width, height),
+            camera: None,
+            view_projection: Mat4::IDENTITY,
+            clock: SimClock::default(),
+            stats: FrameStats::default(),
+            state: None,
+            pending_state_us: 0.0,
+            triangles: Vec::new(),
+            clip_scratch: Vec::new(),
+            commands: Vec::new(),
+            ops: Vec::new(),
+            queries: Vec::new(),
+            drawn: vec![false; scene.instances.len()],
+            frame_start: Instant::now(),
+        }
+    }
+
+    /// The cost model in use.
+    pub fn model(&self) -> &GpuModel {
+        &self.model
+    }
+
+    /// Switches render state if needed, charging a state change.
+    fn set_state(&mut self, state: RenderState) {
+        if self.state != Some(state) {
+            if self.state.is_some() {
+                self.stats.state_changes += 1;
+                self.clock.cpu_work(self.model.cpu_state_change_us);
+                self.pending_state_us += self.model.gpu_state_change_us;
+            }
+            self.state = Some(state);
+        }
+    }
+
+    /// Appends the clip-space triangles of instance `i`.
+    fn push_instance_triangles(&mut self, i: u32) {
+        let inst = &self.scene.instances[i as usize];
+        let mesh = &self.scene.meshes[inst.mesh as usize];
+        let mvp = self.view_projection * inst.transform;
+        let clip = &mut self.clip_scratch;
+        clip.clear();
+        clip.extend(mesh.positions.iter().map(|p| mvp * p.extend(1.0)));
+        self.triangles.extend(
+            mesh.indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]),
+        );
+    }
+
+    /// Appends the 12 outward, counter-clockwise triangles of a box in clip
+    /// space, pulled towards the eye by [`QUERY_DEPTH_BIAS`].
+    fn push_box_triangles(&mut self, b: &Aabb) {
+        let c = b.corners().map(|p| {
+            let v = self.view_projection * p.extend(1.0);
+            Vec4::new(v.x, v.y, v.z - QUERY_DEPTH_BIAS * v.w, v.w)
+        });
+        const FACES: [[usize; 4]; 6] =
+            [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
+        for [a, b, cc, d] in FACES {
+            self.triangles.push([c[a], c[b], c[cc]]);
+            self.triangles.push([c[a], c[cc], c[d]]);
+        }
+    }
+
+    /// Records one raster command and its GPU time-line entry.
+    fn record(&mut self, kind: CommandKind, first_triangle: usize, cull_back: bool, mut op: GpuOp) {
+        op.fixed_us += std::mem::take(&mut self.pending_state_us);
+        self.commands.push(Command { kind, triangles: first_triangle as u32..self.triangles.len() as u32, cull_back });
+        self.ops.push(op);
+    }
+
+    /// Rasterizes everything recorded and replays the GPU time line.
+    fn flush(&mut self) {
+        if self.commands.is_empty() {
+            return;
+        }
+        let results = raster::execute(&mut self.depth, &self.triangles, &self.commands);
+        for (op, r) in self.ops.iter().zip(&results) {
+            let end = self.clock.gpu_command(op.issued_us, op.fixed_us + r.fragments as f64 * op.fragment_ns * 1e-3);
+            match op.query {
+                Some(q) => {
+                    let q = &mut self.queries[q as usize];
+                    q.pending = false;
+                    q.available_at_us = end + self.model.query_latency_us;
+                    q.pixels = if q.forced_visible {
+                        u64::from(self.depth.width) * u64::from(self.depth.height)
+                    } else {
+                        r.passed
+                    };
+                }
+                None => self.stats.fragments += r.fragments,
+            }
+        }
+        self.triangles.clear();
+        self.commands.clear();
+        self.ops.clear();
+    }
+
+    fn query_state(&mut self, query: QueryHandle) -> QueryState {
+        if self.queries[query.0 as usize].pending {
+            self.flush();
+        }
+        self.queries[query.0 as usize]
+    }
+}
+
+impl Backend for SoftBackend<'_> {
+    fn begin_frame(&mut self, camera: &Camera) {
+        self.camera = Some(*camera);
+        self.view_projection = camera.view_projection();
+        self.depth.clear();
+        self.clock = SimClock::default();
+        self.stats = FrameStats::default();
+        self.state = None;
+        self.pending_state_us = 0.0;
+        self.queries.clear();
+        self.drawn.fill(false);
+        self.frame_start = Instant::now();
+    }
+
+    fn draw(&mut self, instances: &[u32]) {
+        for &i in instances {
+            let inst = &self.scene.instances[i as usize];
+            let triangles = self.scene.meshes[inst.mesh as usize].triangle_count() as u64;
+            self.set_state(RenderState::Material(inst.material));
+            self.clock.cpu_work(self.model.cpu_draw_call_us);
+            self.stats.draw_calls += 1;
+            self.stats.triangles += triangles;
+            if !std::mem::replace(&mut self.drawn[i as usize], true) {
+                self.stats.visible_objects += 1;
+            }
+            let first = self.triangles.len();
+            self.push_instance_triangles(i);
+            let op = GpuOp {
+                issued_us: self.clock.cpu,
+                fixed_us: self.model.gpu_draw_call_us + triangles as f64 * self.model.gpu_triangle_ns * 1e-3,
+                fragment_ns: self.model.gpu_fragment_ns,
+                query: None,
+            };
+            self.record(CommandKind::Draw, first, false, op);
+        }
+    }
+
+    fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
+        let camera = self.camera.expect("issue_query outside a frame");
+        self.set_state(RenderState::Query);
+        self.clock.cpu_work(self.model.cpu_query_us);
+        self.stats.queries += 1;
+        self.stats.query_boxes += boxes.len() as u64;
+        let handle = self.queries.len() as u32;
+        let padded: Vec<Aabb> = boxes
+            .iter()
+            .map(|b| b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element()))
+            .collect();
+        let forced_visible = padded.iter().any(|b| camera.box_touches_near_region(b));
+        let first = self.triangles.len();
+        if !forced_visible {
+            for b in &padded {
+                self.push_box_triangles(b);
+            }
+        }
+        self.queries.push(QueryState { pending: true, forced_visible, available_at_us: 0.0, pixels: 0 });
+        let op = GpuOp {
+            issued_us: self.clock.cpu,
+            fixed_us: self.model.gpu_query_box_us * boxes.len() as f64,
+            fragment_ns: self.model.gpu_query_fragment_ns,
+            query: Some(handle),
+        };
+        self.record(CommandKind::Query(DepthTest::Less), first, true, op);
+        QueryHandle(handle)
+    }
+
+    fn is_available(&mut self, query: QueryHandle) -> bool {
+        self.clock.cpu_work(self.model.cpu_query_poll_us);
+        self.query_state(query).available_at_us <= self.clock.cpu
+    }
+
+    fn result(&mut self, query: QueryHandle) -> u64 {
+        let q = self.query_state(query);
+        self.clock.wait_until(q.available_at_us);
+        q.pixels
+    }
+
+    fn traverse(&mut self, nodes: u64) {
+        self.stats.traversal_steps += nodes;
+        self.clock.cpu_work(nodes as f64 * self.model.cpu_node_us);
+    }
+
+    fn end_frame(&mut self) -> FrameStats {
+        self.flush();
+        let c = &self.clock;
+        let mut s = self.stats;
+        s.frame_ms = c.frame_end() * 1e-3;
+        s.cpu_ms = (c.cpu - c.wait) * 1e-3;
+        s.gpu_ms = c.gpu_busy * 1e-3;
+        s.wait_ms = c.wait * 1e-3;
+        s.wall_ms = self.frame_start.elapsed().as_secs_f64() * 1e3;
+        self.camera = None;
+        s
+    }
+
+    fn depth_image(&mut self) -> Vec<f32> {
+        self.flush();
+        self.depth.data.clone()
+    }
+
+    fn visible_instances(&mut self, camera: &Camera, candidates: &[u32]) -> Vec<u32> {
+        self.view_projection = camera.view_projection();
+        self.depth.clear();
+        let mut ranges = Vec::with_capacity(candidates.len());
+        for &i in candidates {
+            let first = self.triangles.len() as u32;
+            self.push_instance_triangles(i);
+            ranges.push(first..self.triangles.len() as u32);
+        }
+        let mut commands: Vec<Command> = ranges
+            .iter()
+            .map(|r| Command { kind: CommandKind::Draw, triangles: r.clone(), cull_back: false })
+            .collect();
+        commands.extend(ranges.into_iter().map(|r| Command {
+            kind: CommandKind::Query(DepthTest::Equal),
+            triangles: r,
+            cull_back: false,
+        }));
+        let results = raster::execute(&mut self.depth, &self.triangles, &commands);
+        self.triangles.clear();
+        candidates.iter().zip(&results[candidates.len()..]).filter(|(_, r)| r.passed > 0).map(|(&i, _)| i).collect()
+    }
+}

@@ -1,0 +1,194 @@
+//! Cost parameters of the simulated GPU clock (DESIGN.md, "The simulated GPU
+//! clock"), with presets and TOML overrides.
+//!
+//! Where the defaults come from is documented in `docs/gpu-models.md`.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use thiserror::Error;
+
+/// Every cost the simulated clock charges. CPU costs advance the CPU clock at
+/// the call; GPU costs occupy the in-order GPU queue.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GpuModel {
+    /// Name shown in tables and JSON (`gpu_model`).
+    pub name: String,
+    /// CPU time to issue one draw call, µs.
+    pub cpu_draw_call_us: f64,
+    /// CPU time of one render-state change, µs.
+    pub cpu_state_change_us: f64,
+    /// CPU time to issue one occlusion query (begin, boxes, end), µs.
+    pub cpu_query_us: f64,
+    /// CPU time of one non-blocking "is the result available?" check, µs.
+    pub cpu_query_poll_us: f64,
+    /// CPU time to visit one hierarchy node (frustum test, queue work), µs.
+    pub cpu_node_us: f64,
+    /// GPU time per draw call (setup, vertex fetch start), µs.
+    pub gpu_draw_call_us: f64,
+    /// GPU time per drawn triangle, ns.
+    pub gpu_triangle_ns: f64,
+    /// GPU time per drawn fragment (covered pixel, before the depth test), ns.
+    pub gpu_fragment_ns: f64,
+    /// GPU time of one render-state change (pipeline flush), µs.
+    pub gpu_state_change_us: f64,
+    /// GPU time per query box (setup of 12 triangles), µs.
+    pub gpu_query_box_us: f64,
+    /// GPU time per query fragment (depth test only, no shading), ns.
+    pub gpu_query_fragment_ns: f64,
+    /// Time from the GPU finishing a query until the CPU can read its
+    /// result, µs.
+    pub query_latency_us: f64,
+}
+
+/// Errors loading a GPU model.
+#[derive(Debug, Error)]
+pub enum GpuModelError {
+    /// The name is neither a preset nor a readable file.
+    #[error("unknown GPU model '{0}': expected a preset ({presets}) or a TOML file", presets = GpuModel::PRESETS.join(", "))]
+    Unknown(String),
+    /// The file could not be read.
+    #[error("cannot read GPU model file {path}: {source}")]
+    Io { path: String, source: std::io::Error },
+    /// The file is not a valid model.
+    #[error("invalid GPU model file {path}: {message}")]
+    Invalid { path: String, message: String },
+}
+
+impl GpuModel {
+    /// Names of the built-in presets.
+    pub const PRESETS: [&'static str; 2] = ["gpu-2004", "modern"];
+
+    /// Close to the CHC paper's GeForce FX 5950 / Pentium 4 (2004): slow draw
+    /// calls and long query round trips. Derived from the paper's Table 1.
+    pub fn gpu_2004() -> Self {
+        Self {
+            name: "gpu-2004".into(),
+            cpu_draw_call_us: 4.0,
+            cpu_state_change_us: 2.0,
+            cpu_query_us: 2.0,
+            cpu_query_poll_us: 0.5,
+            cpu_node_us: 0.3,
+            gpu_draw_call_us: 3.0,
+            gpu_triangle_ns: 25.0,
+            gpu_fragment_ns: 0.6,
+            gpu_state_change_us: 2.0,
+            gpu_query_box_us: 2.0,
+            gpu_query_fragment_ns: 0.3,
+            query_latency_us: 12.0,
+        }
+    }
+
+    /// A current desktop GPU driven by a modern API: cheap draw calls and
+    /// triangles, but a deep pipeline whose query results come back late.
+    pub fn modern() -> Self {
+        Self {
+            name: "modern".into(),
+            cpu_draw_call_us: 1.0,
+            cpu_state_change_us: 1.5,
+            cpu_query_us: 0.5,
+            cpu_query_poll_us: 0.1,
+            cpu_node_us: 0.05,
+            gpu_draw_call_us: 0.5,
+            gpu_triangle_ns: 0.4,
+            gpu_fragment_ns: 0.02,
+            gpu_state_change_us: 1.0,
+            gpu_query_box_us: 0.3,
+            gpu_query_fragment_ns: 0.005,
+            query_latency_us: 30.0,
+        }
+    }
+
+    /// The preset called `name`.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "gpu-2004" => Some(Self::gpu_2004()),
+            "modern" => Some(Self::modern()),
+            _ => None,
+        }
+    }
+
+    /// A preset by name, or a TOML file holding `preset = "..."` (default
+    /// `modern`) plus any fields to override.
+    pub fn load(name_or_path: &str) -> Result<Self, GpuModelError> {
+        if let Some(model) = Self::preset(name_or_path) {
+            return Ok(model);
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            return Err(GpuModelError::Unknown(name_or_path.to_string()));
+        }
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| GpuModelError::Io { path: name_or_path.to_string(), source })?;
+        Self::from_toml(&text).map_err(|message| GpuModelError::Invalid { path: name_or_path.to_string(), message })
+    }
+
+    /// Parses a TOML override (see [`GpuModel::load`]).
+    pub fn from_toml(text: &str) -> Result<Self, String> {
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| e.message().to_string())?;
+        let base = match table.remove("preset") {
+            None => Self::modern(),
+            Some(toml::Value::String(p)) => Self::preset(&p)
+                .ok_or_else(|| format!("unknown preset '{p}': expected one of {}", Self::PRESETS.join(", ")))?,
+            Some(other) => return Err(format!("'preset' must be a string, not {other}")),
+        };
+        let mut merged = toml::Table::try_from(&base).map_err(|e| e.to_string())?;
+        merged.extend(table);
+        let model: Self = merged.try_into().map_err(|e: toml::de::Error| e.message().to_string())?;
+        model.validate()?;
+        Ok(model)
+    }
+
+    /// Every cost must be a finite, non-negative number.
+    pub fn validate(&self) -> Result<(), String> {
+        let costs = [
+            ("cpu_draw_call_us", self.cpu_draw_call_us),
+            ("cpu_state_change_us", self.cpu_state_change_us),
+            ("cpu_query_us", self.cpu_query_us),
+            ("cpu_query_poll_us", self.cpu_query_poll_us),
+            ("cpu_node_us", self.cpu_node_us),
+            ("gpu_draw_call_us", self.gpu_draw_call_us),
+            ("gpu_triangle_ns", self.gpu_triangle_ns),
+            ("gpu_fragment_ns", self.gpu_fragment_ns),
+            ("gpu_state_change_us", self.gpu_state_change_us),
+            ("gpu_query_box_us", self.gpu_query_box_us),
+            ("gpu_query_fragment_ns", self.gpu_query_fragment_ns),
+            ("query_latency_us", self.query_latency_us),
+        ];
+        match costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
+            Some((name, v)) => Err(format!("{name} = {v}: costs must be finite and >= 0")),
+            None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_are_valid_and_distinct() {
+        for p in GpuModel::PRESETS {
+            let m = GpuModel::preset(p).unwrap();
+            assert_eq!(m.name, p);
+            m.validate().unwrap();
+        }
+        assert!(GpuModel::gpu_2004().cpu_draw_call_us > GpuModel::modern().cpu_draw_call_us);
+    }
+
+    #[test]
+    fn toml_overrides_a_preset() {
+        let m = GpuModel::from_toml("preset = \"gpu-2004\"\nquery_latency_us = 99.0\nname = \"mine\"").unwrap();
+        assert_eq!(m.query_latency_us, 99.0);
+        assert_eq!(m.name, "mine");
+        assert_eq!(m.cpu_draw_call_us, GpuModel::gpu_2004().cpu_draw_call_us);
+    }
+
+    #[test]
+    fn toml_errors_name_the_problem() {
+        assert!(GpuModel::from_toml("no_such_cost = 1.0").unwrap_err().contains("no_such_cost"));
+        assert!(GpuModel::from_toml("preset = \"gpu-1999\"").unwrap_err().contains("gpu-1999"));
+        assert!(GpuModel::from_toml("query_latency_us = -1.0").unwrap_err().contains("query_latency_us"));
+        assert!(matches!(GpuModel::load("nonexistent-model"), Err(GpuModelError::Unknown(_))));
+    }
+}

@@ -1,0 +1,510 @@
+use glam::{Mat4, Vec3, Vec4};
+
+use super::clip::Polygon;
+use super::setup::{setup_triangle, Viewport};
+use super::*;
+
+/// Small deterministic PRNG (splitmix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        let u = (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
+        lo + (hi - lo) * u
+    }
+}
+
+/// Clip-space vertex of screen position `(sx, sy)` (pixels, y down), NDC depth `z`,
+/// scaled by `w`.
+fn at_pixel(sx: f32, sy: f32, z: f32, w: f32, width: u32, height: u32) -> Vec4 {
+    let x = sx * 2.0 / width as f32 - 1.0;
+    let y = 1.0 - sy * 2.0 / height as f32;
+    Vec4::new(x, y, z, 1.0) * w
+}
+
+fn cmd(kind: CommandKind, triangles: Range<u32>, cull_back: bool) -> Command {
+    Command { kind, triangles, cull_back }
+}
+
+fn draw_all(depth: &mut DepthBuffer, tris: &[[Vec4; 3]]) -> CommandResult {
+    execute(depth, tris, &[cmd(CommandKind::Draw, 0..tris.len() as u32, false)])[0]
+}
+
+/// Two CCW triangles covering NDC `[-s, s]^2` at depth `z`.
+fn quad(s: f32, z: f32) -> [[Vec4; 3]; 2] {
+    let v = |x: f32, y: f32| Vec4::new(x, y, z, 1.0);
+    [[v(-s, -s), v(s, -s), v(s, s)], [v(-s, -s), v(s, s), v(-s, s)]]
+}
+
+/// Number of pixel centres `p + 0.5` with `lo <= p + 0.5 < hi` (top-left rule for a
+/// rectangle: left and top edges included).
+fn centres_in(lo: f32, hi: f32) -> u64 {
+    (0..10_000).filter(|&p| lo <= p as f32 + 0.5 && (p as f32 + 0.5) < hi).count() as u64
+}
+
+#[test]
+fn screen_quad_covers_every_pixel_once() {
+    // Sizes that are not tile multiples.
+    let mut depth = DepthBuffer::new(200, 150);
+    let r = draw_all(&mut depth, &quad(1.0, 0.5));
+    assert_eq!(r.fragments, 200 * 150);
+    assert_eq!(r.passed, 200 * 150);
+    assert!(depth.data.iter().all(|&d| d == 0.5));
+}
+
+/// A jittered-grid triangulation of the screen rectangle `[x0, x1) x [y0, y1)`
+/// (pixels), every triangle's winding randomly flipped when `flip` is set.
+fn triangulated_rect(
+    rect: [f32; 4],
+    cells: usize,
+    w: f32,
+    flip: bool,
+    rng: &mut Rng,
+    size: (u32, u32),
+) -> Vec<[Vec4; 3]> {
+    let [x0, y0, x1, y1] = rect;
+    let n = cells + 1;
+    let mut pts = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let mut x = x0 + (x1 - x0) * i as f32 / cells as f32;
+            let mut y = y0 + (y1 - y0) * j as f32 / cells as f32;
+            if i > 0 && i < cells {
+                x += rng.range(-0.3, 0.3) * (x1 - x0) / cells as f32;
+            }
+            if j > 0 && j < cells {
+                y += rng.range(-0.3, 0.3) * (y1 - y0) / cells as f32;
+            }
+            let z = rng.range(0.1, 0.9);
+            pts.push(at_pixel(x, y, z, w, size.0, size.1));
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..cells {
+        for i in 0..cells {
+            let (a, b, c, d) = (j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1);
+            // Screen y goes down, so (a, c, d) is counter-clockwise in NDC.
+            let pick = if rng.next_u64() & 1 == 0 { [[a, c, d], [a, d, b]] } else { [[a, c, b], [b, c, d]] };
+            for [p, q, r] in pick {
+                if flip && rng.next_u64() & 1 == 0 {
+                    tris.push([pts[p], pts[r], pts[q]]);
+                } else {
+                    tris.push([pts[p], pts[q], pts[r]]);
+                }
+            }
+        }
+    }
+    tris
+}
+
+#[test]
+fn triangulated_rectangle_covers_each_pixel_once() {
+    let size = (256u32, 128u32);
+    let mut rng = Rng(7);
+    let rects = [
+        [10.0, 20.0, 200.0, 100.0],       // pixel-aligned corners
+        [10.5, 20.5, 130.5, 90.5],        // edges through pixel centres
+        [3.25, 7.75, 250.125, 127.5],     // fractional (dyadic) corners
+        [-40.0, -30.0, 300.0, 200.0],     // beyond the viewport
+        [100.375, 60.625, 101.0, 61.125], // smaller than a pixel
+    ];
+    for rect in rects {
+        for (w, flip, cells) in [(1.0, false, 7), (2.0, true, 13), (0.5, true, 1)] {
+            let tris = triangulated_rect(rect, cells, w, flip, &mut rng, size);
+            let mut depth = DepthBuffer::new(size.0, size.1);
+            let r = draw_all(&mut depth, &tris);
+            let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32);
+            let expected = centres_in(clamp(rect[0], size.0), clamp(rect[2], size.0))
+                * centres_in(clamp(rect[1], size.1), clamp(rect[3], size.1));
+            assert_eq!(r.fragments, expected, "rect {rect:?} w {w}");
+            assert_eq!(r.passed, expected, "rect {rect:?} w {w}");
+            let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+            assert_eq!(written, expected, "rect {rect:?} w {w}");
+            for (i, &d) in depth.data.iter().enumerate() {
+                let (px, py) = ((i as u32 % size.0) as f32 + 0.5, (i as u32 / size.0) as f32 + 0.5);
+                let inside = rect[0] <= px && px < rect[2] && rect[1] <= py && py < rect[3];
+                assert_eq!(inside, d < 1.0, "pixel {px},{py} of rect {rect:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn huge_quad_is_clipped_to_the_guard_band_without_gaps() {
+    let mut depth = DepthBuffer::new(300, 200);
+    let r = draw_all(&mut depth, &quad(1.0e5, 0.25));
+    assert_eq!(r.fragments, 300 * 200);
+    assert!(depth.data.iter().all(|&d| d == 0.25));
+}
+
+/// The 12 triangles of the axis-aligned cube `center +- 0.5`, each face
+/// counter-clockwise seen from outside in a right-handed space.
+fn cube(center: Vec3) -> Vec<[Vec3; 3]> {
+    let mut tris = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            let mut u = Vec3::ZERO;
+            u[(axis + 1) % 3] = 1.0;
+            let v = n.cross(u);
+            let c = center + n * 0.5;
+            let p = [c - u * 0.5 - v * 0.5, c + u * 0.5 - v * 0.5, c + u * 0.5 + v * 0.5];
+            let q = c - u * 0.5 + v * 0.5;
+            tris.push(p);
+            tris.push([p[0], p[2], q]);
+        }
+    }
+    for t in &tris {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        assert!(n.dot(t[0] - center) > 0.0, "outward CCW winding");
+    }
+    tris
+}
+
+#[test]
+fn cube_covers_its_front_face() {
+    // Orthographic, w = 1: x, y map directly to NDC and the camera looks down -z, so
+    // NDC depth is 0.5 - z and the face at z = +0.5 is the front (depth 0).
+    let to_clip = |p: Vec3| Vec4::new(p.x, p.y, 0.5 - p.z, 1.0);
+    let tris: Vec<[Vec4; 3]> = cube(Vec3::new(0.25, -0.125, 0.0)).into_iter().map(|t| t.map(to_clip)).collect();
+    // 128x128: NDC x in [-0.25, 0.75] -> pixels [48, 112), y in [-0.625, 0.375] ->
+    // rows [40, 104): a 64x64 face.
+    let mut depth = DepthBuffer::new(128, 128);
+    let n = tris.len() as u32;
+    let r = execute(
+        &mut depth,
+        &tris,
+        &[
+            cmd(CommandKind::Query(DepthTest::Less), 0..n, true),
+            cmd(CommandKind::Query(DepthTest::Less), 0..n, false),
+            cmd(CommandKind::Draw, 0..n, true),
+        ],
+    );
+    assert_eq!(r[0], CommandResult { fragments: 4096, passed: 4096 });
+    // Two-sided: the back face (depth 1.0) is covered too but fails LESS vs 1.0.
+    assert_eq!(r[1], CommandResult { fragments: 8192, passed: 4096 });
+    assert_eq!(r[2], CommandResult { fragments: 4096, passed: 4096 });
+    for (i, &d) in depth.data.iter().enumerate() {
+        let (x, y) = (i % 128, i / 128);
+        let inside = (48..112).contains(&x) && (40..104).contains(&y);
+        assert_eq!(d, if inside { 0.0 } else { 1.0 }, "pixel {x},{y}");
+    }
+}
+
+#[test]
+fn near_plane_clips_affine_depth() {
+    // w = 1 and z = x: the left half of the screen is behind the near plane.
+    let v = |x: f32, y: f32| Vec4::new(x, y, x, 1.0);
+    let tris = [[v(-1.0, -1.0), v(1.0, -1.0), v(1.0, 1.0)], [v(-1.0, -1.0), v(1.0, 1.0), v(-1.0, 1.0)]];
+    let mut depth = DepthBuffer::new(64, 32);
+    let r = draw_all(&mut depth, &tris);
+    assert_eq!(r.fragments, 32 * 32);
+    for (i, &d) in depth.data.iter().enumerate() {
+        let x = i % 64;
+        if x < 32 {
+            assert_eq!(d, 1.0);
+        } else {
+            let expected = (x as f32 + 0.5) / 32.0 - 1.0;
+            assert!((d - expected).abs() < 1e-6, "pixel {x}: {d} vs {expected}");
+        }
+    }
+}
+
+#[test]
+fn near_plane_clips_a_ground_triangle_reaching_behind_the_eye() {
+    let (w, h) = (128u32, 96u32);
+    let proj = Mat4::perspective_rh(90f32.to_radians(), w as f32 / h as f32, 0.1, 10_000.0);
+    // Counter-clockwise seen from above.
+    let tri = [
+        Vec3::new(-1.0e4, -1.0, -1000.0),
+        Vec3::new(0.0, -1.0, 1000.0), // behind the eye
+        Vec3::new(1.0e4, -1.0, -1000.0),
+    ]
+    .map(|p| proj * p.extend(1.0));
+    assert!(tri[1].w < 0.0);
+    for cull_back in [false, true] {
+        let mut depth = DepthBuffer::new(w, h);
+        let r = execute(&mut depth, &[tri], &[cmd(CommandKind::Draw, 0..1, cull_back)])[0];
+        // The floor seen from above is front-facing and fills exactly the rows below
+        // the horizon; nothing wraps around above it.
+        assert_eq!(r.fragments, u64::from(w * h / 2), "cull_back {cull_back}");
+        assert_eq!(r.passed, r.fragments);
+        for (i, &d) in depth.data.iter().enumerate() {
+            if i < (w * h / 2) as usize {
+                assert_eq!(d, 1.0);
+            } else {
+                assert!((0.0..1.0).contains(&d), "depth {d}");
+            }
+        }
+    }
+    // Seen from below (winding reversed), it is back-facing.
+    let mut depth = DepthBuffer::new(w, h);
+    let reversed = [tri[0], tri[2], tri[1]];
+    let r = execute(&mut depth, &[reversed], &[cmd(CommandKind::Draw, 0..1, true)]);
+    assert_eq!(r[0].fragments, 0);
+}
+
+#[test]
+fn near_clipped_mesh_is_watertight() {
+    // A jittered grid on the ground plane y = -1, reaching behind the eye and far past
+    // the guard band at the sides: its triangles share near- and guard-clipped edges.
+    let (w, h) = (160u32, 120u32);
+    let proj = Mat4::perspective_rh(90f32.to_radians(), w as f32 / h as f32, 0.1, 10_000.0);
+    let mut rng = Rng(21);
+    let (nx, nz) = (41usize, 41usize);
+    let mut pts = Vec::new();
+    for j in 0..nz {
+        for i in 0..nx {
+            let mut x = -4000.0 + 8000.0 * i as f32 / (nx - 1) as f32;
+            let mut z = 200.0 - 1400.0 * j as f32 / (nz - 1) as f32;
+            if i > 0 && i < nx - 1 && j > 0 && j < nz - 1 {
+                x += rng.range(-50.0, 50.0);
+                z += rng.range(-10.0, 10.0);
+            }
+            pts.push(proj * Vec4::new(x, -1.0, z, 1.0));
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..nz - 1 {
+        for i in 0..nx - 1 {
+            let (a, b, c, d) = (j * nx + i, j * nx + i + 1, (j + 1) * nx + i, (j + 1) * nx + i + 1);
+            // Rows go away from the eye (-z): (a, b, d) is counter-clockwise from above.
+            tris.push([pts[a], pts[b], pts[d]]);
+            tris.push([pts[a], pts[d], pts[c]]);
+        }
+    }
+    let mut depth = DepthBuffer::new(w, h);
+    let n = tris.len() as u32;
+    let r = execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 0..n, true)])[0];
+    assert_eq!(r.fragments, u64::from(w * h / 2));
+    assert_eq!(r.passed, r.fragments);
+    let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+    assert_eq!(written, r.fragments);
+}
+
+#[test]
+fn degenerate_and_non_finite_triangles_are_dropped() {
+    let v = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
+    let tris = [
+        [v(-1.0, -1.0), v(0.0, 0.0), v(1.0, 1.0)],   // collinear
+        [v(-1.0, -1.0), v(-1.0, -1.0), v(1.0, 1.0)], // repeated vertex
+        [v(f32::NAN, -1.0), v(1.0, -1.0), v(1.0, 1.0)],
+        [v(-1.0, -1.0), v(f32::INFINITY, -1.0), v(1.0, 1.0)],
+        [v(-1.0, -1.0), v(1.0, -1.0), Vec4::new(1.0, 1.0, f32::NEG_INFINITY, 1.0)],
+        [Vec4::ZERO, Vec4::ZERO, Vec4::ZERO],
+        [Vec4::new(0.0, 0.0, 0.5, 0.0), v(1.0, -1.0), v(1.0, 1.0)], // w = 0, z > 0
+        [v(-0.5, -0.5), v(-0.5 + 1e-7, -0.5), v(-0.5, -0.5 + 1e-7)], // below a sub-pixel
+    ];
+    let mut depth = DepthBuffer::new(64, 64);
+    for cull_back in [false, true] {
+        let commands: Vec<Command> =
+            (0..tris.len() as u32).map(|i| cmd(CommandKind::Draw, i..i + 1, cull_back)).collect();
+        let r = execute(&mut depth, &tris, &commands);
+        assert!(r.iter().all(|r| *r == CommandResult::default()), "{r:?}");
+    }
+    assert!(depth.data.iter().all(|&d| d == 1.0));
+}
+
+#[test]
+fn query_less_counts_unoccluded_fragments() {
+    let (w, h) = (160u32, 100u32);
+    // Occluder: the left 40% of the screen at depth 0.5.
+    let o = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
+    let occluder = [[o(-1.0, -1.0), o(-0.2, -1.0), o(-0.2, 1.0)], [o(-1.0, -1.0), o(-0.2, 1.0), o(-1.0, 1.0)]];
+    let mut tris = occluder.to_vec();
+    tris.extend(quad(1.0, 0.7)); // behind the occluder
+    tris.extend(quad(1.0, 0.3)); // in front of it
+    let mut depth = DepthBuffer::new(w, h);
+    let q = CommandKind::Query(DepthTest::Less);
+    let r = execute(
+        &mut depth,
+        &tris,
+        &[cmd(CommandKind::Draw, 0..2, false), cmd(q, 2..4, true), cmd(q, 4..6, true), cmd(q, 0..2, true)],
+    );
+    let all = u64::from(w * h);
+    let left = u64::from(64 * h);
+    assert_eq!(r[0], CommandResult { fragments: left, passed: left });
+    assert_eq!(r[1], CommandResult { fragments: all, passed: all - left });
+    assert_eq!(r[2], CommandResult { fragments: all, passed: all });
+    assert_eq!(r[3], CommandResult { fragments: left, passed: 0 });
+    // Queries do not write depth.
+    let written = depth.data.iter().filter(|&&d| d == 0.5).count() as u64;
+    assert_eq!(written, left);
+    assert_eq!(depth.data.iter().filter(|&&d| d == 1.0).count() as u64, all - left);
+}
+
+/// A random scene of `n` triangles in clip space: on and off screen, crossing the
+/// near plane, some behind the eye, some tiny.
+fn random_scene(n: usize, seed: u64) -> Vec<[Vec4; 3]> {
+    let mut rng = Rng(seed);
+    (0..n)
+        .map(|i| {
+            let w = rng.range(0.5, 4.0);
+            let (cx, cy) = (rng.range(-1.3, 1.3), rng.range(-1.3, 1.3));
+            let size = match i % 4 {
+                0 => 0.01,
+                1 => 0.1,
+                2 => 0.5,
+                _ => 3.0,
+            };
+            let mut vert = || {
+                let w = if i % 17 == 0 { rng.range(-1.0, 1.0) } else { w * rng.range(0.8, 1.2) };
+                Vec4::new(
+                    (cx + rng.range(-size, size)) * w,
+                    (cy + rng.range(-size, size)) * w,
+                    rng.range(-0.1, 1.05) * w,
+                    w,
+                )
+            };
+            [vert(), vert(), vert()]
+        })
+        .collect()
+}
+
+fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool").install(f)
+}
+
+#[test]
+fn query_equal_passes_redrawn_geometry() {
+    let tris = random_scene(300, 11);
+    let (w, h) = (240u32, 180u32);
+    let n = tris.len() as u32;
+    // Redrawing a single triangle with EQUAL passes all of its fragments.
+    for i in 0..n {
+        let mut depth = DepthBuffer::new(w, h);
+        let r = execute(
+            &mut depth,
+            &tris,
+            &[cmd(CommandKind::Draw, i..i + 1, false), cmd(CommandKind::Query(DepthTest::Equal), i..i + 1, false)],
+        );
+        assert_eq!(r[1].fragments, r[0].fragments);
+        assert_eq!(r[1].passed, r[0].passed, "triangle {i}");
+    }
+    // After the whole scene, every written pixel equals some triangle's depth.
+    let mut depth = DepthBuffer::new(w, h);
+    let mut commands = vec![cmd(CommandKind::Draw, 0..n, false)];
+    commands.extend((0..n).map(|i| cmd(CommandKind::Query(DepthTest::Equal), i..i + 1, false)));
+    let before = {
+        let mut d = DepthBuffer::new(w, h);
+        draw_all(&mut d, &tris);
+        d
+    };
+    let r = execute(&mut depth, &tris, &commands);
+    assert_eq!(depth, before, "queries do not write depth");
+    let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+    let equal: u64 = r[1..].iter().map(|r| r.passed).sum();
+    assert!(written > 1000);
+    assert!(equal >= written, "{equal} < {written}");
+}
+
+#[test]
+fn thread_count_does_not_change_results() {
+    let tris = random_scene(400, 3);
+    let n = tris.len() as u32;
+    let mut commands = vec![cmd(CommandKind::Draw, 0..n / 2, false)];
+    for i in (0..n).step_by(12) {
+        let end = (i + 12).min(n);
+        commands.push(cmd(CommandKind::Query(DepthTest::Less), i..end, true));
+        commands.push(cmd(CommandKind::Query(DepthTest::Equal), i..end, false));
+    }
+    commands.push(cmd(CommandKind::Draw, n / 2..n, true));
+    let run = |threads| {
+        in_pool(threads, || {
+            let mut depth = DepthBuffer::new(333, 251);
+            let r = Rasterizer::new().execute(&mut depth, &tris, &commands);
+            (depth, r)
+        })
+    };
+    let (d1, r1) = run(1);
+    let (d2, r2) = run(2);
+    let (d4, r4) = run(4);
+    assert!(r1.iter().any(|r| r.passed > 0));
+    assert_eq!(r1, r2);
+    assert_eq!(r1, r4);
+    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&d1), bits(&d2));
+    assert_eq!(bits(&d1), bits(&d4));
+}
+
+#[test]
+fn draw_order_does_not_change_depth() {
+    let tris = random_scene(400, 5);
+    let mut rev = tris.clone();
+    rev.reverse();
+    let mut a = DepthBuffer::new(301, 207);
+    let mut b = DepthBuffer::new(301, 207);
+    let mut raster = Rasterizer::new();
+    let ra = raster.execute(&mut a, &tris, &[cmd(CommandKind::Draw, 0..400, false)]);
+    // One command per triangle, reversed, reusing the rasterizer's buffers.
+    let commands: Vec<Command> = (0..400).map(|i| cmd(CommandKind::Draw, i..i + 1, false)).collect();
+    let rb = raster.execute(&mut b, &rev, &commands);
+    let frags: u64 = rb.iter().map(|r| r.fragments).sum();
+    assert_eq!(ra[0].fragments, frags);
+    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&b));
+}
+
+#[test]
+fn matches_a_per_pixel_reference() {
+    // Reference: evaluate every set-up triangle's edge functions directly at every
+    // pixel of its bounding box, with no tiles and no spans.
+    let (w, h) = (190u32, 140u32);
+    let tris = random_scene(300, 9);
+    let viewport = Viewport::new(w, h);
+    let mut expected = DepthBuffer::new(w, h);
+    let mut expected_r = CommandResult::default();
+    let mut poly = Polygon::new();
+    let mut setups = Vec::new();
+    for t in &tris {
+        setups.clear();
+        setup_triangle(t, false, 0, viewport, &mut poly, &mut setups);
+        for s in &setups {
+            for dy in 0..=(s.y1 - s.y0) {
+                for dx in 0..=(s.x1 - s.x0) {
+                    let covered =
+                        s.edges.iter().all(|e| e.origin + e.step_x * i64::from(dx) + e.step_y * i64::from(dy) >= 0);
+                    if covered {
+                        let z = s.depth(s.row_depth(dy), dx);
+                        let d = &mut expected.data[((s.y0 + dy) as u32 * w + (s.x0 + dx) as u32) as usize];
+                        expected_r.fragments += 1;
+                        if z < *d {
+                            *d = z;
+                            expected_r.passed += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut depth = DepthBuffer::new(w, h);
+    let r = draw_all(&mut depth, &tris);
+    assert_eq!(r, expected_r);
+    assert!(r.fragments > 10_000);
+    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&depth), bits(&expected));
+}
+
+#[test]
+fn empty_inputs() {
+    let mut depth = DepthBuffer::new(0, 10);
+    let tris = quad(1.0, 0.5);
+    assert_eq!(execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 0..2, false)]), vec![CommandResult::default()]);
+    let mut depth = DepthBuffer::new(10, 10);
+    assert!(execute(&mut depth, &tris, &[]).is_empty());
+    let r = execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 1..1, false)]);
+    assert_eq!(r, vec![CommandResult::default()]);
+    depth.data[3] = 0.0;
+    depth.clear();
+    assert!(depth.data.iter().all(|&d| d == 1.0));
+}

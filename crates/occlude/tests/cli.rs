@@ -1,0 +1,87 @@
+//! The command line as a user meets it: bad input gets a clear message and
+//! exit code 2; a short run prints the table and writes JSON in the schema of
+//! DESIGN.md.
+
+use std::process::Command;
+
+fn occlude(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_occlude")).args(args).output().expect("occlude runs")
+}
+
+fn assert_usage_error(args: &[&str], needle: &str) {
+    let out = occlude(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: expected exit code 2, stderr: {stderr}");
+    assert!(stderr.contains(needle), "{args:?}: stderr should mention '{needle}': {stderr}");
+}
+
+#[test]
+fn bad_input_is_a_clear_error_with_exit_code_2() {
+    assert_usage_error(&["bench", "--scene", "atlantis"], "atlantis");
+    assert_usage_error(&["bench", "--size", "huge"], "huge");
+    assert_usage_error(&["bench", "--methods", "vfc,magic"], "magic");
+    assert_usage_error(&["bench", "--frames", "0"], "frames");
+    assert_usage_error(&["bench", "--resolution", "12by4"], "12by4");
+    assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
+    assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
+    let dir = std::env::temp_dir().join(format!("occlude-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "query_latency_us = \"slow\"").unwrap();
+    assert_usage_error(&["bench", "--gpu-model", bad.to_str().unwrap()], "bad.toml");
+}
+
+#[test]
+fn short_run_prints_table_and_writes_json_and_csv() {
+    let dir = std::env::temp_dir().join(format!("occlude-cli-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("out.json");
+    let csv = dir.join("out.csv");
+    let out = occlude(&[
+        "bench",
+        "--frames",
+        "5",
+        "--resolution",
+        "320x240",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    for method in ["vfc", "sw", "opt"] {
+        assert!(stdout.lines().any(|l| l.starts_with(method)), "table lacks {method}: {stdout}");
+    }
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for key in ["scene", "size", "frames", "resolution", "backend", "gpu_model", "methods"] {
+        assert!(v.get(key).is_some(), "JSON lacks top-level key {key}");
+    }
+    assert_eq!(v["scene"], "city");
+    assert_eq!(v["frames"], 5);
+    let methods = v["methods"].as_array().unwrap();
+    assert_eq!(methods.len(), 3);
+    for m in methods {
+        for key in [
+            "name",
+            "mean_frame_ms",
+            "p95_frame_ms",
+            "queries_per_frame",
+            "wait_ms_per_frame",
+            "draw_calls_per_frame",
+            "state_changes_per_frame",
+            "triangles_per_frame",
+            "visible_objects_per_frame",
+            "missing_pixels",
+            "speedup_vs_vfc",
+            "ratio_to_opt",
+            "per_frame",
+        ] {
+            assert!(m.get(key).is_some(), "method {} lacks key {key}", m["name"]);
+        }
+        assert_eq!(m["per_frame"].as_array().unwrap().len(), 5);
+        assert_eq!(m["missing_pixels"], 0);
+    }
+    let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+    assert_eq!(rows, 1 + 3 * 5, "CSV: header plus one row per method and frame");
+}
