@@ -4,6 +4,8 @@
 //! Data flows top to bottom (see `docs/architecture.md`):
 //! scene -> hierarchy -> culling method -> backend -> frame statistics.
 
+#![warn(missing_docs)]
+
 pub mod backend;
 pub mod camera;
 pub mod geometry;

@@ -51,16 +51,40 @@ pub enum SceneError {
     Empty(String),
     /// A mesh has a position that is NaN or infinite.
     #[error("mesh {mesh} has a non-finite vertex position at index {vertex}")]
-    NonFiniteVertex { mesh: usize, vertex: usize },
+    NonFiniteVertex {
+        /// Mesh index.
+        mesh: usize,
+        /// Vertex index.
+        vertex: usize,
+    },
     /// A mesh index points past its vertices.
     #[error("mesh {mesh} has index {index} but only {vertices} vertices")]
-    IndexOutOfRange { mesh: usize, index: u32, vertices: usize },
+    IndexOutOfRange {
+        /// Mesh index.
+        mesh: usize,
+        /// The bad index.
+        index: u32,
+        /// Vertices the mesh has.
+        vertices: usize,
+    },
     /// A mesh's index count is not a multiple of three.
     #[error("mesh {mesh} has {count} indices, not a multiple of 3")]
-    PartialTriangle { mesh: usize, count: usize },
+    PartialTriangle {
+        /// Mesh index.
+        mesh: usize,
+        /// Its index count.
+        count: usize,
+    },
     /// An instance refers to a mesh that does not exist.
     #[error("instance {instance} refers to mesh {mesh}, but the scene has {meshes} meshes")]
-    MissingMesh { instance: usize, mesh: u32, meshes: usize },
+    MissingMesh {
+        /// Instance index.
+        instance: usize,
+        /// The mesh it names.
+        mesh: u32,
+        /// Meshes the scene has.
+        meshes: usize,
+    },
     /// An instance transform is not finite.
     #[error("instance {0} has a non-finite transform")]
     NonFiniteTransform(usize),

@@ -49,10 +49,20 @@ pub enum GpuModelError {
     Unknown(String),
     /// The file could not be read.
     #[error("cannot read GPU model file {path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        /// The file.
+        path: String,
+        /// Why reading failed.
+        source: std::io::Error,
+    },
     /// The file is not a valid model.
     #[error("invalid GPU model file {path}: {message}")]
-    Invalid { path: String, message: String },
+    Invalid {
+        /// The file.
+        path: String,
+        /// What is wrong, naming the field.
+        message: String,
+    },
 }
 
 impl GpuModel {

@@ -1,6 +1,8 @@
 //! The software backend: an exact depth rasterizer, parallel over screen tiles,
 //! driven by a simulated GPU clock so that results are deterministic.
 
+#![warn(missing_docs)]
+
 pub mod backend;
 pub mod clock;
 pub mod gpu_model;

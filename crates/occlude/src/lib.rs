@@ -1,5 +1,7 @@
 //! The `occlude` tool as a library: the benchmark runner and its reports, so
 //! that tests drive exactly what the command line runs.
 
+#![warn(missing_docs)]
+
 pub mod bench;
 pub mod scenes;
