@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use occlude::bench::{self, config::parse_resolution, BenchConfig};
 use occlude_core::hierarchy::BuildOptions;
+use occlude_core::methods::MethodOptions;
 use occlude_core::HierarchyKind;
 use occlude_scenes::{Size, SCENE_NAMES};
 use occlude_soft::GpuModel;
@@ -60,6 +61,9 @@ struct BenchArgs {
     /// Most instances per hierarchy leaf.
     #[arg(long, default_value_t = BuildOptions::default().leaf_size)]
     leaf_size: usize,
+    /// Method parameter, method.key=value (repeatable), e.g. chc.tav=2.
+    #[arg(long = "method-opt", value_name = "METHOD.KEY=VALUE")]
+    method_opt: Vec<String>,
     /// Simulated GPU: a preset (gpu-2004, modern) or a TOML file.
     #[arg(long, default_value = "modern")]
     gpu_model: String,
@@ -100,6 +104,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         hierarchy: args.hierarchy,
         build: BuildOptions { leaf_size: args.leaf_size, ..BuildOptions::default() },
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
+        options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
     };
     config.validate().map_err(usage)?;
     if args.threads == Some(0) {

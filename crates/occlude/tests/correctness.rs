@@ -38,14 +38,14 @@ fn conservative_methods_match_vfc_on_every_frame() {
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             let cfg = config(name, hierarchy);
             let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
-            for (method, frames) in &run.methods {
-                for (f, stats) in frames.iter().enumerate() {
-                    assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{method}: frame {f} differs from vfc");
+            for m in &run.methods {
+                for (f, stats) in m.frames.iter().enumerate() {
+                    assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
                 }
             }
             // The walkthrough must show something and let occlusion work.
-            let vfc = &run.methods[0].1;
-            let sw = &run.methods[1].1;
+            let vfc = &run.methods[0].frames;
+            let sw = &run.methods[1].frames;
             let vfc_tris: u64 = vfc.iter().map(|f| f.triangles).sum();
             let sw_tris: u64 = sw.iter().map(|f| f.triangles).sum();
             assert!(vfc_tris > 0, "{name}: the walkthrough sees nothing");
@@ -66,7 +66,7 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
             let mut lanes: Vec<_> = ["sw", "opt"]
                 .iter()
                 .map(|m| {
-                    (create(m).unwrap(), SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()), DrawnSet::default())
+                    (create(m, &Default::default()).unwrap().method, SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()), DrawnSet::default())
                 })
                 .collect();
             for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {

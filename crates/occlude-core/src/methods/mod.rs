@@ -7,10 +7,12 @@
 
 mod front_to_back;
 pub mod opt;
+pub mod options;
 pub mod sw;
 pub mod vfc;
 
 pub use front_to_back::FrontToBack;
+pub use options::{MethodOptions, OptionError, OptionReader};
 
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
@@ -21,19 +23,37 @@ use thiserror::Error;
 /// Names accepted by [`create`], in the order tables list them.
 pub const METHOD_NAMES: [&str; 3] = ["vfc", "sw", "opt"];
 
-/// A method name that [`create`] does not know.
+/// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
-#[error("unknown method '{0}': expected one of {names}", names = METHOD_NAMES.join(", "))]
-pub struct UnknownMethod(pub String);
+pub enum MethodError {
+    /// No method has this name.
+    #[error("unknown method '{0}': expected one of {names}", names = METHOD_NAMES.join(", "))]
+    Unknown(String),
+    /// A parameter is wrong.
+    #[error(transparent)]
+    Option(#[from] OptionError),
+}
 
-/// The method called `name`, freshly constructed (no state from earlier frames).
-pub fn create(name: &str) -> Result<Box<dyn CullingMethod>, UnknownMethod> {
-    match name {
-        "vfc" => Ok(Box::new(vfc::ViewFrustumCulling)),
-        "sw" => Ok(Box::new(sw::StopAndWait)),
-        "opt" => Ok(Box::new(opt::Optimal::default())),
-        _ => Err(UnknownMethod(name.to_string())),
-    }
+/// A method ready to run, with the parameter values it uses (defaults
+/// included) for the report.
+pub struct BuiltMethod {
+    /// The method.
+    pub method: Box<dyn CullingMethod>,
+    /// `(parameter, value)` pairs in the order the method reads them.
+    pub params: Vec<(String, String)>,
+}
+
+/// The method called `name`, freshly constructed (no state from earlier
+/// frames), with its parameters read from `options`.
+pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, MethodError> {
+    let reader = options.for_method(name);
+    let method: Box<dyn CullingMethod> = match name {
+        "vfc" => Box::new(vfc::ViewFrustumCulling),
+        "sw" => Box::new(sw::StopAndWait),
+        "opt" => Box::new(opt::Optimal::default()),
+        _ => return Err(MethodError::Unknown(name.to_string())),
+    };
+    Ok(BuiltMethod { method, params: reader.finish()? })
 }
 
 /// A visibility-culling method. Implementations keep whatever they carry from

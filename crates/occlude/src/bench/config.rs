@@ -2,7 +2,7 @@
 
 use anyhow::{bail, Result};
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::{create, METHOD_NAMES};
+use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
 use occlude_core::HierarchyKind;
 use occlude_scenes::Size;
 use occlude_soft::GpuModel;
@@ -31,6 +31,8 @@ pub struct BenchConfig {
     pub build: BuildOptions,
     /// Cost model of the simulated GPU.
     pub gpu_model: GpuModel,
+    /// Method parameters (`--method-opt method.key=value`).
+    pub options: MethodOptions,
 }
 
 impl Default for BenchConfig {
@@ -45,6 +47,7 @@ impl Default for BenchConfig {
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions::default(),
             gpu_model: GpuModel::modern(),
+            options: MethodOptions::default(),
         }
     }
 }
@@ -57,8 +60,9 @@ impl BenchConfig {
             bail!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
         }
         for m in &self.methods {
-            create(m)?;
+            create(m, &self.options)?;
         }
+        self.options.check_methods(&self.methods)?;
         if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
             bail!("method '{}' is listed twice", dup.1);
         }

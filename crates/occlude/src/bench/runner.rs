@@ -5,7 +5,7 @@ use super::config::{BenchConfig, NEAR_PLANE};
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
-use occlude_core::methods::{create, vfc::ViewFrustumCulling, CullingMethod, DrawnSet};
+use occlude_core::methods::{create, BuiltMethod, DrawnSet};
 use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
 
@@ -14,36 +14,52 @@ pub struct BenchRun {
     /// Scene, hierarchy and path figures.
     pub scene: SceneStats,
     /// Per method (in configuration order), its per-frame statistics.
-    pub methods: Vec<(String, Vec<FrameStats>)>,
+    pub methods: Vec<MethodRun>,
     /// View-frustum culling's frames (the reference, always run).
     pub reference: Vec<FrameStats>,
 }
 
+/// One method's measurements.
+#[derive(Clone, Debug)]
+pub struct MethodRun {
+    /// Method name.
+    pub name: String,
+    /// Parameter values in use.
+    pub params: Vec<(String, String)>,
+    /// Statistics of every frame.
+    pub frames: Vec<FrameStats>,
+}
+
 /// One method with its own backend and state across frames.
 struct Lane<'s> {
-    method: Box<dyn CullingMethod>,
+    built: BuiltMethod,
     backend: SoftBackend<'s>,
     drawn: DrawnSet,
     frames: Vec<FrameStats>,
 }
 
 impl<'s> Lane<'s> {
-    fn new(method: Box<dyn CullingMethod>, scene: &'s Scene, config: &BenchConfig) -> Self {
+    fn new(built: BuiltMethod, scene: &'s Scene, config: &BenchConfig) -> Self {
         let (w, h) = config.resolution;
         Self {
-            method,
+            built,
             backend: SoftBackend::new(scene, w, h, config.gpu_model.clone()),
             drawn: DrawnSet::default(),
             frames: Vec::with_capacity(config.frames),
         }
     }
 
+    /// The lane's measurements.
+    fn into_run(self) -> MethodRun {
+        MethodRun { name: self.built.method.name().to_string(), params: self.built.params, frames: self.frames }
+    }
+
     /// Renders one frame; returns its statistics.
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> FrameStats {
         let mut ctx = FrameContext::new(scene, hierarchy, *camera, &mut self.drawn);
-        self.method.prepare(&mut ctx, &mut self.backend);
+        self.built.method.prepare(&mut ctx, &mut self.backend);
         self.backend.begin_frame(camera);
-        self.method.render(&mut ctx, &mut self.backend);
+        self.built.method.render(&mut ctx, &mut self.backend);
         self.backend.end_frame()
     }
 }
@@ -71,12 +87,12 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
-    let mut reference = Lane::new(Box::new(ViewFrustumCulling), scene, config);
+    let mut reference = Lane::new(create("vfc", &config.options)?, scene, config);
     let mut lanes = config
         .methods
         .iter()
         .filter(|m| m.as_str() != "vfc")
-        .map(|m| Ok(Lane::new(create(m)?, scene, config)))
+        .map(|m| Ok(Lane::new(create(m, &config.options)?, scene, config)))
         .collect::<Result<Vec<_>>>()?;
 
     progress.set_length(cameras.len() as u64);
@@ -92,17 +108,12 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
         progress.inc(1);
     }
 
-    let mut lanes = lanes.into_iter().map(|l| (l.method.name().to_string(), l.frames));
+    let reference = reference.into_run();
+    let mut lanes = lanes.into_iter().map(Lane::into_run);
     let methods = config
         .methods
         .iter()
-        .map(|m| {
-            if m == "vfc" {
-                (m.clone(), reference.frames.clone())
-            } else {
-                lanes.next().expect("one lane per method")
-            }
-        })
+        .map(|m| if m == "vfc" { reference.clone() } else { lanes.next().expect("one lane per method") })
         .collect();
     Ok(BenchRun { scene: SceneStats::new(scene, &hierarchy, cameras.len()), methods, reference: reference.frames })
 }

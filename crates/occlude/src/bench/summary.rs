@@ -4,6 +4,7 @@ use super::config::BenchConfig;
 use super::runner::BenchRun;
 use occlude_core::{FrameStats, Hierarchy, Scene};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Figures about the scene and hierarchy a run used.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -50,6 +51,8 @@ impl SceneStats {
 pub struct MethodSummary {
     /// Method name (`vfc`, `sw`, `opt`, ...).
     pub name: String,
+    /// Parameter values in use, defaults included.
+    pub params: BTreeMap<String, String>,
     /// Mean frame time (simulated on the soft backend), ms.
     pub mean_frame_ms: f64,
     /// 95th-percentile frame time, ms.
@@ -126,14 +129,16 @@ impl BenchReport {
     /// Summarises a run.
     pub fn new(run: &BenchRun, config: &BenchConfig) -> Self {
         let vfc_ms = mean(&run.reference, |f| f.frame_ms);
-        let opt_ms = run.methods.iter().find(|(n, _)| n == "opt").map(|(_, f)| mean(f, |f| f.frame_ms));
+        let opt_ms = run.methods.iter().find(|m| m.name == "opt").map(|m| mean(&m.frames, |f| f.frame_ms));
         let methods = run
             .methods
             .iter()
-            .map(|(name, frames)| {
+            .map(|m| {
+                let frames = &m.frames;
                 let frame_ms = mean(frames, |f| f.frame_ms);
                 MethodSummary {
-                    name: name.clone(),
+                    name: m.name.clone(),
+                    params: m.params.iter().cloned().collect(),
                     mean_frame_ms: frame_ms,
                     p95_frame_ms: p95(frames),
                     queries_per_frame: mean(frames, |f| f.queries as f64),
