@@ -178,6 +178,7 @@ mod tests {
         let err = r.get("smax", 1.4f32, "a number >= 1", |v| v >= 1.0).unwrap_err();
         assert!(err.to_string().contains("chcpp.smax = 0.5: expected a number >= 1"), "{err}");
         let mut r = opts.for_method("chcpp");
+        r.get("smax", 1.4f32, "any number", |_| true).unwrap();
         r.flag("tight", true).unwrap();
         assert!(r.finish().unwrap_err().to_string().contains("no parameter 'zzz'"));
     }
