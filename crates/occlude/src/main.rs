@@ -47,7 +47,7 @@ struct BenchArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Comma-separated methods, in table order.
-    #[arg(long, default_value = "vfc,sw,opt", value_delimiter = ',')]
+    #[arg(long, default_value = "vfc,sw,chc,opt", value_delimiter = ',')]
     methods: Vec<String>,
     /// Frames sampled along the walkthrough.
     #[arg(long, default_value_t = 300)]

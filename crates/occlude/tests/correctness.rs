@@ -6,7 +6,7 @@
 use indicatif::ProgressBar;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
-use occlude_core::methods::{create, DrawnSet};
+use occlude_core::methods::{create, DrawnSet, MethodOptions};
 use occlude_core::{Backend, FrameContext, Hierarchy, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -17,7 +17,7 @@ use std::collections::HashSet;
 fn config(scene: &str, hierarchy: HierarchyKind) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: vec!["vfc".into(), "sw".into(), "opt".into()],
+        methods: ["vfc", "sw", "chc", "opt"].map(String::from).to_vec(),
         frames: 90,
         resolution: (480, 360),
         hierarchy,
@@ -46,6 +46,14 @@ fn conservative_methods_match_vfc_on_every_frame() {
             // The walkthrough must show something and let occlusion work.
             let vfc = &run.methods[0].frames;
             let sw = &run.methods[1].frames;
+            let chc = &run.methods[2].frames;
+            let queries = |frames: &[occlude_core::FrameStats]| frames.iter().map(|f| f.queries).sum::<u64>();
+            assert!(
+                queries(chc) < queries(sw),
+                "{name}/{hierarchy}: chc issued {} queries, sw {}",
+                queries(chc),
+                queries(sw)
+            );
             let vfc_tris: u64 = vfc.iter().map(|f| f.triangles).sum();
             let sw_tris: u64 = sw.iter().map(|f| f.triangles).sum();
             assert!(vfc_tris > 0, "{name}: the walkthrough sees nothing");
@@ -66,7 +74,11 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
             let mut lanes: Vec<_> = ["sw", "opt"]
                 .iter()
                 .map(|m| {
-                    (create(m, &Default::default()).unwrap().method, SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()), DrawnSet::default())
+                    (
+                        create(m, &Default::default()).unwrap().method,
+                        SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()),
+                        DrawnSet::default(),
+                    )
                 })
                 .collect();
             for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {
@@ -100,6 +112,91 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
                     }
                 }
             }
+        }
+    }
+}
+
+/// Runs `methods` with `options` and checks every frame against vfc.
+fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude::bench::BenchRun {
+    let run = run_scene(scene, cfg, &ProgressBar::hidden()).unwrap();
+    for m in &run.methods {
+        for (f, stats) in m.frames.iter().enumerate() {
+            assert_eq!(stats.missing_pixels, 0, "{}/{}: frame {f} differs from vfc", scene.name, m.name);
+        }
+    }
+    run
+}
+
+#[test]
+fn chc_options_save_queries_and_keep_the_image_exact() {
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            let with = |opts: &[&str]| BenchConfig {
+                methods: vec!["chc".into()],
+                options: MethodOptions::parse(opts).unwrap(),
+                ..config(name, hierarchy)
+            };
+            let queries = |run: &occlude::bench::BenchRun| run.methods[0].frames.iter().map(|f| f.queries).sum::<u64>();
+            let plain = queries(&exact_run(&scene, &with(&[])));
+            let tav = queries(&exact_run(&scene, &with(&["chc.tav=3"])));
+            exact_run(&scene, &with(&["chc.spec=2000", "chc.tav=1"]));
+            assert!(tav < plain, "{name}/{hierarchy}: tav=3 issued {tav} queries, tav=0 {plain}");
+        }
+    }
+}
+
+#[test]
+fn approximate_chc_reports_its_missing_pixels() {
+    let scene = small("city");
+    let cfg = BenchConfig {
+        methods: vec!["chc".into()],
+        options: MethodOptions::parse(&["chc.nvp=200"]).unwrap(),
+        ..config("city", HierarchyKind::Bvh)
+    };
+    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    let missing: u64 = run.methods[0].frames.iter().map(|f| f.missing_pixels).sum();
+    assert!(missing > 0, "a 200-pixel threshold should cull something visible on the city walkthrough");
+}
+
+/// A camera inside an object's box (a closed room around the eye): every
+/// query method must still draw the room.
+#[test]
+fn node_seen_from_inside_its_box_is_never_culled() {
+    use glam::{Mat4, Vec3};
+    use occlude_core::{CameraPath, Mesh};
+    let mut scene = Scene {
+        name: "room".into(),
+        meshes: vec![],
+        instances: vec![],
+        material_count: 0,
+        path: CameraPath::through(
+            [
+                (Vec3::new(0.0, 1.5, 0.0), Vec3::new(3.0, 1.0, -2.0)),
+                (Vec3::new(1.0, 1.5, 1.0), Vec3::new(-3.0, 1.0, -2.0)),
+            ],
+            70.0,
+        ),
+    };
+    let corners: Vec<Vec3> =
+        occlude_core::Aabb::new(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 4.0, 5.0)).corners().to_vec();
+    let faces = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
+    let indices = faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect();
+    let room = scene.add_mesh(Mesh::new(corners, indices));
+    scene.add_instance(room, Mat4::IDENTITY, 0);
+    let crate_mesh = scene.add_mesh(Mesh::new(
+        occlude_core::Aabb::new(Vec3::ZERO, Vec3::ONE).corners().to_vec(),
+        faces.iter().flat_map(|&[a, b, c, d]| [a, b, c, a, c, d]).collect(),
+    ));
+    for x in [-3.0, 2.0] {
+        scene.add_instance(crate_mesh, Mat4::from_translation(Vec3::new(x, 0.0, -3.0)), 1);
+    }
+    scene.validate().unwrap();
+    for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        let cfg = BenchConfig { frames: 10, ..config("room", hierarchy) };
+        let run = exact_run(&scene, &cfg);
+        for m in &run.methods {
+            assert!(m.frames.iter().all(|f| f.visible_objects >= 1), "{}: the room was culled", m.name);
         }
     }
 }

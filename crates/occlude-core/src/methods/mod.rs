@@ -5,6 +5,7 @@
 //! then `Backend::begin_frame`, [`CullingMethod::render`] and
 //! `Backend::end_frame`.
 
+pub mod chc;
 mod front_to_back;
 pub mod opt;
 pub mod options;
@@ -21,7 +22,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 3] = ["vfc", "sw", "opt"];
+pub const METHOD_NAMES: [&str; 4] = ["vfc", "sw", "chc", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -46,11 +47,12 @@ pub struct BuiltMethod {
 /// The method called `name`, freshly constructed (no state from earlier
 /// frames), with its parameters read from `options`.
 pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, MethodError> {
-    let reader = options.for_method(name);
+    let mut reader = options.for_method(name);
     let method: Box<dyn CullingMethod> = match name {
         "vfc" => Box::new(vfc::ViewFrustumCulling),
         "sw" => Box::new(sw::StopAndWait),
         "opt" => Box::new(opt::Optimal::default()),
+        "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })

@@ -1,0 +1,223 @@
+//! Coherent hierarchical culling (Bittner, Wimmer, Piringer, Purgathofer,
+//! Eurographics 2004), Figure 2 of the paper, with its section 5 options.
+//!
+//! Visibility from the previous frame schedules this frame's queries: the
+//! traversal runs front to back (a priority queue, section 4.4, so any
+//! hierarchy works), skips queries on previously opened interior nodes,
+//! renders previously visible leaves at once while their queries are in
+//! flight, and consumes query results from a queue as soon as they are
+//! available, interleaved with the traversal (section 4.1). Visibility is
+//! pulled up the hierarchy when a node turns out visible.
+
+use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use crate::backend::{Backend, QueryHandle};
+use crate::hierarchy::{Hierarchy, NodeId};
+use std::collections::VecDeque;
+
+/// The section 5 options of CHC.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChcParams {
+    /// `tav`: frames a node found visible is assumed visible without a query
+    /// (section 5.1, conservative visibility testing); 0 turns it off.
+    pub assumed_visible_frames: u32,
+    /// `nvp`: a node is visible only if more than this many pixels pass
+    /// (section 5.2, approximate visibility); 0 is exact.
+    pub visible_pixel_threshold: u64,
+    /// `spec`: when the CPU would stall, render the cheapest node waiting in
+    /// the query queue if it has at most this many triangles (section 5.3,
+    /// conservative speculative rendering); 0 turns it off.
+    pub speculation_triangles: u64,
+}
+
+impl ChcParams {
+    /// Reads `tav`, `nvp` and `spec`.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        Ok(Self {
+            assumed_visible_frames: r.get("tav", 0, "an integer from 0 to 1000", |v| v <= 1000)?,
+            visible_pixel_threshold: r.get("nvp", 0, "an integer >= 0 (pixels)", |_| true)?,
+            speculation_triangles: r.get("spec", 0, "an integer >= 0 (triangles)", |_| true)?,
+        })
+    }
+}
+
+/// What CHC remembers about a node between frames.
+#[derive(Clone, Copy, Debug, Default)]
+struct NodeState {
+    visible: bool,
+    last_visited: u32,
+    /// Last frame of the `tav` window in which no query is needed.
+    assumed_until: u32,
+    /// Frame in which the node's subtree was rendered speculatively.
+    speculated: u32,
+}
+
+/// `chc`: coherent hierarchical culling.
+#[derive(Clone, Debug)]
+pub struct Chc {
+    params: ChcParams,
+    frame: u32,
+    nodes: Vec<NodeState>,
+    /// Triangles under each node, for the speculation cost estimate.
+    subtree_triangles: Vec<u64>,
+}
+
+impl Chc {
+    /// CHC with the given options.
+    pub fn new(params: ChcParams) -> Self {
+        Self { params, frame: 0, nodes: Vec::new(), subtree_triangles: Vec::new() }
+    }
+
+    /// Marks `node` and its ancestors visible (Figure 2, `PullUpVisibility`).
+    fn pull_up(&mut self, h: &Hierarchy, mut node: NodeId) {
+        while !self.nodes[node as usize].visible {
+            self.nodes[node as usize].visible = true;
+            match h.parent(node) {
+                Some(p) => node = p,
+                None => break,
+            }
+        }
+    }
+
+    /// Figure 2, `TraverseNode`: render a leaf or queue the children.
+    fn traverse_node(
+        &self,
+        ctx: &mut FrameContext<'_>,
+        backend: &mut dyn Backend,
+        queue: &mut FrontToBack,
+        node: NodeId,
+    ) {
+        let h = ctx.hierarchy;
+        if h.is_leaf(node) {
+            ctx.draw_leaf(backend, node);
+        } else {
+            for &c in h.children(node) {
+                queue.push_node(h, c, ctx.camera.position);
+            }
+        }
+    }
+
+    /// Renders the leaves in view under `node` (section 5.3).
+    fn render_subtree(ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, node: NodeId) {
+        let h = ctx.hierarchy;
+        let mut stack = vec![node];
+        while let Some(n) = stack.pop() {
+            if !ctx.in_frustum(n) {
+                continue;
+            }
+            if h.is_leaf(n) {
+                ctx.draw_leaf(backend, n);
+            } else {
+                stack.extend_from_slice(h.children(n));
+            }
+        }
+    }
+
+    /// Section 5.3: picks the cheapest queued node not yet speculated on,
+    /// if it is cheap enough, and renders it; true when something was drawn.
+    fn speculate(
+        &mut self,
+        ctx: &mut FrameContext<'_>,
+        backend: &mut dyn Backend,
+        queries: &VecDeque<(NodeId, QueryHandle)>,
+    ) -> bool {
+        let frame = self.frame;
+        let candidate = queries
+            .iter()
+            .map(|&(n, _)| n)
+            .filter(|&n| self.nodes[n as usize].speculated != frame)
+            .min_by_key(|&n| (self.subtree_triangles[n as usize], n));
+        match candidate {
+            Some(n) if self.subtree_triangles[n as usize] <= self.params.speculation_triangles => {
+                self.nodes[n as usize].speculated = frame;
+                Self::render_subtree(ctx, backend, n);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Sizes the per-node state for `h` (first frame, or a new hierarchy).
+    fn prepare_state(&mut self, ctx: &FrameContext<'_>) {
+        let h = ctx.hierarchy;
+        if self.nodes.len() != h.node_count() {
+            self.nodes = vec![NodeState::default(); h.node_count()];
+            self.subtree_triangles = subtree_triangles(ctx);
+        }
+    }
+}
+
+/// Triangles drawn by each node's subtree (children have higher ids than
+/// their parent in both builders, so one backward sweep suffices).
+fn subtree_triangles(ctx: &FrameContext<'_>) -> Vec<u64> {
+    let h = ctx.hierarchy;
+    let mut tris = vec![0u64; h.node_count()];
+    for n in (0..h.node_count() as NodeId).rev() {
+        tris[n as usize] = if h.is_leaf(n) {
+            h.instances(n)
+                .iter()
+                .map(|&i| ctx.scene.meshes[ctx.scene.instances[i as usize].mesh as usize].triangle_count() as u64)
+                .sum()
+        } else {
+            h.children(n).iter().map(|&c| tris[c as usize]).sum()
+        };
+    }
+    tris
+}
+
+impl CullingMethod for Chc {
+    fn name(&self) -> &'static str {
+        "chc"
+    }
+
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        self.prepare_state(ctx);
+        self.frame += 1;
+        let frame = self.frame;
+        let h = ctx.hierarchy;
+        let mut traversal = FrontToBack::new();
+        let mut queries: VecDeque<(NodeId, QueryHandle)> = VecDeque::new();
+        traversal.push_node(h, h.root(), ctx.camera.position);
+
+        while !traversal.is_empty() || !queries.is_empty() {
+            // Part 1: consume finished queries (wait only with nothing else to do).
+            while let Some(&(node, query)) = queries.front() {
+                if !backend.is_available(query) {
+                    if !traversal.is_empty() {
+                        break;
+                    }
+                    if self.params.speculation_triangles > 0 && self.speculate(ctx, backend, &queries) {
+                        continue;
+                    }
+                }
+                queries.pop_front();
+                if backend.result(query) > self.params.visible_pixel_threshold {
+                    self.pull_up(h, node);
+                    let state = &mut self.nodes[node as usize];
+                    state.assumed_until = frame + self.params.assumed_visible_frames;
+                    self.traverse_node(ctx, backend, &mut traversal, node);
+                }
+            }
+            // Part 2: hierarchy traversal.
+            let Some(node) = traversal.pop() else { continue };
+            backend.traverse(1);
+            if !ctx.in_frustum(node) {
+                continue;
+            }
+            let state = &mut self.nodes[node as usize];
+            let was_visible = state.visible && state.last_visited + 1 == frame;
+            let opened = was_visible && !h.is_leaf(node);
+            let assumed = was_visible && frame <= state.assumed_until;
+            state.visible = false;
+            state.last_visited = frame;
+            if assumed {
+                // Section 5.1: still within the tav window, no query.
+                self.pull_up(h, node);
+            } else if !opened {
+                queries.push_back((node, backend.issue_query(std::slice::from_ref(h.bounds(node)))));
+            }
+            if was_visible {
+                self.traverse_node(ctx, backend, &mut traversal, node);
+            }
+        }
+    }
+}
