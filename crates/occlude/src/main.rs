@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use occlude::bench::{self, config::parse_resolution, BenchConfig};
+use occlude::bench::{self, config::parse_resolution, config::DEFAULT_METHODS, BenchConfig};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::HierarchyKind;
@@ -47,7 +47,7 @@ struct BenchArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Comma-separated methods, in table order.
-    #[arg(long, default_value = "vfc,sw,chc,opt", value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from))]
     methods: Vec<String>,
     /// Frames sampled along the walkthrough.
     #[arg(long, default_value_t = 300)]

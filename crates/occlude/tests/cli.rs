@@ -53,7 +53,7 @@ fn short_run_prints_table_and_writes_json_and_csv() {
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
-    for method in ["vfc", "sw", "opt"] {
+    for method in ["vfc", "sw", "chc", "opt"] {
         assert!(stdout.lines().any(|l| l.starts_with(method)), "table lacks {method}: {stdout}");
     }
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -63,7 +63,7 @@ fn short_run_prints_table_and_writes_json_and_csv() {
     assert_eq!(v["scene"], "city");
     assert_eq!(v["frames"], 5);
     let methods = v["methods"].as_array().unwrap();
-    assert_eq!(methods.len(), 3);
+    assert_eq!(methods.len(), 4);
     for m in methods {
         for key in [
             "name",
@@ -86,5 +86,5 @@ fn short_run_prints_table_and_writes_json_and_csv() {
         assert_eq!(m["missing_pixels"], 0);
     }
     let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
-    assert_eq!(rows, 1 + 3 * 5, "CSV: header plus one row per method and frame");
+    assert_eq!(rows, 1 + 4 * 5, "CSV: header plus one row per method and frame");
 }

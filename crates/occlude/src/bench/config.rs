@@ -10,6 +10,9 @@ use occlude_soft::GpuModel;
 /// Near clipping distance of every walkthrough camera, metres.
 pub const NEAR_PLANE: f32 = 0.25;
 
+/// Methods `occlude bench` compares when none are named.
+pub const DEFAULT_METHODS: [&str; 4] = ["vfc", "sw", "chc", "opt"];
+
 /// A validated benchmark configuration.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
@@ -41,7 +44,7 @@ impl Default for BenchConfig {
             scene: "city".into(),
             size: Size::Small,
             seed: 1,
-            methods: METHOD_NAMES.iter().map(|s| s.to_string()).collect(),
+            methods: DEFAULT_METHODS.iter().map(|s| s.to_string()).collect(),
             frames: 300,
             resolution: (1024, 768),
             hierarchy: HierarchyKind::Bvh,
