@@ -47,8 +47,22 @@ pub trait Backend {
     /// correctness rule (DESIGN.md). Costs nothing on the frame's clock.
     fn depth_image(&mut self) -> Vec<f32>;
 
-    /// Oracle pass, outside any frame's clock: of `candidates`, the instances
-    /// with at least one pixel in the final depth image of drawing all of them
-    /// from `camera` (ties included). Used by `opt`.
-    fn visible_instances(&mut self, camera: &Camera, candidates: &[u32]) -> Vec<u32>;
+    /// Oracle pass, outside any frame's clock: draws all `candidates` from
+    /// `camera` and reports which of them have at least one pixel in the
+    /// final depth image (ties included), with that image. Used by `opt`.
+    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView;
+}
+
+/// What an oracle pass saw.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OracleView {
+    /// Candidates with at least one pixel in the image.
+    pub visible: Vec<u32>,
+    /// The depth image (normalized device depth, 1.0 where nothing was
+    /// drawn), row 0 at the top.
+    pub depth: Vec<f32>,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
 }

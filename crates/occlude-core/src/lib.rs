@@ -15,7 +15,7 @@ pub mod path;
 pub mod scene;
 pub mod stats;
 
-pub use backend::{Backend, QueryHandle};
+pub use backend::{Backend, OracleView, QueryHandle};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};

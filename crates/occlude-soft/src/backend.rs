@@ -11,7 +11,7 @@ use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
 use crate::raster::{self, Command, CommandKind, DepthBuffer, DepthTest};
 use glam::{Mat4, Vec4};
-use occlude_core::{Aabb, Backend, Camera, FrameStats, QueryHandle, Scene};
+use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, Scene};
 use std::time::Instant;
 
 /// Relative growth of query boxes, so geometry lying on a box face or edge
@@ -280,7 +280,7 @@ impl Backend for SoftBackend<'_> {
         self.depth.data.clone()
     }
 
-    fn visible_instances(&mut self, camera: &Camera, candidates: &[u32]) -> Vec<u32> {
+    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
         self.view_projection = camera.view_projection();
         self.depth.clear();
         let mut ranges = Vec::with_capacity(candidates.len());
@@ -300,6 +300,12 @@ impl Backend for SoftBackend<'_> {
         }));
         let results = raster::execute(&mut self.depth, &self.triangles, &commands);
         self.triangles.clear();
-        candidates.iter().zip(&results[candidates.len()..]).filter(|(_, r)| r.passed > 0).map(|(&i, _)| i).collect()
+        let visible = candidates
+            .iter()
+            .zip(&results[candidates.len()..])
+            .filter(|(_, r)| r.passed > 0)
+            .map(|(&i, _)| i)
+            .collect();
+        OracleView { visible, depth: self.depth.data.clone(), width: self.depth.width, height: self.depth.height }
     }
 }

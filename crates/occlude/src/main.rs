@@ -4,6 +4,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, config::parse_resolution, config::DEFAULT_METHODS, BenchConfig};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
@@ -23,7 +24,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run culling methods over a walkthrough and print the comparison table.
-    Bench(BenchArgs),
+    Bench(Box<BenchArgs>),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         /// Sizes to list: small, medium, paper or all.
@@ -73,6 +74,17 @@ struct BenchArgs {
     /// Write one CSV row per method and frame.
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Plot frame time over the walkthrough, one line per method (.svg or .png).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Plot queries and state changes per frame (.svg or .png).
+    #[arg(long)]
+    plot_queries: Option<PathBuf>,
+    /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
+    /// model as in the paper; size, frames, resolution and seed from the
+    /// other options): chc.
+    #[arg(long)]
+    paper: Option<String>,
     /// Worker threads for the rasterizer (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -107,6 +119,17 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
     };
     config.validate().map_err(usage)?;
+    if let Some(paper) = &args.paper {
+        if !bench::paper::PAPERS.contains(&paper.as_str()) {
+            return Err(usage(anyhow::anyhow!(
+                "unknown paper '{paper}': expected one of {}",
+                bench::paper::PAPERS.join(", ")
+            )));
+        }
+    }
+    for path in args.plot.iter().chain(&args.plot_queries) {
+        bench::plot::plot_format(path).map_err(usage)?;
+    }
     if args.threads == Some(0) {
         return Err(usage(anyhow::anyhow!("--threads must be at least 1")));
     }
@@ -122,6 +145,16 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
             .expect("valid template")
             .progress_chars("=> "),
     );
+    if let Some(paper) = &args.paper {
+        let result = bench::paper::run(paper, config, &progress)?;
+        progress.finish_and_clear();
+        print!("{}", result.text);
+        if let Some(path) = &args.json {
+            bench::output::write_json(&result.reports, path)?;
+            eprintln!("wrote {}", path.display());
+        }
+        return Ok(());
+    }
     progress.set_message(format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
     let run = bench::run(config, &progress)?;
     progress.finish_and_clear();
@@ -134,6 +167,12 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     if let Some(path) = &args.csv {
         bench::output::write_csv(&report, path)?;
         eprintln!("wrote {}", path.display());
+    }
+    for (path, kind) in [(&args.plot, PlotKind::FrameTime), (&args.plot_queries, PlotKind::QueriesAndStateChanges)] {
+        if let Some(path) = path {
+            bench::plot::write_plot(&report, kind, path)?;
+            eprintln!("wrote {}", path.display());
+        }
     }
     Ok(())
 }

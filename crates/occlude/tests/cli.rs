@@ -25,6 +25,8 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
     assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
     assert_usage_error(&["bench", "--method-opt", "sw.tav=2"], "no parameter 'tav'");
+    assert_usage_error(&["bench", "--plot", "frames.jpg"], "frames.jpg");
+    assert_usage_error(&["bench", "--paper", "nohc"], "nohc");
     assert_usage_error(&["bench", "--method-opt", "chc.tav"], "chc.tav");
     assert_usage_error(&["bench", "--methods", "vfc", "--method-opt", "sw.x=1"], "not in --methods");
     let dir = std::env::temp_dir().join(format!("occlude-cli-{}", std::process::id()));

@@ -83,7 +83,7 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
                 .collect();
             for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {
                 let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
-                let seen: HashSet<u32> = oracle.visible_instances(camera, &all).into_iter().collect();
+                let seen: HashSet<u32> = oracle.oracle(camera, &all).visible.into_iter().collect();
                 for (method, backend, drawn) in &mut lanes {
                     let mut ctx = FrameContext::new(&scene, &h, *camera, drawn);
                     method.prepare(&mut ctx, backend);

@@ -1,12 +1,20 @@
 //! The ideal visible set (DESIGN.md, "opt"; the CHC++ paper's OPT): draw
-//! exactly the hierarchy leaves that hold an instance with at least one pixel
-//! in the final image, with no query. The set comes from an oracle pass run
-//! before the frame's clock starts, so `opt` is the fastest any query-based
-//! method can be on the same hierarchy.
+//! exactly the hierarchy leaves that have at least one visible pixel, with no
+//! query. The set comes from an oracle pass run before the frame's clock
+//! starts, so `opt` is the fastest any query-based method can be on the same
+//! hierarchy.
+//!
+//! A leaf has a visible pixel when it holds an instance the oracle sees and,
+//! where instances are shared by several leaves (kD-tree), when a visible
+//! pixel's surface point lies in the leaf's box: otherwise a large object
+//! referenced by every leaf it crosses would make all those leaves "visible".
 
 use super::{CullingMethod, FrameContext};
-use crate::backend::Backend;
-use crate::hierarchy::NodeId;
+use crate::backend::{Backend, OracleView};
+use crate::camera::Camera;
+use crate::geometry::Aabb;
+use crate::hierarchy::{Hierarchy, NodeId};
+use glam::{DVec3, DVec4, Vec3};
 
 /// `opt`: render the oracle's visible leaves only.
 #[derive(Clone, Debug, Default)]
@@ -26,12 +34,19 @@ impl CullingMethod for Optimal {
         let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
         candidates.sort_unstable();
         candidates.dedup();
+        let view = backend.oracle(&ctx.camera, &candidates);
         let mut visible = vec![false; ctx.scene.instances.len()];
-        for i in backend.visible_instances(&ctx.camera, &candidates) {
+        for &i in &view.visible {
             visible[i as usize] = true;
         }
+        let shared_instances = h.items.len() > ctx.scene.instances.len();
+        let seen_leaves = shared_instances.then(|| leaves_with_visible_pixels(h, &ctx.camera, &view));
         let eye = ctx.camera.position;
-        self.leaves = in_view.into_iter().filter(|&n| h.instances(n).iter().any(|&i| visible[i as usize])).collect();
+        self.leaves = in_view
+            .into_iter()
+            .filter(|&n| h.instances(n).iter().any(|&i| visible[i as usize]))
+            .filter(|&n| seen_leaves.as_ref().is_none_or(|seen| seen[n as usize]))
+            .collect();
         self.leaves.sort_by(|&a, &b| h.bounds(a).distance_squared(eye).total_cmp(&h.bounds(b).distance_squared(eye)));
     }
 
@@ -40,4 +55,53 @@ impl CullingMethod for Optimal {
             ctx.draw_leaf(backend, leaf);
         }
     }
+}
+
+/// Relative depth uncertainty of a stored pixel depth (a few float steps
+/// near 1.0): the surface point is searched on the segment this spans.
+const DEPTH_TOLERANCE: f64 = 5e-7;
+
+/// Marks, per node, the leaves whose box holds the surface point of some
+/// drawn pixel. Each pixel is unprojected (in f64) to a short segment along
+/// its ray covering the depth's rounding, and every leaf whose box, slightly
+/// grown, meets that segment's box is marked, so the leaf that really holds
+/// the point is never missed.
+fn leaves_with_visible_pixels(h: &Hierarchy, camera: &Camera, view: &OracleView) -> Vec<bool> {
+    let inverse = camera.view_projection().as_dmat4().inverse();
+    let unproject = |x: f64, y: f64, z: f64| {
+        let p = inverse * DVec4::new(x, y, z, 1.0);
+        p.truncate() / p.w
+    };
+    let (w, ht) = (view.width as usize, view.height as usize);
+    let mut seen = vec![false; h.node_count()];
+    let mut stack = Vec::new();
+    for (index, &depth) in view.depth.iter().enumerate() {
+        if depth >= 1.0 {
+            continue;
+        }
+        let (px, py) = (index % w, index / w);
+        let x = (px as f64 + 0.5) / w as f64 * 2.0 - 1.0;
+        let y = 1.0 - (py as f64 + 0.5) / ht as f64 * 2.0;
+        let z = f64::from(depth);
+        let a = unproject(x, y, (z - DEPTH_TOLERANCE).max(0.0));
+        let b = unproject(x, y, (z + DEPTH_TOLERANCE).min(1.0));
+        let pad = 1e-5 * a.abs().max(b.abs()).max_element() + 1e-4;
+        let segment = Aabb::new(to_vec3(a.min(b) - DVec3::splat(pad)), to_vec3(a.max(b) + DVec3::splat(pad)));
+        stack.push(h.root());
+        while let Some(n) = stack.pop() {
+            if !h.bounds(n).overlaps(&segment) {
+                continue;
+            }
+            if h.is_leaf(n) {
+                seen[n as usize] = true;
+            } else {
+                stack.extend_from_slice(h.children(n));
+            }
+        }
+    }
+    seen
+}
+
+fn to_vec3(v: DVec3) -> Vec3 {
+    v.as_vec3()
 }

@@ -4,6 +4,8 @@
 
 pub mod config;
 pub mod output;
+pub mod paper;
+pub mod plot;
 pub mod runner;
 pub mod summary;
 pub mod table;

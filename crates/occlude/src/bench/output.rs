@@ -6,8 +6,8 @@ use anyhow::{Context, Result};
 use std::io::Write;
 use std::path::Path;
 
-/// Writes the report as pretty JSON.
-pub fn write_json(report: &BenchReport, path: &Path) -> Result<()> {
+/// Writes a report (or, for `--paper`, a list of them) as pretty JSON.
+pub fn write_json<T: serde::Serialize + ?Sized>(report: &T, path: &Path) -> Result<()> {
     let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     serde_json::to_writer_pretty(std::io::BufWriter::new(file), report)
         .with_context(|| format!("cannot write {}", path.display()))

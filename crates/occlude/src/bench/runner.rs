@@ -96,6 +96,7 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
         .collect::<Result<Vec<_>>>()?;
 
     progress.set_length(cameras.len() as u64);
+    progress.set_position(0);
     for camera in &cameras {
         let stats = reference.frame(scene, &hierarchy, camera);
         reference.frames.push(stats);

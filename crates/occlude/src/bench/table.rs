@@ -11,7 +11,7 @@ pub fn render(report: &BenchReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves), {} frames at {}x{}, backend {}, GPU model {}",
+        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves, built in {:.1} ms), {} frames at {}x{}, backend {}, GPU model {}",
         report.scene,
         report.size,
         report.seed,
@@ -20,6 +20,7 @@ pub fn render(report: &BenchReport) -> String {
         s.nodes,
         report.hierarchy,
         s.leaves,
+        s.build_wall_ms,
         report.frames,
         report.resolution[0],
         report.resolution[1],
