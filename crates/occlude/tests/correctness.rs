@@ -17,7 +17,7 @@ use std::collections::HashSet;
 fn config(scene: &str, hierarchy: HierarchyKind) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "opt"].map(String::from).to_vec(),
+        methods: ["vfc", "sw", "chc", "chcpp", "opt"].map(String::from).to_vec(),
         frames: 90,
         resolution: (480, 360),
         hierarchy,
@@ -144,6 +144,49 @@ fn chc_options_save_queries_and_keep_the_image_exact() {
             assert!(tav < plain, "{name}/{hierarchy}: tav=3 issued {tav} queries, tav=0 {plain}");
         }
     }
+}
+
+/// CHC++ with all components, with each switched off in turn, and with
+/// virtual leaves: exact on every frame of every small scene, both
+/// hierarchies.
+#[test]
+fn chcpp_is_exact_with_every_component_on_and_off() {
+    let variants: [&[&str]; 8] = [
+        &[],
+        &["chcpp.multiquery=off"],
+        &["chcpp.vqueue=off"],
+        &["chcpp.sort=off"],
+        &["chcpp.random=off"],
+        &["chcpp.tight=off"],
+        &["chcpp.b=1", "chcpp.nav=0"],
+        &["chcpp.vleaf=2000", "chcpp.dmax=5", "chcpp.smax=2"],
+    ];
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            for opts in variants {
+                let cfg = BenchConfig {
+                    methods: vec!["chcpp".into()],
+                    options: MethodOptions::parse(opts).unwrap(),
+                    frames: 45,
+                    ..config(name, hierarchy)
+                };
+                exact_run(&scene, &cfg);
+            }
+        }
+    }
+}
+
+/// CHC++'s batching and multiqueries must show: fewer queries and state
+/// changes than CHC on the city walkthrough.
+#[test]
+fn chcpp_saves_queries_and_state_changes_over_chc() {
+    let scene = small("city");
+    let cfg = BenchConfig { methods: vec!["chc".into(), "chcpp".into()], ..config("city", HierarchyKind::Bvh) };
+    let run = exact_run(&scene, &cfg);
+    let total = |m: usize, f: fn(&occlude_core::FrameStats) -> u64| run.methods[m].frames.iter().map(f).sum::<u64>();
+    assert!(total(1, |f| f.queries) < total(0, |f| f.queries), "queries");
+    assert!(total(1, |f| f.state_changes) * 3 < total(0, |f| f.state_changes), "state changes");
 }
 
 #[test]

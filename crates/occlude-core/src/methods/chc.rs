@@ -9,7 +9,7 @@
 //! available, interleaved with the traversal (section 4.1). Visibility is
 //! pulled up the hierarchy when a node turns out visible.
 
-use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
 use crate::backend::{Backend, QueryHandle};
 use crate::hierarchy::{Hierarchy, NodeId};
 use std::collections::VecDeque;
@@ -96,22 +96,6 @@ impl Chc {
         }
     }
 
-    /// Renders the leaves in view under `node` (section 5.3).
-    fn render_subtree(ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, node: NodeId) {
-        let h = ctx.hierarchy;
-        let mut stack = vec![node];
-        while let Some(n) = stack.pop() {
-            if !ctx.in_frustum(n) {
-                continue;
-            }
-            if h.is_leaf(n) {
-                ctx.draw_leaf(backend, n);
-            } else {
-                stack.extend_from_slice(h.children(n));
-            }
-        }
-    }
-
     /// Section 5.3: picks the cheapest queued node not yet speculated on,
     /// if it is cheap enough, and renders it; true when something was drawn.
     fn speculate(
@@ -129,7 +113,9 @@ impl Chc {
         match candidate {
             Some(n) if self.subtree_triangles[n as usize] <= self.params.speculation_triangles => {
                 self.nodes[n as usize].speculated = frame;
-                Self::render_subtree(ctx, backend, n);
+                let mut leaves = Vec::new();
+                ctx.leaves_in_view(n, &mut leaves);
+                ctx.draw_leaves(backend, &leaves, false);
                 true
             }
             _ => false,
@@ -141,27 +127,9 @@ impl Chc {
         let h = ctx.hierarchy;
         if self.nodes.len() != h.node_count() {
             self.nodes = vec![NodeState::default(); h.node_count()];
-            self.subtree_triangles = subtree_triangles(ctx);
+            self.subtree_triangles = subtree_triangles(ctx.scene, h);
         }
     }
-}
-
-/// Triangles drawn by each node's subtree (children have higher ids than
-/// their parent in both builders, so one backward sweep suffices).
-fn subtree_triangles(ctx: &FrameContext<'_>) -> Vec<u64> {
-    let h = ctx.hierarchy;
-    let mut tris = vec![0u64; h.node_count()];
-    for n in (0..h.node_count() as NodeId).rev() {
-        tris[n as usize] = if h.is_leaf(n) {
-            h.instances(n)
-                .iter()
-                .map(|&i| ctx.scene.meshes[ctx.scene.instances[i as usize].mesh as usize].triangle_count() as u64)
-                .sum()
-        } else {
-            h.children(n).iter().map(|&c| tris[c as usize]).sum()
-        };
-    }
-    tris
 }
 
 impl CullingMethod for Chc {

@@ -6,7 +6,9 @@
 //! `Backend::end_frame`.
 
 pub mod chc;
+pub mod chcpp;
 mod front_to_back;
+pub mod om;
 pub mod opt;
 pub mod options;
 pub mod sw;
@@ -22,7 +24,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 4] = ["vfc", "sw", "chc", "opt"];
+pub const METHOD_NAMES: [&str; 6] = ["vfc", "sw", "chc", "chcpp", "om", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -53,6 +55,8 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "sw" => Box::new(sw::StopAndWait),
         "opt" => Box::new(opt::Optimal::default()),
         "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
+        "chcpp" => Box::new(chcpp::Chcpp::new(chcpp::ChcppParams::read(&mut reader)?)),
+        "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -70,6 +74,24 @@ pub trait CullingMethod {
 
     /// Draws the frame: everything visible must reach `backend.draw`.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend);
+}
+
+/// Triangles drawn by each node's subtree, a rendering-cost estimate
+/// (children have higher ids than their parent in both builders, so one
+/// backward sweep suffices).
+pub fn subtree_triangles(scene: &Scene, h: &Hierarchy) -> Vec<u64> {
+    let mut tris = vec![0u64; h.node_count()];
+    for n in (0..h.node_count() as NodeId).rev() {
+        tris[n as usize] = if h.is_leaf(n) {
+            h.instances(n)
+                .iter()
+                .map(|&i| scene.meshes[scene.instances[i as usize].mesh as usize].triangle_count() as u64)
+                .sum()
+        } else {
+            h.children(n).iter().map(|&c| tris[c as usize]).sum()
+        };
+    }
+    tris
 }
 
 /// Remembers which instances were drawn in the current frame, so an instance
@@ -121,18 +143,49 @@ impl<'a> FrameContext<'a> {
     /// Draws the instances of leaf `node` not yet drawn this frame; returns
     /// how many were drawn.
     pub fn draw_leaf(&mut self, backend: &mut dyn Backend, node: NodeId) -> usize {
+        self.draw_leaves(backend, &[node], false)
+    }
+
+    /// Draws the instances of `leaves` not yet drawn this frame, in one
+    /// batch; with `sort_by_material` the batch is ordered by material so
+    /// that each material costs one state change (the CHC++ render queue,
+    /// section 4.3). Returns how many instances were drawn.
+    pub fn draw_leaves(&mut self, backend: &mut dyn Backend, leaves: &[NodeId], sort_by_material: bool) -> usize {
         let d = &mut *self.drawn;
         d.batch.clear();
-        for &i in self.hierarchy.instances(node) {
-            if d.stamp[i as usize] != d.frame {
-                d.stamp[i as usize] = d.frame;
-                d.batch.push(i);
+        for &leaf in leaves {
+            for &i in self.hierarchy.instances(leaf) {
+                if d.stamp[i as usize] != d.frame {
+                    d.stamp[i as usize] = d.frame;
+                    d.batch.push(i);
+                }
             }
+        }
+        if sort_by_material {
+            let instances = &self.scene.instances;
+            d.batch.sort_by_key(|&i| instances[i as usize].material);
         }
         if !d.batch.is_empty() {
             backend.draw(&d.batch);
         }
         d.batch.len()
+    }
+
+    /// Appends the leaves in view under `node` (itself if it is a leaf), in
+    /// no particular order.
+    pub fn leaves_in_view(&self, node: NodeId, out: &mut Vec<NodeId>) {
+        let h = self.hierarchy;
+        let mut stack = vec![node];
+        while let Some(n) = stack.pop() {
+            if !self.in_frustum(n) {
+                continue;
+            }
+            if h.is_leaf(n) {
+                out.push(n);
+            } else {
+                stack.extend_from_slice(h.children(n));
+            }
+        }
     }
 
     /// True when `instance` was drawn this frame.

@@ -41,19 +41,17 @@ impl CullingMethod for Optimal {
         }
         let shared_instances = h.items.len() > ctx.scene.instances.len();
         let seen_leaves = shared_instances.then(|| leaves_with_visible_pixels(h, &ctx.camera, &view));
-        let eye = ctx.camera.position;
         self.leaves = in_view
             .into_iter()
             .filter(|&n| h.instances(n).iter().any(|&i| visible[i as usize]))
             .filter(|&n| seen_leaves.as_ref().is_none_or(|seen| seen[n as usize]))
             .collect();
-        self.leaves.sort_by(|&a, &b| h.bounds(a).distance_squared(eye).total_cmp(&h.bounds(b).distance_squared(eye)));
     }
 
+    /// One batch sorted by material: the fewest state changes any method
+    /// could reach for this set.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        for &leaf in &self.leaves {
-            ctx.draw_leaf(backend, leaf);
-        }
+        ctx.draw_leaves(backend, &self.leaves, true);
     }
 }
 

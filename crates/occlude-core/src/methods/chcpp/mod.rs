@@ -1,0 +1,336 @@
+//! CHC++: coherent hierarchical culling revisited (Mattausch, Bittner,
+//! Wimmer, Eurographics 2008), Figure 6 of the paper.
+//!
+//! On top of CHC's front-to-back traversal and temporal coherence:
+//! previously invisible nodes wait in an i-queue and are queried in batches
+//! of `b`, grouped into multiqueries (section 4.1, 5.1); queries of
+//! previously visible leaves wait in a v-queue and fill the time the CPU
+//! would otherwise wait (section 4.2); rendering goes through a render queue
+//! sorted by material before each query batch (section 4.3); visible leaves
+//! are re-queried every `nav` frames, the first time after a random delay
+//! (section 5.2); queries use tight bounding volumes and traversal stops at
+//! virtual leaves (section 6). Every component can be switched off.
+
+pub mod multiquery;
+pub mod tight;
+
+use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use crate::backend::{Backend, QueryHandle};
+use crate::geometry::Aabb;
+use crate::hierarchy::NodeId;
+use std::collections::VecDeque;
+
+/// The CHC++ parameters; the switches exist for ablation studies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChcppParams {
+    /// `b`: previously invisible nodes per query batch (section 4.1).
+    pub batch: u32,
+    /// `nav`: frames a visible leaf goes untested between queries (section 5.2).
+    pub nav: u32,
+    /// `dmax`: deepest level of descendants used as tight bounds (section 6).
+    pub dmax: u32,
+    /// `smax`: most surface-area growth allowed when refining tight bounds.
+    pub smax: f32,
+    /// `vleaf`: interior nodes with fewer triangles become virtual leaves (0: off).
+    pub virtual_leaf_triangles: u64,
+    /// `multiquery`: group i-queue nodes into multiqueries (section 5.1).
+    pub multiquery: bool,
+    /// `vqueue`: delay visible-leaf queries to fill wait time (section 4.2).
+    pub vqueue: bool,
+    /// `sort`: render through a material-sorted render queue (section 4.3).
+    pub sort: bool,
+    /// `random`: randomize the first re-query of a newly visible leaf (section 5.2).
+    pub random: bool,
+    /// `tight`: query tight bounding volumes (section 6).
+    pub tight: bool,
+}
+
+impl ChcppParams {
+    /// Reads `b`, `nav`, `dmax`, `smax`, `vleaf` and the component switches.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        Ok(Self {
+            batch: r.get("b", 50, "an integer from 1 to 100000", |v| (1..=100_000).contains(&v))?,
+            nav: r.get("nav", 10, "an integer from 0 to 1000", |v| v <= 1000)?,
+            dmax: r.get("dmax", 3, "an integer from 0 to 16", |v| v <= 16)?,
+            smax: r.get("smax", 1.4, "a number from 1 to 100", |v: f32| (1.0..=100.0).contains(&v))?,
+            virtual_leaf_triangles: r.get("vleaf", 0, "an integer >= 0 (triangles)", |_| true)?,
+            multiquery: r.flag("multiquery", true)?,
+            vqueue: r.flag("vqueue", true)?,
+            sort: r.flag("sort", true)?,
+            random: r.flag("random", true)?,
+            tight: r.flag("tight", true)?,
+        })
+    }
+}
+
+/// What CHC++ remembers about a node between frames.
+#[derive(Clone, Copy, Debug, Default)]
+struct NodeState {
+    visible: bool,
+    last_visited: u32,
+    /// Frame the visibility classification last changed (persistence).
+    changed_at: u32,
+    /// First frame in which a visible leaf is queried again.
+    next_test: u32,
+}
+
+/// An issued query and what it was for.
+enum Pending {
+    /// One node; `was_visible` tells a v-queue query from an i-queue one.
+    Node { node: NodeId, query: QueryHandle, was_visible: bool },
+    /// Several previously invisible nodes in one multiquery.
+    Multi { nodes: Vec<NodeId>, query: QueryHandle },
+}
+
+impl Pending {
+    fn query(&self) -> QueryHandle {
+        match self {
+            Pending::Node { query, .. } | Pending::Multi { query, .. } => *query,
+        }
+    }
+}
+
+/// The queues of one frame (the paper's Figure 3).
+#[derive(Default)]
+struct Queues {
+    distance: FrontToBack,
+    queries: VecDeque<Pending>,
+    invisible: Vec<NodeId>,
+    visible: VecDeque<NodeId>,
+    render: Vec<NodeId>,
+}
+
+/// `chcpp`: CHC++.
+#[derive(Clone, Debug)]
+pub struct Chcpp {
+    params: ChcppParams,
+    frame: u32,
+    nodes: Vec<NodeState>,
+    is_leaf: Vec<bool>,
+    boxes: Vec<Option<Vec<Aabb>>>,
+}
+
+/// A deterministic pseudo-random integer in `1..=n` for (node, frame).
+fn jitter(node: NodeId, frame: u32, n: u32) -> u32 {
+    let mut z = (u64::from(node) << 32 | u64::from(frame)).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    1 + (z % u64::from(n.max(1))) as u32
+}
+
+impl Chcpp {
+    /// CHC++ with the given parameters.
+    pub fn new(params: ChcppParams) -> Self {
+        Self { params, frame: 0, nodes: Vec::new(), is_leaf: Vec::new(), boxes: Vec::new() }
+    }
+
+    fn prepare_state(&mut self, ctx: &FrameContext<'_>) {
+        let h = ctx.hierarchy;
+        if self.nodes.len() != h.node_count() {
+            self.nodes = vec![NodeState::default(); h.node_count()];
+            let tris = subtree_triangles(ctx.scene, h);
+            self.is_leaf = tight::virtual_leaves(h, &tris, self.params.virtual_leaf_triangles);
+            self.boxes = vec![None; h.node_count()];
+        }
+    }
+
+    /// The boxes a query of `node` rasterizes (tight bounds when on).
+    fn boxes(&mut self, ctx: &FrameContext<'_>, node: NodeId) -> &[Aabb] {
+        let (h, p) = (ctx.hierarchy, self.params);
+        self.boxes[node as usize].get_or_insert_with(|| {
+            if p.tight {
+                tight::tight_boxes(h, node, p.dmax, p.smax)
+            } else {
+                vec![*h.bounds(node)]
+            }
+        })
+    }
+
+    fn pull_up(&mut self, ctx: &FrameContext<'_>, mut node: NodeId) {
+        while !self.nodes[node as usize].visible {
+            self.nodes[node as usize].visible = true;
+            match ctx.hierarchy.parent(node) {
+                Some(p) => node = p,
+                None => break,
+            }
+        }
+    }
+
+    /// Draws everything in the render queue (sorted by material when on).
+    fn flush_render_queue(&self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, q: &mut Queues) {
+        if !q.render.is_empty() {
+            ctx.draw_leaves(backend, &q.render, self.params.sort);
+            q.render.clear();
+        }
+    }
+
+    /// Figure 6, `TraverseNode`: a (virtual) leaf goes to rendering, an
+    /// interior node's children to the distance queue.
+    fn traverse_node(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, q: &mut Queues, node: NodeId) {
+        if self.is_leaf[node as usize] {
+            let first = q.render.len();
+            ctx.leaves_in_view(node, &mut q.render);
+            if !self.params.sort {
+                ctx.draw_leaves(backend, &q.render[first..], false);
+                q.render.truncate(first);
+            }
+        } else {
+            for &c in ctx.hierarchy.children(node) {
+                q.distance.push_node(ctx.hierarchy, c, ctx.camera.position);
+            }
+        }
+    }
+
+    /// Issues one query for `node` after rendering what is queued.
+    fn issue_single(
+        &mut self,
+        ctx: &mut FrameContext<'_>,
+        backend: &mut dyn Backend,
+        q: &mut Queues,
+        node: NodeId,
+        was_visible: bool,
+    ) {
+        self.flush_render_queue(ctx, backend, q);
+        let query = backend.issue_query(self.boxes(ctx, node));
+        q.queries.push_back(Pending::Node { node, query, was_visible });
+    }
+
+    /// Figure 6, `IssueMultiQueries`: the i-queue as one batch, grouped into
+    /// multiqueries by the cost/benefit model when on.
+    fn issue_batch(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, q: &mut Queues) {
+        if q.invisible.is_empty() {
+            return;
+        }
+        self.flush_render_queue(ctx, backend, q);
+        let mut nodes = std::mem::take(&mut q.invisible);
+        let frame = self.frame;
+        let persistence = |n: NodeId| frame - self.nodes[n as usize].changed_at;
+        let sizes = if self.params.multiquery {
+            nodes.sort_by_key(|&n| (std::cmp::Reverse(persistence(n)), n));
+            let p: Vec<u32> = nodes.iter().map(|&n| persistence(n)).collect();
+            multiquery::group_sizes(&p)
+        } else {
+            vec![1; nodes.len()]
+        };
+        let mut rest = &nodes[..];
+        for size in sizes {
+            let (group, tail) = rest.split_at(size);
+            rest = tail;
+            if let [node] = group {
+                let query = backend.issue_query(self.boxes(ctx, *node));
+                q.queries.push_back(Pending::Node { node: *node, query, was_visible: false });
+            } else {
+                let boxes: Vec<Aabb> = group.iter().flat_map(|&n| self.boxes(ctx, n).to_vec()).collect();
+                let query = backend.issue_query(&boxes);
+                q.queries.push_back(Pending::Multi { nodes: group.to_vec(), query });
+            }
+        }
+    }
+
+    /// Figure 6, `HandleReturnedQuery`.
+    fn handle(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, q: &mut Queues, done: Pending) {
+        let visible = backend.result(done.query()) > 0;
+        let frame = self.frame;
+        match done {
+            Pending::Multi { nodes, .. } => {
+                if visible {
+                    // The group broke coherence: test each node on its own.
+                    for n in nodes {
+                        self.issue_single(ctx, backend, q, n, false);
+                    }
+                }
+            }
+            Pending::Node { node, was_visible, .. } => {
+                let nav = self.params.nav;
+                let state = &mut self.nodes[node as usize];
+                if visible {
+                    if was_visible {
+                        state.next_test = frame + nav + 1;
+                    } else {
+                        state.changed_at = frame;
+                        state.next_test = frame + if self.params.random { jitter(node, frame, nav) } else { nav + 1 };
+                        self.traverse_node(ctx, backend, q, node);
+                    }
+                    self.pull_up(ctx, node);
+                } else {
+                    if was_visible {
+                        state.changed_at = frame;
+                    }
+                    state.visible = false;
+                }
+            }
+        }
+    }
+}
+
+impl CullingMethod for Chcpp {
+    fn name(&self) -> &'static str {
+        "chcpp"
+    }
+
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        self.prepare_state(ctx);
+        self.frame += 1;
+        let frame = self.frame;
+        let mut q = Queues::default();
+        q.distance.push_node(ctx.hierarchy, ctx.hierarchy.root(), ctx.camera.position);
+
+        while !q.distance.is_empty() || !q.queries.is_empty() {
+            while let Some(front) = q.queries.front() {
+                if backend.is_available(front.query()) {
+                    let done = q.queries.pop_front().expect("front exists");
+                    self.handle(ctx, backend, &mut q, done);
+                } else if !q.distance.is_empty() {
+                    break;
+                } else if let Some(n) = q.visible.pop_front() {
+                    // Fill the wait with a previously visible leaf's query.
+                    self.issue_single(ctx, backend, &mut q, n, true);
+                } else {
+                    let done = q.queries.pop_front().expect("front exists");
+                    self.handle(ctx, backend, &mut q, done);
+                }
+            }
+            if let Some(node) = q.distance.pop() {
+                backend.traverse(1);
+                if ctx.in_frustum(node) {
+                    let state = &mut self.nodes[node as usize];
+                    let was_visible = state.visible && state.last_visited + 1 == frame;
+                    let test_due = frame >= state.next_test;
+                    state.last_visited = frame;
+                    state.visible = false;
+                    if !was_visible {
+                        q.invisible.push(node);
+                        if q.invisible.len() >= self.params.batch as usize {
+                            self.issue_batch(ctx, backend, &mut q);
+                        }
+                    } else {
+                        if self.is_leaf[node as usize] {
+                            if !test_due {
+                                self.pull_up(ctx, node);
+                            } else if self.params.vqueue {
+                                q.visible.push_back(node);
+                            } else {
+                                self.issue_single(ctx, backend, &mut q, node, true);
+                            }
+                        }
+                        self.traverse_node(ctx, backend, &mut q, node);
+                    }
+                }
+            }
+            if q.distance.is_empty() {
+                self.issue_batch(ctx, backend, &mut q);
+            }
+        }
+        // The remaining previously-visible queries go out as one batch after
+        // the last rendering; their results classify the nodes for the next frame.
+        self.flush_render_queue(ctx, backend, &mut q);
+        while let Some(n) = q.visible.pop_front() {
+            self.issue_single(ctx, backend, &mut q, n, true);
+        }
+        while let Some(done) = q.queries.pop_front() {
+            self.handle(ctx, backend, &mut q, done);
+        }
+        self.flush_render_queue(ctx, backend, &mut q);
+    }
+}
