@@ -1,7 +1,11 @@
-//! `occlude bench --paper chc`: the CHC paper's experiments (Bittner et al.
-//! 2004, section 6) on our teapots, city and plant scenes, printed in the
-//! shape of its Table 1 (methods compared) and Table 2 (influence of the
-//! assumed-visible frames `tav` and the pixel threshold `nvp`).
+//! `occlude bench --paper chc|chcpp`: a paper's experiments on our teapots,
+//! city and plant scenes, printed in the shape of its tables.
+//!
+//! - `chc` (Bittner et al. 2004, section 6): kD-tree, `gpu-2004`; Table 1
+//!   (VFC, S&W, CHC, ideal) and Table 2 (influence of `tav` and `nvp`).
+//! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
+//!   comparison of VFC, S&W, CHC, CHC++ and OPT, and an ablation of CHC++'s
+//!   components.
 
 use super::config::BenchConfig;
 use super::runner::run_scene;
@@ -9,19 +13,62 @@ use super::summary::BenchReport;
 use anyhow::Result;
 use indicatif::ProgressBar;
 use occlude_core::methods::MethodOptions;
-use occlude_core::HierarchyKind;
+use occlude_core::{HierarchyKind, Scene};
 use occlude_soft::GpuModel;
 use std::fmt::Write;
 
 /// Papers whose experiments `--paper` can run.
-pub const PAPERS: [&str; 1] = ["chc"];
+pub const PAPERS: [&str; 2] = ["chc", "chcpp"];
 
-/// The scenes of the CHC paper's Table 1, in its order.
-const CHC_SCENES: [&str; 3] = ["teapots", "city", "plant"];
-/// `tav` values of the CHC paper's Table 2.
-const TAV_VALUES: [u32; 3] = [2, 5, 10];
-/// `nvp` values of the CHC paper's Table 2.
-const NVP_VALUES: [u32; 3] = [10, 25, 50];
+/// The scenes both papers' tables use, in the CHC paper's order.
+const SCENES: [&str; 3] = ["teapots", "city", "plant"];
+
+/// One paper's setting.
+struct Experiment {
+    title: &'static str,
+    hierarchy: HierarchyKind,
+    gpu_model: fn() -> GpuModel,
+    methods: &'static [&'static str],
+    /// The method whose options the second table varies, and the variants
+    /// (each a list of `method.key=value`, labelled by the list).
+    varied: &'static str,
+    variants: &'static [&'static [&'static str]],
+}
+
+const CHC: Experiment = Experiment {
+    title: "CHC paper (kD-tree, gpu-2004)",
+    hierarchy: HierarchyKind::KdTree,
+    gpu_model: GpuModel::gpu_2004,
+    methods: &["vfc", "sw", "chc", "opt"],
+    varied: "chc",
+    variants: &[
+        &[],
+        &["chc.tav=2"],
+        &["chc.tav=5"],
+        &["chc.tav=10"],
+        &["chc.nvp=10"],
+        &["chc.nvp=25"],
+        &["chc.nvp=50"],
+    ],
+};
+
+const CHCPP: Experiment = Experiment {
+    title: "CHC++ paper (BVH, modern)",
+    hierarchy: HierarchyKind::Bvh,
+    gpu_model: GpuModel::modern,
+    methods: &["vfc", "sw", "chc", "chcpp", "opt"],
+    varied: "chcpp",
+    variants: &[
+        &[],
+        &["chcpp.multiquery=off"],
+        &["chcpp.vqueue=off"],
+        &["chcpp.sort=off"],
+        &["chcpp.random=off"],
+        &["chcpp.tight=off"],
+        &["chcpp.b=1"],
+        &["chcpp.nav=0"],
+    ],
+};
 
 /// Tables and the reports behind them.
 pub struct PaperResult {
@@ -32,74 +79,80 @@ pub struct PaperResult {
 }
 
 /// Runs the experiments of `paper` with the size, seed, frames and
-/// resolution of `base`; scene, methods, hierarchy and GPU model are the
+/// resolution of `base`; scenes, methods, hierarchy and GPU model are the
 /// paper's.
 pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
-    match paper {
-        "chc" => run_chc(base, progress),
+    let experiment = match paper {
+        "chc" => &CHC,
+        "chcpp" => &CHCPP,
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
-    }
+    };
+    run_experiment(experiment, base, progress)
 }
 
-fn run_chc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
-    let mut table1 = String::from(
-        "CHC paper, Table 1 (kD-tree, gpu-2004; times simulated)\n\
-         scene     method  queries  wait ms  rendered triangles  frame ms  speedup\n",
+fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
+    let mut comparison = format!(
+        "{} — methods compared (times simulated)\n\
+         scene     method  queries  wait ms  states  rendered triangles  frame ms  speedup  ratio opt\n",
+        e.title
     );
-    let mut table2 = String::from(
-        "CHC paper, Table 2 (influence of tav and nvp on chc)\n\
-         scene     option  queries  frame ms  missing px/frame\n",
+    let mut variants = format!(
+        "{} — {} variants\n\
+         scene     variant                 queries  states  frame ms  missing px/frame\n",
+        e.title, e.varied
     );
     let mut reports = Vec::new();
-    for scene_name in CHC_SCENES {
+    for scene_name in SCENES {
         let config = BenchConfig {
             scene: scene_name.into(),
-            methods: ["vfc", "sw", "chc", "opt"].map(String::from).to_vec(),
-            hierarchy: HierarchyKind::KdTree,
-            gpu_model: GpuModel::gpu_2004(),
+            methods: e.methods.iter().map(|m| m.to_string()).collect(),
+            hierarchy: e.hierarchy,
+            gpu_model: (e.gpu_model)(),
             options: MethodOptions::default(),
             ..base.clone()
         };
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
-        progress.set_message(format!("chc paper: {scene_name}"));
-        let report = run_scene(&scene, &config, progress)?.report(&config);
+        let report = run_labelled(&scene, &config, progress, "methods")?;
         for m in &report.methods {
             let _ = writeln!(
-                table1,
-                "{:<9} {:<6} {:>8.0} {:>8.2} {:>19.0} {:>9.2} {:>8.2}",
+                comparison,
+                "{:<9} {:<6} {:>8.0} {:>8.2} {:>7.0} {:>19.0} {:>9.3} {:>8.2} {:>10}",
                 scene_name,
                 m.name,
                 m.queries_per_frame,
                 m.wait_ms_per_frame,
+                m.state_changes_per_frame,
                 m.triangles_per_frame,
                 m.mean_frame_ms,
-                m.speedup_vs_vfc
+                m.speedup_vs_vfc,
+                m.ratio_to_opt.map_or("-".into(), |r| format!("{r:.2}")),
             );
         }
         reports.push(report);
-
-        let variants =
-            TAV_VALUES.iter().map(|t| format!("chc.tav={t}")).chain(NVP_VALUES.iter().map(|n| format!("chc.nvp={n}")));
-        for option in std::iter::once(String::new()).chain(variants) {
-            let options = if option.is_empty() { MethodOptions::default() } else { MethodOptions::parse(&[&option])? };
-            let config = BenchConfig { methods: vec!["chc".into()], options, ..config.clone() };
-            progress.set_message(format!("chc paper: {scene_name} {option}"));
-            let report = run_scene(&scene, &config, progress)?.report(&config);
+        for opts in e.variants {
+            let config =
+                BenchConfig { methods: vec![e.varied.into()], options: MethodOptions::parse(opts)?, ..config.clone() };
+            let label = if opts.is_empty() { "all defaults".to_string() } else { opts.join(" ") };
+            let report = run_labelled(&scene, &config, progress, &label)?;
             let m = &report.methods[0];
-            let label =
-                if option.is_empty() { "basic".to_string() } else { option.trim_start_matches("chc.").to_string() };
             let _ = writeln!(
-                table2,
-                "{:<9} {:<7} {:>7.0} {:>9.2} {:>17.0}",
+                variants,
+                "{:<9} {:<23} {:>7.0} {:>7.0} {:>9.3} {:>17.0}",
                 scene_name,
                 label,
                 m.queries_per_frame,
+                m.state_changes_per_frame,
                 m.mean_frame_ms,
                 m.missing_pixels as f64 / report.frames.max(1) as f64
             );
             reports.push(report);
         }
     }
-    Ok(PaperResult { text: format!("{table1}\n{table2}"), reports })
+    Ok(PaperResult { text: format!("{comparison}\n{variants}"), reports })
+}
+
+fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {
+    progress.set_message(format!("{} {}: {label}", config.scene, config.size));
+    Ok(run_scene(scene, config, progress)?.report(config))
 }

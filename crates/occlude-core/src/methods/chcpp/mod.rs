@@ -295,8 +295,13 @@ impl CullingMethod for Chcpp {
                 backend.traverse(1);
                 if ctx.in_frustum(node) {
                     let state = &mut self.nodes[node as usize];
-                    let was_visible = state.visible && state.last_visited + 1 == frame;
+                    let seen_last_frame = state.last_visited + 1 == frame;
+                    let was_visible = state.visible && seen_last_frame;
                     let test_due = frame >= state.next_test;
+                    if !seen_last_frame {
+                        // A stale classification says nothing: persistence restarts.
+                        state.changed_at = frame;
+                    }
                     state.last_visited = frame;
                     state.visible = false;
                     if !was_visible {
