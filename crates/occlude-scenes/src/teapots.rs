@@ -16,9 +16,9 @@ use glam::{Mat4, Vec3};
 use occlude_core::Scene;
 
 /// Grid cell of one teapot, in metres (x and z; layers are [`LAYER`] apart).
-const CELL: f32 = 1.6;
+const CELL: f32 = 1.2;
 /// Vertical distance between layers of teapots.
-const LAYER: f32 = 1.3;
+const LAYER: f32 = 0.8;
 /// Height of the lowest layer's cells above the ground.
 const BASE: f32 = 0.3;
 /// Scale from Newell units to metres (a teapot about 1 m long).
