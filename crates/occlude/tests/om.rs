@@ -1,0 +1,99 @@
+//! `om` (occupancy maps + multiple occlusion queries, Staneker, Bartz and
+//! Straßer) against the correctness rule of DESIGN.md, and against
+//! stop-and-wait for the queries its first stage saves.
+
+use indicatif::ProgressBar;
+use occlude::bench::runner::run_scene;
+use occlude::bench::{BenchConfig, BenchRun};
+use occlude_core::methods::MethodOptions;
+use occlude_core::{FrameStats, HierarchyKind, Scene};
+use occlude_scenes::{generate, Size, SCENE_NAMES};
+
+/// The whole walkthrough of each small scene at the resolution the
+/// correctness suite uses, running `methods` with `options`.
+fn config(scene: &str, hierarchy: HierarchyKind, methods: &[&str], options: &[&str]) -> BenchConfig {
+    BenchConfig {
+        scene: scene.into(),
+        methods: methods.iter().map(|m| m.to_string()).collect(),
+        frames: 90,
+        resolution: (480, 360),
+        hierarchy,
+        options: MethodOptions::parse(options).unwrap(),
+        ..BenchConfig::default()
+    }
+}
+
+fn small(scene: &str) -> Scene {
+    let s = generate(scene, Size::Small, 1).unwrap();
+    s.validate().unwrap();
+    s
+}
+
+fn run(scene: &Scene, cfg: &BenchConfig) -> BenchRun {
+    run_scene(scene, cfg, &ProgressBar::hidden()).unwrap()
+}
+
+fn total(frames: &[FrameStats], field: fn(&FrameStats) -> u64) -> u64 {
+    frames.iter().map(field).sum()
+}
+
+/// With and without occupancy-map grouping of its queries, `om` produces
+/// view-frustum culling's depth image bit for bit on every frame, while
+/// actually culling (so the check is not met by drawing everything).
+#[test]
+fn om_matches_vfc_on_every_frame_of_every_small_scene() {
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            for options in [&[][..], &["om.grouping=off"]] {
+                let r = run(&scene, &config(name, hierarchy, &["om"], options));
+                let om = &r.methods[0];
+                for (f, stats) in om.frames.iter().enumerate() {
+                    assert_eq!(
+                        stats.missing_pixels, 0,
+                        "{name}/{hierarchy}/om {options:?}: frame {f} differs from vfc"
+                    );
+                }
+                let (om_tris, vfc_tris) = (total(&om.frames, |f| f.triangles), total(&r.reference, |f| f.triangles));
+                assert!(
+                    om_tris < vfc_tris,
+                    "{name}/{hierarchy}/om {options:?}: culled nothing ({om_tris} vs {vfc_tris})"
+                );
+                assert!(total(&om.frames, |f| f.queries) > 0, "{name}/{hierarchy}/om {options:?}: no query issued");
+            }
+        }
+    }
+}
+
+/// Stage 1 draws the nodes that reach uncovered screen space without a
+/// query, so on the city walkthrough `om` issues fewer queries per frame than
+/// stop-and-wait, which queries every node it reaches.
+#[test]
+fn stage_one_saves_queries_over_stop_and_wait_on_the_city() {
+    let scene = small("city");
+    for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        let r = run(&scene, &config("city", hierarchy, &["sw", "om"], &[]));
+        let (sw, om) = (&r.methods[0], &r.methods[1]);
+        assert_eq!((sw.name.as_str(), om.name.as_str()), ("sw", "om"));
+        let per_frame = |frames: &[FrameStats]| total(frames, |f| f.queries) as f64 / frames.len() as f64;
+        let (sw_q, om_q) = (per_frame(&sw.frames), per_frame(&om.frames));
+        assert!(om_q < sw_q, "{hierarchy}: om issued {om_q:.1} queries per frame, sw {sw_q:.1}");
+    }
+}
+
+/// Grouping the queries into rounds of boxes that do not overlap on screen
+/// avoids the false "visible" answers of boxes queried behind undrawn
+/// geometry, so on the city walkthrough `om` draws fewer triangles with
+/// grouping than without it.
+#[test]
+fn grouping_avoids_redundant_visible_answers_on_the_city() {
+    let scene = small("city");
+    for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        let triangles = |options: &[&str]| {
+            let r = run(&scene, &config("city", hierarchy, &["om"], options));
+            total(&r.methods[0].frames, |f| f.triangles)
+        };
+        let (grouped, brute) = (triangles(&[]), triangles(&["om.grouping=off"]));
+        assert!(grouped < brute, "{hierarchy}: {grouped} triangles with grouping, {brute} without");
+    }
+}
