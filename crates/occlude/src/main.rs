@@ -82,7 +82,7 @@ struct BenchArgs {
     plot_queries: Option<PathBuf>,
     /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
     /// model as in the paper; size, frames, resolution and seed from the
-    /// other options): chc or chcpp.
+    /// other options): chc, chcpp or om.
     #[arg(long)]
     paper: Option<String>,
     /// Worker threads for the rasterizer (default: all cores).

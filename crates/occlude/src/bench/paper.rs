@@ -6,6 +6,9 @@
 //! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
 //!   comparison of VFC, S&W, CHC, CHC++ and OPT, and an ablation of CHC++'s
 //!   components.
+//! - `om` (Staneker, Bartz, Straßer): city and plant, BVH, `gpu-2004`; single
+//!   queries (`sw`) against multiple queries without occupancy-map grouping
+//!   and `om`.
 
 use super::config::BenchConfig;
 use super::runner::run_scene;
@@ -18,14 +21,15 @@ use occlude_soft::GpuModel;
 use std::fmt::Write;
 
 /// Papers whose experiments `--paper` can run.
-pub const PAPERS: [&str; 2] = ["chc", "chcpp"];
+pub const PAPERS: [&str; 3] = ["chc", "chcpp", "om"];
 
-/// The scenes both papers' tables use, in the CHC paper's order.
-const SCENES: [&str; 3] = ["teapots", "city", "plant"];
+/// The scenes of the CHC papers' tables, in the CHC paper's order.
+const CHC_SCENES: &[&str] = &["teapots", "city", "plant"];
 
 /// One paper's setting.
 struct Experiment {
     title: &'static str,
+    scenes: &'static [&'static str],
     hierarchy: HierarchyKind,
     gpu_model: fn() -> GpuModel,
     methods: &'static [&'static str],
@@ -37,6 +41,7 @@ struct Experiment {
 
 const CHC: Experiment = Experiment {
     title: "CHC paper (kD-tree, gpu-2004)",
+    scenes: CHC_SCENES,
     hierarchy: HierarchyKind::KdTree,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "chc", "opt"],
@@ -54,6 +59,7 @@ const CHC: Experiment = Experiment {
 
 const CHCPP: Experiment = Experiment {
     title: "CHC++ paper (BVH, modern)",
+    scenes: CHC_SCENES,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::modern,
     methods: &["vfc", "sw", "chc", "chcpp", "opt"],
@@ -68,6 +74,16 @@ const CHCPP: Experiment = Experiment {
         &["chcpp.b=1"],
         &["chcpp.nav=0"],
     ],
+};
+
+const OM: Experiment = Experiment {
+    title: "Occupancy-map paper (BVH, gpu-2004)",
+    scenes: &["city", "plant"],
+    hierarchy: HierarchyKind::Bvh,
+    gpu_model: GpuModel::gpu_2004,
+    methods: &["vfc", "sw", "om", "opt"],
+    varied: "om",
+    variants: &[&[], &["om.grouping=off"]],
 };
 
 /// Tables and the reports behind them.
@@ -85,6 +101,7 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
     let experiment = match paper {
         "chc" => &CHC,
         "chcpp" => &CHCPP,
+        "om" => &OM,
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
     };
     run_experiment(experiment, base, progress)
@@ -102,7 +119,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         e.title, e.varied
     );
     let mut reports = Vec::new();
-    for scene_name in SCENES {
+    for &scene_name in e.scenes {
         let config = BenchConfig {
             scene: scene_name.into(),
             methods: e.methods.iter().map(|m| m.to_string()).collect(),
