@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod hierarchy;
 pub mod methods;
 pub mod path;
+pub mod rng;
 pub mod scene;
 pub mod stats;
 

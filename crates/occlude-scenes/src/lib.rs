@@ -2,7 +2,7 @@
 //!
 //! [`generate`] builds one of [`SCENE_NAMES`] at a [`Size`] from a seed; the
 //! same `(name, size, seed)` always gives the same scene, on every machine,
-//! because all randomness comes from this crate's own [`rng::Rng`].
+//! because all randomness comes from `occlude_core`'s own [`rng::Rng`].
 //!
 //! The scenes stand in for those of the occlusion-culling papers (CHC 2004,
 //! CHC++ 2008, IOC): a long field of Utah teapots, a city of streets and
@@ -16,7 +16,7 @@ mod city;
 mod figures;
 pub mod newell;
 mod plant;
-pub mod rng;
+pub use occlude_core::rng;
 pub mod shapes;
 mod teapots;
 mod walk;

@@ -7,30 +7,18 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
 use glam::Vec4;
+use occlude_core::rng::Rng;
 use occlude_soft::raster::{Command, CommandKind, DepthBuffer, Rasterizer};
-
-/// Small deterministic PRNG (splitmix64), so the workload needs no dependency.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// `count` right triangles with legs of `leg` pixels on a `width` x `height` screen,
 /// in clip space (w = 1), depth decreasing from one triangle to the next.
 fn workload(width: u32, height: u32, leg: f32, count: usize) -> Vec<[Vec4; 3]> {
-    let mut rng = SplitMix64(0x5EED ^ leg.to_bits() as u64);
+    let mut rng = Rng::new(0x5EED ^ leg.to_bits() as u64, 0);
     let (w, h) = (width as f32, height as f32);
     (0..count)
         .map(|i| {
-            let (cx, cy) = (rng.next_f32() * w, rng.next_f32() * h);
-            let angle = rng.next_f32() * std::f32::consts::TAU;
+            let (cx, cy) = (rng.unit() * w, rng.unit() * h);
+            let angle = rng.unit() * std::f32::consts::TAU;
             let (u, v) = (
                 glam::Vec2::from_angle(angle) * leg,
                 glam::Vec2::from_angle(angle + std::f32::consts::FRAC_PI_2) * leg,

@@ -4,24 +4,7 @@ use super::clip::Polygon;
 use super::setup::{setup_triangle, Viewport};
 use super::*;
 
-/// Small deterministic PRNG (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        let u = (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
-        lo + (hi - lo) * u
-    }
-}
+use occlude_core::rng::Rng;
 
 /// Clip-space vertex of screen position `(sx, sy)` (pixels, y down), NDC depth `z`,
 /// scaled by `w`.
@@ -109,7 +92,7 @@ fn triangulated_rect(
 #[test]
 fn triangulated_rectangle_covers_each_pixel_once() {
     let size = (256u32, 128u32);
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7, 0);
     let rects = [
         [10.0, 20.0, 200.0, 100.0],       // pixel-aligned corners
         [10.5, 20.5, 130.5, 90.5],        // edges through pixel centres
@@ -260,7 +243,7 @@ fn near_clipped_mesh_is_watertight() {
     // the guard band at the sides: its triangles share near- and guard-clipped edges.
     let (w, h) = (160u32, 120u32);
     let proj = Mat4::perspective_rh(90f32.to_radians(), w as f32 / h as f32, 0.1, 10_000.0);
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21, 0);
     let (nx, nz) = (41usize, 41usize);
     let mut pts = Vec::new();
     for j in 0..nz {
@@ -346,7 +329,7 @@ fn query_less_counts_unoccluded_fragments() {
 /// A random scene of `n` triangles in clip space: on and off screen, crossing the
 /// near plane, some behind the eye, some tiny.
 fn random_scene(n: usize, seed: u64) -> Vec<[Vec4; 3]> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed, 0);
     (0..n)
         .map(|i| {
             let w = rng.range(0.5, 4.0);

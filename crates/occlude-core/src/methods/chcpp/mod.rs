@@ -18,6 +18,7 @@ use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack, OptionE
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
 use crate::hierarchy::NodeId;
+use crate::rng::mix64;
 use std::collections::VecDeque;
 
 /// The CHC++ parameters; the switches exist for ablation studies.
@@ -112,10 +113,7 @@ pub struct Chcpp {
 
 /// A deterministic pseudo-random integer in `1..=n` for (node, frame).
 fn jitter(node: NodeId, frame: u32, n: u32) -> u32 {
-    let mut z = (u64::from(node) << 32 | u64::from(frame)).wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^= z >> 31;
+    let z = mix64(u64::from(node) << 32 | u64::from(frame));
     1 + (z % u64::from(n.max(1))) as u32
 }
 

@@ -1,10 +1,24 @@
-//! A tiny deterministic random number generator (SplitMix64).
+//! A tiny deterministic random number generator (SplitMix64), shared by the
+//! scene generators, randomized methods (CHC++'s re-query jitter), tests and
+//! benchmarks.
 //!
-//! Scenes must be identical for a given `(name, size, seed)` forever, on every
-//! platform and whatever crate versions are in use, so the generator lives here
-//! instead of coming from a dependency whose output could change.
+//! Scenes and simulated results must be identical for the same inputs
+//! forever, on every platform and whatever crate versions are in use, so the
+//! generator lives here instead of coming from a dependency whose output
+//! could change.
 
 use glam::{Quat, Vec3};
+
+/// The SplitMix64 increment.
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// SplitMix64's output function: a bijective mix of 64 bits, usable on its
+/// own as a stateless hash (for example of a node id and a frame number).
+pub fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
 
 /// SplitMix64 (Steele, Lea and Flood 2014): small, fast, and good enough for
 /// placing objects.
@@ -25,11 +39,8 @@ impl Rng {
 
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.state = self.state.wrapping_add(GOLDEN_GAMMA);
+        mix64(self.state)
     }
 
     /// Uniform in `[0, 1)`, from the top 24 bits so every value is exact in f32.
