@@ -9,7 +9,7 @@
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
-use crate::raster::{self, Command, CommandKind, DepthBuffer, DepthTest};
+use crate::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
 use glam::{Mat4, Vec4};
 use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, Scene};
 use std::time::Instant;
@@ -54,6 +54,7 @@ pub struct SoftBackend<'s> {
     scene: &'s Scene,
     model: GpuModel,
     depth: DepthBuffer,
+    rasterizer: Rasterizer,
     camera: Option<Camera>,
     view_projection: Mat4,
     clock: SimClock,
@@ -77,6 +78,7 @@ impl<'s> SoftBackend<'s> {
             scene,
             model,
             depth: DepthBuffer::new(width, height),
+            rasterizer: Rasterizer::new(),
             camera: None,
             view_projection: Mat4::IDENTITY,
             clock: SimClock::default(),
@@ -150,7 +152,7 @@ impl<'s> SoftBackend<'s> {
         if self.commands.is_empty() {
             return;
         }
-        let results = raster::execute(&mut self.depth, &self.triangles, &self.commands);
+        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &self.commands);
         for (op, r) in self.ops.iter().zip(&results) {
             let end = self.clock.gpu_command(op.issued_us, op.fixed_us + r.fragments as f64 * op.fragment_ns * 1e-3);
             match op.query {
@@ -298,7 +300,7 @@ impl Backend for SoftBackend<'_> {
             triangles: r,
             cull_back: false,
         }));
-        let results = raster::execute(&mut self.depth, &self.triangles, &commands);
+        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
         self.triangles.clear();
         let visible = candidates
             .iter()
