@@ -26,6 +26,15 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
     assert_usage_error(&["bench", "--method-opt", "sw.tav=2"], "no parameter 'tav'");
     assert_usage_error(&["bench", "--plot", "frames.jpg"], "frames.jpg");
+    assert_usage_error(
+        &["bench", "--methods", "chcpp", "--method-opt", "chcpp.b=-1"],
+        "chcpp.b = -1: expected an integer from 1",
+    );
+    assert_usage_error(
+        &["bench", "--methods", "chcpp", "--method-opt", "chcpp.smax=0.5"],
+        "chcpp.smax = 0.5: expected a number from 1",
+    );
+    assert_usage_error(&["bench", "--methods", "om", "--method-opt", "om.map=0"], "om.map = 0");
     assert_usage_error(&["bench", "--paper", "nohc"], "nohc");
     assert_usage_error(&["bench", "--method-opt", "chc.tav"], "chc.tav");
     assert_usage_error(&["bench", "--methods", "vfc", "--method-opt", "sw.x=1"], "not in --methods");

@@ -187,6 +187,15 @@ fn chcpp_saves_queries_and_state_changes_over_chc() {
     let total = |m: usize, f: fn(&occlude_core::FrameStats) -> u64| run.methods[m].frames.iter().map(f).sum::<u64>();
     assert!(total(1, |f| f.queries) < total(0, |f| f.queries), "queries");
     assert!(total(1, |f| f.state_changes) * 3 < total(0, |f| f.state_changes), "state changes");
+
+    // Skipping re-queries of visible leaves for `nav` frames saves queries.
+    let every_frame = BenchConfig {
+        methods: vec!["chcpp".into()],
+        options: MethodOptions::parse(&["chcpp.nav=0"]).unwrap(),
+        ..config("city", HierarchyKind::Bvh)
+    };
+    let queries_nav0: u64 = exact_run(&scene, &every_frame).methods[0].frames.iter().map(|f| f.queries).sum();
+    assert!(total(1, |f| f.queries) < queries_nav0, "nav=10 should query less than nav=0");
 }
 
 #[test]
