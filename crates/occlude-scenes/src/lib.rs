@@ -9,11 +9,15 @@
 //! buildings, a dense industrial plant, and a volume of scattered figures.
 //! Objects are instances of shared meshes (one draw call each), so even the
 //! `paper` sizes with millions of triangles stay small in memory.
+//!
+//! [`load`] also imports real models (glTF 2.0, OBJ) by file name; see
+//! [`import`](mod@import).
 
 #![warn(missing_docs)]
 
 mod city;
 mod figures;
+pub mod import;
 pub mod newell;
 mod plant;
 pub use occlude_core::rng;
@@ -21,6 +25,7 @@ pub mod shapes;
 mod teapots;
 mod walk;
 
+pub use import::{load, AutoPath, ImportOptions, LoadError};
 use occlude_core::{Scene, SceneError};
 use std::fmt;
 use std::str::FromStr;

@@ -4,12 +4,14 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use occlude::bench::config::{load_camera_path, parse_resolution, DEFAULT_METHODS};
 use occlude::bench::plot::PlotKind;
-use occlude::bench::{self, config::parse_resolution, config::DEFAULT_METHODS, BenchConfig};
+use occlude::bench::{self, BenchConfig};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::HierarchyKind;
-use occlude_scenes::{Size, SCENE_NAMES};
+use occlude_scenes::import::SceneSource;
+use occlude_scenes::{AutoPath, ImportOptions, LoadError, Size};
 use occlude_soft::GpuModel;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -38,9 +40,22 @@ enum Command {
 
 #[derive(clap::Args)]
 struct BenchArgs {
-    /// Scene: teapots, city, plant or figures.
+    /// Scene: teapots, city, plant or figures, or a model file (.gltf, .glb, .obj;
+    /// y-up, metres).
     #[arg(long, default_value = "city")]
     scene: String,
+    /// Split imported meshes of more triangles than this into several objects
+    /// (0: never).
+    #[arg(long, default_value_t = ImportOptions::DEFAULT_SPLIT_TRIANGLES)]
+    split_triangles: usize,
+    /// Walkthrough of an imported model: orbit (around it) or walk (at eye
+    /// height through its free space).
+    #[arg(long, default_value = "orbit")]
+    auto_path: AutoPath,
+    /// Replay this walkthrough instead of the scene's: a JSON file
+    /// {"keyframes":[{"time":0,"position":[x,y,z],"target":[x,y,z],"fov_y_deg":60}, ...]}.
+    #[arg(long, value_name = "FILE")]
+    camera_path: Option<PathBuf>,
     /// Scene size: small, medium or paper.
     #[arg(long, default_value = "small")]
     size: String,
@@ -97,15 +112,20 @@ enum Failure {
     Run(anyhow::Error),
 }
 
+/// A failed run is the user's input when a model file could not be imported
+/// (the scene is loaded in the run, not in `configure`, so as to read a large
+/// model once): exit code 2 like any bad argument; anything else exit code 1.
+fn run_failure(e: anyhow::Error) -> Failure {
+    if e.chain().any(|c| c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)) {
+        Failure::Usage(e)
+    } else {
+        Failure::Run(e)
+    }
+}
+
 fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     let usage = Failure::Usage;
-    if !SCENE_NAMES.contains(&args.scene.as_str()) {
-        return Err(usage(anyhow::anyhow!(
-            "unknown scene '{}': expected one of {}",
-            args.scene,
-            SCENE_NAMES.join(", ")
-        )));
-    }
+    SceneSource::resolve(&args.scene).map_err(|e| usage(e.into()))?;
     let config = BenchConfig {
         scene: args.scene.clone(),
         size: args.size.parse::<Size>().map_err(|e| usage(e.into()))?,
@@ -117,6 +137,8 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         build: BuildOptions { leaf_size: args.leaf_size, ..BuildOptions::default() },
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
+        import: ImportOptions { split_triangles: args.split_triangles, auto_path: args.auto_path },
+        camera_path: args.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
     };
     config.validate().map_err(usage)?;
     if let Some(paper) = &args.paper {
@@ -191,7 +213,7 @@ fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match &cli.command {
-        Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(Failure::Run)),
+        Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(run_failure)),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

@@ -1,11 +1,12 @@
 //! What a benchmark run is asked to do, checked before any work starts.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
-use occlude_core::HierarchyKind;
-use occlude_scenes::Size;
+use occlude_core::{CameraPath, HierarchyKind};
+use occlude_scenes::{ImportOptions, Size};
 use occlude_soft::GpuModel;
+use std::path::Path;
 
 /// Near clipping distance of every walkthrough camera, metres.
 pub const NEAR_PLANE: f32 = 0.25;
@@ -16,7 +17,7 @@ pub const DEFAULT_METHODS: [&str; 4] = ["vfc", "sw", "chc", "opt"];
 /// A validated benchmark configuration.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
-    /// Scene name (see `occlude scenes`).
+    /// Scene name (see `occlude scenes`) or model file (.gltf, .glb, .obj).
     pub scene: String,
     /// Scene size.
     pub size: Size,
@@ -36,6 +37,10 @@ pub struct BenchConfig {
     pub gpu_model: GpuModel,
     /// Method parameters (`--method-opt method.key=value`).
     pub options: MethodOptions,
+    /// How a model file is imported (`--split-triangles`, `--auto-path`).
+    pub import: ImportOptions,
+    /// A walkthrough replacing the scene's own (`--camera-path FILE`).
+    pub camera_path: Option<CameraPath>,
 }
 
 impl Default for BenchConfig {
@@ -51,6 +56,8 @@ impl Default for BenchConfig {
             build: BuildOptions::default(),
             gpu_model: GpuModel::modern(),
             options: MethodOptions::default(),
+            import: ImportOptions::default(),
+            camera_path: None,
         }
     }
 }
@@ -81,6 +88,35 @@ impl BenchConfig {
         }
         Ok(())
     }
+}
+
+/// Reads a walkthrough from a JSON file of camera keyframes,
+/// `{"keyframes":[{"time":0,"position":[x,y,z],"target":[x,y,z],"fov_y_deg":60}, ...]}`
+/// (the serde form of [`CameraPath`]), and checks that it can be replayed:
+/// at least one keyframe, finite values, times strictly increasing, a field
+/// of view between 0 and 180 degrees, a target apart from the position.
+pub fn load_camera_path(path: &Path) -> Result<CameraPath> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read camera path {}", path.display()))?;
+    let camera_path: CameraPath = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a camera path (JSON of keyframes)", path.display()))?;
+    if camera_path.keyframes.is_empty() {
+        bail!("camera path {} has no keyframes", path.display());
+    }
+    for (i, k) in camera_path.keyframes.iter().enumerate() {
+        let finite = k.time.is_finite() && k.position.is_finite() && k.target.is_finite();
+        let usable = finite && k.fov_y_deg > 0.0 && k.fov_y_deg < 180.0 && k.position != k.target;
+        if !usable {
+            bail!(
+                "camera path {}: keyframe {i} needs finite values, a target apart from the position \
+                 and fov_y_deg between 0 and 180",
+                path.display()
+            );
+        }
+        if i > 0 && k.time <= camera_path.keyframes[i - 1].time {
+            bail!("camera path {}: keyframe {i} is not later than the one before", path.display());
+        }
+    }
+    Ok(camera_path)
 }
 
 /// Parses `WIDTHxHEIGHT`.

@@ -71,11 +71,18 @@ pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
     scene.path.sample(config.frames, w as f32 / h as f32, NEAR_PLANE, far)
 }
 
-/// Generates the scene, builds the hierarchy and runs every method over the
-/// walkthrough; `progress` advances once per frame.
+/// Generates or imports the scene (an import error stays an
+/// [`occlude_scenes::LoadError`] inside the returned error, so that the
+/// command line can tell it from a failure of the run), replaces its
+/// walkthrough with the configured camera path if any, builds the hierarchy
+/// and runs every method over the walkthrough; `progress` advances once per
+/// frame.
 pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     config.validate()?;
-    let scene = occlude_scenes::generate(&config.scene, config.size, config.seed)?;
+    let mut scene = occlude_scenes::load(&config.scene, config.size, config.seed, &config.import)?;
+    if let Some(path) = &config.camera_path {
+        scene.path = path.clone();
+    }
     scene.validate().with_context(|| format!("scene '{}' is not usable", config.scene))?;
     run_scene(&scene, config, progress)
 }
