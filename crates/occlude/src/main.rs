@@ -103,6 +103,13 @@ struct BenchArgs {
     /// Worker threads for the rasterizer (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Write PNGs of what frame K (0-based) decided, for each method that
+    /// records it (om): its occupancy map and its nodes' screen rectangles.
+    #[arg(long, value_name = "K")]
+    dump_frame: Option<usize>,
+    /// Folder for the --dump-frame PNGs (created if missing).
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    dump_dir: PathBuf,
 }
 
 /// Why a command failed: what the user asked for is wrong (exit code 2), or
@@ -139,9 +146,13 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
         import: ImportOptions { split_triangles: args.split_triangles, auto_path: args.auto_path },
         camera_path: args.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
+        dump_frame: args.dump_frame,
     };
     config.validate().map_err(usage)?;
     if let Some(paper) = &args.paper {
+        if args.dump_frame.is_some() {
+            return Err(usage(anyhow::anyhow!("--dump-frame cannot be combined with --paper")));
+        }
         if !bench::paper::PAPERS.contains(&paper.as_str()) {
             return Err(usage(anyhow::anyhow!(
                 "unknown paper '{paper}': expected one of {}",
@@ -193,6 +204,14 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     for (path, kind) in [(&args.plot, PlotKind::FrameTime), (&args.plot_queries, PlotKind::QueriesAndStateChanges)] {
         if let Some(path) = path {
             bench::plot::write_plot(&report, kind, path)?;
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    if config.dump_frame.is_some() && run.dumps.is_empty() {
+        eprintln!("note: --dump-frame wrote nothing: none of the methods records its decisions (om does)");
+    }
+    for dump in &run.dumps {
+        for path in bench::dump::write(dump, &args.dump_dir)? {
             eprintln!("wrote {}", path.display());
         }
     }

@@ -37,6 +37,8 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--methods", "om", "--method-opt", "om.map=0"], "om.map = 0");
     assert_usage_error(&["bench", "--paper", "nohc"], "nohc");
     assert_usage_error(&["bench", "--method-opt", "chc.tav"], "chc.tav");
+    assert_usage_error(&["bench", "--dump-frame", "99", "--frames", "5"], "--dump-frame 99 is past the last frame");
+    assert_usage_error(&["bench", "--dump-frame", "1", "--paper", "om"], "--paper");
     assert_usage_error(&["bench", "--methods", "vfc", "--method-opt", "sw.x=1"], "not in --methods");
     let dir = std::env::temp_dir().join(format!("occlude-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

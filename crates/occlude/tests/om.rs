@@ -5,7 +5,7 @@
 use indicatif::ProgressBar;
 use occlude::bench::runner::run_scene;
 use occlude::bench::{BenchConfig, BenchRun};
-use occlude_core::methods::MethodOptions;
+use occlude_core::methods::{MethodOptions, NodeClass};
 use occlude_core::{FrameStats, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 
@@ -96,4 +96,39 @@ fn grouping_avoids_redundant_visible_answers_on_the_city() {
         let (grouped, brute) = (triangles(&[]), triangles(&["om.grouping=off"]));
         assert!(grouped < brute, "{hierarchy}: {grouped} triangles with grouping, {brute} without");
     }
+}
+
+/// Asked for frame 10 of the small city, `om` records its decisions without
+/// changing them: the run's statistics equal those of a run that records
+/// nothing, stage 1 drew nodes, and the map has covered and clear cells.
+#[test]
+fn om_debug_view_of_a_city_frame_records_without_changing_decisions() {
+    let scene = small("city");
+    let mut cfg = config("city", HierarchyKind::Bvh, &["vfc", "om"], &[]);
+    cfg.frames = 20;
+    let plain = run(&scene, &cfg);
+    assert!(plain.dumps.is_empty());
+    cfg.dump_frame = Some(10);
+    let dumped = run(&scene, &cfg);
+    // All but the real time (`wall_ms`) is deterministic.
+    let decided = |r: &BenchRun| -> Vec<FrameStats> {
+        r.methods[1].frames.iter().map(|f| FrameStats { wall_ms: 0.0, ..*f }).collect()
+    };
+    assert_eq!(decided(&plain), decided(&dumped));
+
+    assert_eq!(dumped.dumps.len(), 1, "only om records a view");
+    let d = &dumped.dumps[0];
+    assert_eq!((d.method.as_str(), d.frame, d.resolution), ("om", 10, (480, 360)));
+    assert_eq!(d.depth.len(), 480 * 360);
+    let v = &d.view;
+    assert_eq!((v.map_width, v.map_height), (64, 48));
+    assert_eq!(v.occupancy.len(), 64 * 48);
+    assert!(v.occupancy.contains(&true) && v.occupancy.contains(&false), "map should be partly covered");
+    let count = |class| v.nodes.iter().filter(|(c, _)| *c == class).count();
+    assert!(count(NodeClass::DrawnWithoutQuery) > 0, "stage 1 drew nothing");
+    // Every query of the frame is a node drawn after a query, found hidden,
+    // or an interior node found visible and opened; the last are not listed.
+    let queried = count(NodeClass::DrawnAfterQuery) + count(NodeClass::FoundHidden);
+    assert!(queried as u64 <= dumped.methods[1].frames[10].queries);
+    assert!(count(NodeClass::FoundHidden) > 0, "the city hides something in frame 10");
 }

@@ -7,6 +7,7 @@
 
 pub mod chc;
 pub mod chcpp;
+pub mod debug;
 mod front_to_back;
 pub mod om;
 pub mod opt;
@@ -14,6 +15,7 @@ pub mod options;
 pub mod sw;
 pub mod vfc;
 
+pub use debug::{DebugView, NdcRect, NodeClass};
 pub use front_to_back::FrontToBack;
 pub use options::{MethodOptions, OptionError, OptionReader};
 
@@ -74,6 +76,17 @@ pub trait CullingMethod {
 
     /// Draws the frame: everything visible must reach `backend.draw`.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend);
+
+    /// Turns recording of a [`DebugView`] during the following frames on or
+    /// off. Recording must change neither the method's decisions nor its
+    /// statistics; methods without a view ignore it.
+    fn set_debug(&mut self, _on: bool) {}
+
+    /// What the method decided in the last frame it rendered, if recording
+    /// was on for that frame and the method has a view to give (only `om`).
+    fn debug_view(&self) -> Option<DebugView> {
+        None
+    }
 }
 
 /// Triangles drawn by each node's subtree, a rendering-cost estimate

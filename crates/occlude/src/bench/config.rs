@@ -41,6 +41,9 @@ pub struct BenchConfig {
     pub import: ImportOptions,
     /// A walkthrough replacing the scene's own (`--camera-path FILE`).
     pub camera_path: Option<CameraPath>,
+    /// Frame (0-based) whose decisions the methods that can record them keep
+    /// for [`super::dump`] (`--dump-frame K`).
+    pub dump_frame: Option<usize>,
 }
 
 impl Default for BenchConfig {
@@ -58,6 +61,7 @@ impl Default for BenchConfig {
             options: MethodOptions::default(),
             import: ImportOptions::default(),
             camera_path: None,
+            dump_frame: None,
         }
     }
 }
@@ -78,6 +82,9 @@ impl BenchConfig {
         }
         if self.frames == 0 {
             bail!("--frames must be at least 1");
+        }
+        if let Some(k) = self.dump_frame.filter(|&k| k >= self.frames) {
+            bail!("--dump-frame {k} is past the last frame: frames are numbered 0 to {}", self.frames - 1);
         }
         let (w, h) = self.resolution;
         if w == 0 || h == 0 || w > 16384 || h > 16384 {
@@ -149,5 +156,9 @@ mod tests {
         assert!(c.validate().unwrap_err().to_string().contains("0x10"));
         c = BenchConfig { frames: 0, ..BenchConfig::default() };
         assert!(c.validate().is_err());
+        c = BenchConfig { frames: 5, dump_frame: Some(4), ..BenchConfig::default() };
+        c.validate().unwrap();
+        c.dump_frame = Some(5);
+        assert!(c.validate().unwrap_err().to_string().contains("--dump-frame 5"));
     }
 }

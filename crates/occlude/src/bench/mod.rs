@@ -3,6 +3,7 @@
 //! the schema of DESIGN.md.
 
 pub mod config;
+pub mod dump;
 pub mod output;
 pub mod paper;
 pub mod plot;

@@ -33,7 +33,7 @@ const SIZE: (u32, u32) = (1024, 600);
 const LOG_RATIO: f64 = 30.0;
 
 /// Font family every text element uses.
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Line colours, one per method in report order (repeating past ten).
 const COLOURS: [RGBColor; 10] = [
@@ -87,7 +87,7 @@ pub fn write_plot(report: &BenchReport, kind: PlotKind, path: &Path) -> anyhow::
 }
 
 /// Makes DejaVu Sans the `sans-serif` font (once per process).
-fn register_font() -> anyhow::Result<()> {
+pub(crate) fn register_font() -> anyhow::Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED
         .get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok());

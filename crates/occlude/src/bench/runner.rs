@@ -2,6 +2,7 @@
 //! culling's depth image (the correctness rule of DESIGN.md).
 
 use super::config::{BenchConfig, NEAR_PLANE};
+use super::dump::FrameDump;
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
@@ -17,6 +18,9 @@ pub struct BenchRun {
     pub methods: Vec<MethodRun>,
     /// View-frustum culling's frames (the reference, always run).
     pub reference: Vec<FrameStats>,
+    /// The decisions of frame [`BenchConfig::dump_frame`] of each method that
+    /// records them, in configuration order (empty when none was asked for).
+    pub dumps: Vec<FrameDump>,
 }
 
 /// One method's measurements.
@@ -104,14 +108,22 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
 
     progress.set_length(cameras.len() as u64);
     progress.set_position(0);
-    for camera in &cameras {
+    let mut dumps = Vec::new();
+    for (k, camera) in cameras.iter().enumerate() {
         let stats = reference.frame(scene, &hierarchy, camera);
         reference.frames.push(stats);
         let expected = reference.backend.depth_image();
+        let dump = config.dump_frame == Some(k);
         for lane in &mut lanes {
+            lane.built.method.set_debug(dump);
             let mut stats = lane.frame(scene, &hierarchy, camera);
-            stats.missing_pixels = differing_pixels(&expected, &lane.backend.depth_image());
+            let image = lane.backend.depth_image();
+            stats.missing_pixels = differing_pixels(&expected, &image);
             lane.frames.push(stats);
+            if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
+                let name = lane.built.method.name().to_string();
+                dumps.push(FrameDump { method: name, frame: k, resolution: config.resolution, depth: image, view });
+            }
         }
         progress.inc(1);
     }
@@ -123,7 +135,12 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
         .iter()
         .map(|m| if m == "vfc" { reference.clone() } else { lanes.next().expect("one lane per method") })
         .collect();
-    Ok(BenchRun { scene: SceneStats::new(scene, &hierarchy, cameras.len()), methods, reference: reference.frames })
+    Ok(BenchRun {
+        scene: SceneStats::new(scene, &hierarchy, cameras.len()),
+        methods,
+        reference: reference.frames,
+        dumps,
+    })
 }
 
 /// Pixels whose depth bits differ between two images.

@@ -58,10 +58,12 @@
 
 pub mod occupancy;
 
-use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use super::{CullingMethod, DebugView, FrameContext, FrontToBack, NdcRect, NodeClass, OptionError, OptionReader};
 use crate::backend::{Backend, QueryHandle};
+use crate::geometry::Aabb;
 use crate::hierarchy::NodeId;
-use occupancy::OccupancyBits;
+use glam::Mat4;
+use occupancy::{screen_bounds, CellRect, OccupancyBits};
 
 /// Most columns (and rows) an occupancy map may have.
 pub const MAX_MAP_CELLS: u32 = 1024;
@@ -113,12 +115,23 @@ pub struct OccupancyMap {
     grouped_rounds: u32,
     /// Queries of the current round, with their nodes, in issue order.
     round: Vec<(NodeId, QueryHandle)>,
+    /// Whether frames record a [`DebugView`].
+    debug: bool,
+    /// The view of the last frame, when it was recorded.
+    view: Option<DebugView>,
 }
 
 impl OccupancyMap {
     /// The method with `params`, before its first frame.
     pub fn new(params: OmParams) -> Self {
-        Self { params, map: OccupancyBits::default(), grouped_rounds: params.first_rounds, round: Vec::new() }
+        Self {
+            params,
+            map: OccupancyBits::default(),
+            grouped_rounds: params.first_rounds,
+            round: Vec::new(),
+            debug: false,
+            view: None,
+        }
     }
 
     /// Gives the map `map_columns` columns and as many rows as keep its cells
@@ -143,6 +156,23 @@ fn push_children(ctx: &FrameContext<'_>, node: NodeId, queue: &mut FrontToBack) 
     }
 }
 
+/// Adds the screen rectangle of box `b` as a node of `class` to `view`, when
+/// a view is being recorded and some of the box lies in front of the eye.
+fn note(view: &mut Option<DebugView>, class: NodeClass, view_projection: &Mat4, b: &Aabb) {
+    if let Some(v) = view {
+        if let Some((min, max)) = screen_bounds(view_projection, b) {
+            v.nodes.push((class, NdcRect { min, max }));
+        }
+    }
+}
+
+/// The covered cells of `map`, row by row (see [`DebugView::occupancy`]).
+fn covered_cells(map: &OccupancyBits) -> Vec<bool> {
+    (0..map.height())
+        .flat_map(|y| (0..map.width()).map(move |x| map.is_any_set(CellRect { x0: x, y0: y, x1: x + 1, y1: y + 1 })))
+        .collect()
+}
+
 impl CullingMethod for OccupancyMap {
     fn name(&self) -> &'static str {
         "om"
@@ -152,6 +182,7 @@ impl CullingMethod for OccupancyMap {
         let h = ctx.hierarchy;
         let vp = ctx.camera.view_projection();
         self.reset_map(ctx.camera.aspect);
+        let mut view = self.debug.then(DebugView::default);
 
         // Stage 1: draw what reaches uncovered screen space, without queries.
         let mut queue = FrontToBack::new();
@@ -165,12 +196,17 @@ impl CullingMethod for OccupancyMap {
                 pending.push_node(h, node, ctx.camera.position);
             } else if h.is_leaf(node) {
                 ctx.draw_leaf(backend, node);
+                note(&mut view, NodeClass::DrawnWithoutQuery, &vp, h.bounds(node));
                 for &i in h.instances(node) {
                     self.map.mark(self.map.rect_of(&vp, &ctx.scene.instances[i as usize].bounds));
                 }
             } else {
                 push_children(ctx, node, &mut queue);
             }
+        }
+
+        if let Some(v) = &mut view {
+            (v.map_width, v.map_height, v.occupancy) = (self.map.width(), self.map.height(), covered_cells(&self.map));
         }
 
         // Stage 2: rounds of multiple queries, grouped by the map for the
@@ -197,10 +233,12 @@ impl CullingMethod for OccupancyMap {
             }
             for (node, query) in self.round.drain(..) {
                 if backend.result(query) == 0 {
+                    note(&mut view, NodeClass::FoundHidden, &vp, h.bounds(node));
                     continue;
                 }
                 if h.is_leaf(node) {
                     ctx.draw_leaf(backend, node);
+                    note(&mut view, NodeClass::DrawnAfterQuery, &vp, h.bounds(node));
                 } else {
                     push_children(ctx, node, &mut next);
                 }
@@ -209,6 +247,15 @@ impl CullingMethod for OccupancyMap {
             rounds += 1;
         }
         self.grouped_rounds = (self.params.decay * rounds as f32).round() as u32;
+        self.view = view;
+    }
+
+    fn set_debug(&mut self, on: bool) {
+        self.debug = on;
+    }
+
+    fn debug_view(&self) -> Option<DebugView> {
+        self.view.clone()
     }
 }
 
