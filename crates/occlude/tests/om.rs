@@ -78,6 +78,12 @@ fn stage_one_saves_queries_over_stop_and_wait_on_the_city() {
         let per_frame = |frames: &[FrameStats]| total(frames, |f| f.queries) as f64 / frames.len() as f64;
         let (sw_q, om_q) = (per_frame(&sw.frames), per_frame(&om.frames));
         assert!(om_q < sw_q, "{hierarchy}: om issued {om_q:.1} queries per frame, sw {sw_q:.1}");
+        // The savings are reported per frame as stage-1 decisions and rounds.
+        let stage1 = &om.counters["stage1_no_query_nodes"];
+        assert_eq!(stage1.len(), om.frames.len());
+        assert!(stage1.iter().sum::<f64>() > 0.0, "{hierarchy}: no stage-1 decision recorded");
+        assert!(om.counters["stage2_rounds"].iter().any(|&r| r >= 1.0));
+        assert!(sw.counters.is_empty());
     }
 }
 

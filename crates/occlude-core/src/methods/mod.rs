@@ -82,6 +82,13 @@ pub trait CullingMethod {
     /// statistics; methods without a view ignore it.
     fn set_debug(&mut self, _on: bool) {}
 
+    /// Method-specific figures of the last frame it rendered, by name (for
+    /// example `om`'s nodes decided in stage 1 without a query and its
+    /// stage-2 rounds); reported per frame beside the common statistics.
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+
     /// What the method decided in the last frame it rendered, if recording
     /// was on for that frame and the method has a view to give (only `om`).
     fn debug_view(&self) -> Option<DebugView> {

@@ -155,13 +155,14 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
             let m = &report.methods[0];
             let _ = writeln!(
                 variants,
-                "{:<9} {:<23} {:>7.0} {:>7.0} {:>9.3} {:>17.0}",
+                "{:<9} {:<23} {:>7.0} {:>7.0} {:>9.3} {:>17.0}{}",
                 scene_name,
                 label,
                 m.queries_per_frame,
                 m.state_changes_per_frame,
                 m.mean_frame_ms,
-                m.missing_pixels as f64 / report.frames.max(1) as f64
+                m.missing_pixels as f64 / report.frames.max(1) as f64,
+                m.counters_per_frame.iter().map(|(k, v)| format!("  {k} {v:.1}")).collect::<String>()
             );
             reports.push(report);
         }

@@ -295,6 +295,7 @@ mod tests {
             cpu_ms_per_frame: 0.0,
             gpu_ms_per_frame: 0.0,
             wall_ms: 0.0,
+            counters_per_frame: BTreeMap::new(),
             per_frame,
         }
     }

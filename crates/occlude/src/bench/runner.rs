@@ -9,6 +9,7 @@ use indicatif::ProgressBar;
 use occlude_core::methods::{create, BuiltMethod, DrawnSet};
 use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
+use std::collections::BTreeMap;
 
 /// Everything a run measured, before summarising.
 pub struct BenchRun {
@@ -32,6 +33,9 @@ pub struct MethodRun {
     pub params: Vec<(String, String)>,
     /// Statistics of every frame.
     pub frames: Vec<FrameStats>,
+    /// The method's own counters (`CullingMethod::counters`), one value per
+    /// frame each.
+    pub counters: BTreeMap<String, Vec<f64>>,
 }
 
 /// One method with its own backend and state across frames.
@@ -40,6 +44,7 @@ struct Lane<'s> {
     backend: SoftBackend<'s>,
     drawn: DrawnSet,
     frames: Vec<FrameStats>,
+    counters: BTreeMap<String, Vec<f64>>,
 }
 
 impl<'s> Lane<'s> {
@@ -50,12 +55,18 @@ impl<'s> Lane<'s> {
             backend: SoftBackend::new(scene, w, h, config.gpu_model.clone()),
             drawn: DrawnSet::default(),
             frames: Vec::with_capacity(config.frames),
+            counters: BTreeMap::new(),
         }
     }
 
     /// The lane's measurements.
     fn into_run(self) -> MethodRun {
-        MethodRun { name: self.built.method.name().to_string(), params: self.built.params, frames: self.frames }
+        MethodRun {
+            name: self.built.method.name().to_string(),
+            params: self.built.params,
+            frames: self.frames,
+            counters: self.counters,
+        }
     }
 
     /// Renders one frame; returns its statistics.
@@ -64,6 +75,9 @@ impl<'s> Lane<'s> {
         self.built.method.prepare(&mut ctx, &mut self.backend);
         self.backend.begin_frame(camera);
         self.built.method.render(&mut ctx, &mut self.backend);
+        for (name, value) in self.built.method.counters() {
+            self.counters.entry(name.to_string()).or_default().push(value);
+        }
         self.backend.end_frame()
     }
 }

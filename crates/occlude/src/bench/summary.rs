@@ -81,6 +81,9 @@ pub struct MethodSummary {
     pub gpu_ms_per_frame: f64,
     /// Real time per frame on this machine (rasterizing included; varies).
     pub wall_ms: f64,
+    /// Means per frame of the method's own counters (e.g. `om`'s stage-1
+    /// nodes decided without a query and its stage-2 rounds).
+    pub counters_per_frame: BTreeMap<String, f64>,
     /// Every frame's statistics.
     pub per_frame: Vec<FrameStats>,
 }
@@ -153,6 +156,11 @@ impl BenchReport {
                     cpu_ms_per_frame: mean(frames, |f| f.cpu_ms),
                     gpu_ms_per_frame: mean(frames, |f| f.gpu_ms),
                     wall_ms: mean(frames, |f| f.wall_ms),
+                    counters_per_frame: m
+                        .counters
+                        .iter()
+                        .map(|(k, v)| (k.clone(), v.iter().sum::<f64>() / v.len().max(1) as f64))
+                        .collect(),
                     per_frame: frames.clone(),
                 }
             })

@@ -119,6 +119,19 @@ pub struct OccupancyMap {
     debug: bool,
     /// The view of the last frame, when it was recorded.
     view: Option<DebugView>,
+    /// What the last frame's two stages did.
+    last: StageCounts,
+}
+
+/// How one frame's work split between the stages.
+#[derive(Clone, Copy, Debug, Default)]
+struct StageCounts {
+    /// Nodes drawn or opened in stage 1 without a query.
+    stage1_no_query: u64,
+    /// Stage-2 rounds, grouped and brute force.
+    rounds: u32,
+    /// Of those, rounds grouped by the occupancy map.
+    grouped_rounds: u32,
 }
 
 impl OccupancyMap {
@@ -131,6 +144,7 @@ impl OccupancyMap {
             round: Vec::new(),
             debug: false,
             view: None,
+            last: StageCounts::default(),
         }
     }
 
@@ -190,11 +204,15 @@ impl CullingMethod for OccupancyMap {
         if ctx.in_frustum(h.root()) {
             queue.push_node(h, h.root(), ctx.camera.position);
         }
+        let mut stage1_no_query = 0u64;
         while let Some(node) = queue.pop() {
             backend.traverse(1);
             if !self.map.is_any_clear(self.map.rect_of(&vp, h.bounds(node))) {
                 pending.push_node(h, node, ctx.camera.position);
-            } else if h.is_leaf(node) {
+                continue;
+            }
+            stage1_no_query += 1;
+            if h.is_leaf(node) {
                 ctx.draw_leaf(backend, node);
                 note(&mut view, NodeClass::DrawnWithoutQuery, &vp, h.bounds(node));
                 for &i in h.instances(node) {
@@ -246,8 +264,18 @@ impl CullingMethod for OccupancyMap {
             std::mem::swap(&mut pending, &mut next);
             rounds += 1;
         }
+        self.last = StageCounts { stage1_no_query, rounds, grouped_rounds: rounds.min(allowed) };
         self.grouped_rounds = (self.params.decay * rounds as f32).round() as u32;
         self.view = view;
+    }
+
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        let c = &self.last;
+        vec![
+            ("stage1_no_query_nodes", c.stage1_no_query as f64),
+            ("stage2_rounds", c.rounds as f64),
+            ("stage2_grouped_rounds", c.grouped_rounds as f64),
+        ]
     }
 
     fn set_debug(&mut self, on: bool) {
