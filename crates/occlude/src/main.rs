@@ -1,5 +1,6 @@
 //! The `occlude` command line: `bench` compares culling methods on a scene
-//! and walkthrough, `scenes` lists the procedural scenes.
+//! and walkthrough, `report` turns its JSON into an HTML (and Markdown)
+//! report, `scenes` lists the procedural scenes.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -27,6 +28,8 @@ struct Cli {
 enum Command {
     /// Run culling methods over a walkthrough and print the comparison table.
     Bench(Box<BenchArgs>),
+    /// Write a self-contained HTML report (tables and plots) of bench JSON files.
+    Report(ReportArgs),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         /// Sizes to list: small, medium, paper or all.
@@ -110,6 +113,20 @@ struct BenchArgs {
     /// Folder for the --dump-frame PNGs (created if missing).
     #[arg(long, value_name = "DIR", default_value = ".")]
     dump_dir: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ReportArgs {
+    /// JSON files of `occlude bench --json`: one report each, or an array of
+    /// them (`--paper`).
+    #[arg(required = true, value_name = "FILE.json")]
+    files: Vec<PathBuf>,
+    /// The HTML file to write.
+    #[arg(long, value_name = "FILE.html")]
+    out: PathBuf,
+    /// Also write the report as Markdown, its plots as SVG files beside it.
+    #[arg(long, value_name = "FILE.md")]
+    markdown: Option<PathBuf>,
 }
 
 /// Why a command failed: what the user asked for is wrong (exit code 2), or
@@ -218,6 +235,23 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     Ok(())
 }
 
+/// `occlude report`: unreadable or malformed input is the user's (exit code
+/// 2); failing to write the output is not (exit code 1).
+fn report(args: &ReportArgs) -> Result<(), Failure> {
+    let mut reports = Vec::new();
+    for path in &args.files {
+        reports.extend(occlude::report::load(path).map_err(Failure::Usage)?);
+    }
+    occlude::report::write_html(&reports, &args.out).map_err(Failure::Run)?;
+    eprintln!("wrote {}", args.out.display());
+    if let Some(path) = &args.markdown {
+        for written in occlude::report::write_markdown(&reports, path).map_err(Failure::Run)? {
+            eprintln!("wrote {}", written.display());
+        }
+    }
+    Ok(())
+}
+
 fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
     let sizes = if size == "all" {
         vec![Size::Small, Size::Medium, Size::Paper]
@@ -233,6 +267,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match &cli.command {
         Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(run_failure)),
+        Command::Report(args) => report(args),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

@@ -35,8 +35,9 @@ const LOG_RATIO: f64 = 30.0;
 /// Font family every text element uses.
 pub(crate) const FONT: &str = "sans-serif";
 
-/// Line colours, one per method in report order (repeating past ten).
-const COLOURS: [RGBColor; 10] = [
+/// Line colours, one per method in report order (repeating past ten); public
+/// so that tests of rendered reports can look for the lines' pixels.
+pub const COLOURS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -74,16 +75,26 @@ pub fn write_plot(report: &BenchReport, kind: PlotKind, path: &Path) -> anyhow::
     let format = plot_format(path)?;
     register_font()?;
     let written = match format {
-        PlotFormat::Svg => {
-            let root = SVGBackend::new(path, SIZE).into_drawing_area();
-            draw(report, kind, &root).and_then(|()| Ok(root.present()?))
-        }
+        PlotFormat::Svg => svg_string(report, kind).and_then(|svg| Ok(std::fs::write(path, svg)?)),
         PlotFormat::Png => {
             let root = BitMapBackend::new(path, SIZE).into_drawing_area();
             draw(report, kind, &root).and_then(|()| Ok(root.present()?))
         }
     };
     written.with_context(|| format!("writing plot {}", path.display()))
+}
+
+/// A plot of `report` as an SVG document in memory, so that a report page can
+/// embed it; [`write_plot`] writes the same document to an .svg file.
+pub fn svg_string(report: &BenchReport, kind: PlotKind) -> anyhow::Result<String> {
+    register_font()?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        draw(report, kind, &root)?;
+        root.present()?;
+    }
+    Ok(svg)
 }
 
 /// Makes DejaVu Sans the `sans-serif` font (once per process).

@@ -7,7 +7,6 @@ use std::fmt::Write;
 /// Renders the report as an aligned text table.
 pub fn render(report: &BenchReport) -> String {
     let s = &report.scene_stats;
-    let sim = if report.backend == "soft" { "sim " } else { "" };
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -27,6 +26,35 @@ pub fn render(report: &BenchReport) -> String {
         report.backend,
         report.gpu_model,
     );
+    let (headers, rows) = cells(report);
+    let widths: Vec<usize> = (0..headers.len())
+        .map(|c| rows.iter().map(|r| r[c].len()).chain([headers[c].len()]).max().unwrap_or(0))
+        .collect();
+    let line = |cells: &[String]| {
+        cells
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(i, (c, w))| if i == 0 { format!("{c:<w$}") } else { format!("{c:>w$}") })
+            .collect::<Vec<_>>()
+            .join("  ")
+    };
+    let _ = writeln!(out, "{}", line(&headers));
+    for r in &rows {
+        let _ = writeln!(out, "{}", line(r));
+    }
+    let _ = writeln!(out, "{}", note(report));
+    out
+}
+
+/// Columns of the comparison table.
+pub const COLUMNS: usize = 12;
+
+/// The comparison table's header and one row per method, formatted but not
+/// aligned, so that the text table and the HTML and Markdown reports show the
+/// same columns. Times from the soft backend are headed "sim".
+pub fn cells(report: &BenchReport) -> ([String; COLUMNS], Vec<[String; COLUMNS]>) {
+    let sim = if report.backend == "soft" { "sim " } else { "" };
     let headers = [
         "method".to_string(),
         format!("{sim}ms"),
@@ -41,7 +69,7 @@ pub fn render(report: &BenchReport) -> String {
         "missing px".into(),
         "wall ms".into(),
     ];
-    let rows: Vec<[String; 12]> = report
+    let rows: Vec<[String; COLUMNS]> = report
         .methods
         .iter()
         .map(|m| {
@@ -61,26 +89,13 @@ pub fn render(report: &BenchReport) -> String {
             ]
         })
         .collect();
-    let widths: Vec<usize> = (0..headers.len())
-        .map(|c| rows.iter().map(|r| r[c].len()).chain([headers[c].len()]).max().unwrap_or(0))
-        .collect();
-    let line = |cells: &[String]| {
-        cells
-            .iter()
-            .zip(&widths)
-            .enumerate()
-            .map(|(i, (c, w))| if i == 0 { format!("{c:<w$}") } else { format!("{c:>w$}") })
-            .collect::<Vec<_>>()
-            .join("  ")
-    };
-    let _ = writeln!(out, "{}", line(&headers));
-    for r in &rows {
-        let _ = writeln!(out, "{}", line(r));
-    }
-    let _ = writeln!(
-        out,
+    (headers, rows)
+}
+
+/// The line under the table that says what its figures mean.
+pub fn note(report: &BenchReport) -> String {
+    format!(
         "per frame means; speedup = vfc time / method time; missing px summed over frames{}",
-        if sim.is_empty() { "" } else { "; sim = simulated GPU clock, wall = real time on this machine" }
-    );
-    out
+        if report.backend == "soft" { "; sim = simulated GPU clock, wall = real time on this machine" } else { "" }
+    )
 }
