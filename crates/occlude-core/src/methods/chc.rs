@@ -9,9 +9,12 @@
 //! available, interleaved with the traversal (section 4.1). Visibility is
 //! pulled up the hierarchy when a node turns out visible.
 
-use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use super::{
+    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
+    OptionReader,
+};
 use crate::backend::{Backend, QueryHandle};
-use crate::hierarchy::{Hierarchy, NodeId};
+use crate::hierarchy::NodeId;
 use std::collections::VecDeque;
 
 /// The section 5 options of CHC.
@@ -51,6 +54,12 @@ struct NodeState {
     speculated: u32,
 }
 
+impl Classified for NodeState {
+    fn visible_mut(&mut self) -> &mut bool {
+        &mut self.visible
+    }
+}
+
 /// `chc`: coherent hierarchical culling.
 #[derive(Clone, Debug)]
 pub struct Chc {
@@ -65,17 +74,6 @@ impl Chc {
     /// CHC with the given options.
     pub fn new(params: ChcParams) -> Self {
         Self { params, frame: 0, nodes: Vec::new(), subtree_triangles: Vec::new() }
-    }
-
-    /// Marks `node` and its ancestors visible (Figure 2, `PullUpVisibility`).
-    fn pull_up(&mut self, h: &Hierarchy, mut node: NodeId) {
-        while !self.nodes[node as usize].visible {
-            self.nodes[node as usize].visible = true;
-            match h.parent(node) {
-                Some(p) => node = p,
-                None => break,
-            }
-        }
     }
 
     /// Figure 2, `TraverseNode`: render a leaf or queue the children.
@@ -159,7 +157,7 @@ impl CullingMethod for Chc {
                 }
                 queries.pop_front();
                 if backend.result(query) > self.params.visible_pixel_threshold {
-                    self.pull_up(h, node);
+                    pull_up_visibility(h, &mut self.nodes, node);
                     let state = &mut self.nodes[node as usize];
                     state.assumed_until = frame + self.params.assumed_visible_frames;
                     self.traverse_node(ctx, backend, &mut traversal, node);
@@ -179,7 +177,7 @@ impl CullingMethod for Chc {
             state.last_visited = frame;
             if assumed {
                 // Section 5.1: still within the tav window, no query.
-                self.pull_up(h, node);
+                pull_up_visibility(h, &mut self.nodes, node);
             } else if !opened {
                 queries.push_back((node, backend.issue_query(std::slice::from_ref(h.bounds(node)))));
             }

@@ -114,6 +114,29 @@ pub fn subtree_triangles(scene: &Scene, h: &Hierarchy) -> Vec<u64> {
     tris
 }
 
+/// Per-node state that carries a visibility classification from frame to
+/// frame (CHC and CHC++).
+pub(crate) trait Classified {
+    /// The node's "visible" flag.
+    fn visible_mut(&mut self) -> &mut bool;
+}
+
+/// Marks `node` and its ancestors visible, stopping at the first ancestor
+/// already marked (CHC paper, Figure 2, `PullUpVisibility`; CHC++ Figure 6).
+pub(crate) fn pull_up_visibility<S: Classified>(h: &Hierarchy, states: &mut [S], mut node: NodeId) {
+    loop {
+        let visible = states[node as usize].visible_mut();
+        if *visible {
+            return;
+        }
+        *visible = true;
+        match h.parent(node) {
+            Some(p) => node = p,
+            None => return,
+        }
+    }
+}
+
 /// Remembers which instances were drawn in the current frame, so an instance
 /// referenced by several kD-tree leaves is drawn once.
 #[derive(Clone, Debug, Default)]

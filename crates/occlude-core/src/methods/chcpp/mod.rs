@@ -14,7 +14,10 @@
 pub mod multiquery;
 pub mod tight;
 
-use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use super::{
+    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
+    OptionReader,
+};
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
 use crate::hierarchy::NodeId;
@@ -73,6 +76,12 @@ struct NodeState {
     changed_at: u32,
     /// First frame in which a visible leaf is queried again.
     next_test: u32,
+}
+
+impl Classified for NodeState {
+    fn visible_mut(&mut self) -> &mut bool {
+        &mut self.visible
+    }
 }
 
 /// An issued query and what it was for.
@@ -143,16 +152,6 @@ impl Chcpp {
                 vec![*h.bounds(node)]
             }
         })
-    }
-
-    fn pull_up(&mut self, ctx: &FrameContext<'_>, mut node: NodeId) {
-        while !self.nodes[node as usize].visible {
-            self.nodes[node as usize].visible = true;
-            match ctx.hierarchy.parent(node) {
-                Some(p) => node = p,
-                None => break,
-            }
-        }
     }
 
     /// Draws everything in the render queue (sorted by material when on).
@@ -250,7 +249,7 @@ impl Chcpp {
                         state.next_test = frame + if self.params.random { jitter(node, frame, nav) } else { nav + 1 };
                         self.traverse_node(ctx, backend, q, node);
                     }
-                    self.pull_up(ctx, node);
+                    pull_up_visibility(ctx.hierarchy, &mut self.nodes, node);
                 } else {
                     if was_visible {
                         state.changed_at = frame;
@@ -310,7 +309,7 @@ impl CullingMethod for Chcpp {
                     } else {
                         if self.is_leaf[node as usize] {
                             if !test_due {
-                                self.pull_up(ctx, node);
+                                pull_up_visibility(ctx.hierarchy, &mut self.nodes, node);
                             } else if self.params.vqueue {
                                 q.visible.push_back(node);
                             } else {
