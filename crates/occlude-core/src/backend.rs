@@ -51,6 +51,41 @@ pub trait Backend {
     /// `camera` and reports which of them have at least one pixel in the
     /// final depth image (ties included), with that image. Used by `opt`.
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView;
+
+    /// A fatal error the backend met (a lost GPU device, say), after which
+    /// its answers mean nothing: whoever runs frames stops and reports it.
+    /// The interface's calls stay infallible so that methods need not thread
+    /// errors through every draw; a failed backend answers queries as
+    /// visible and draws nothing. `None` while all is well.
+    fn failure(&self) -> Option<String> {
+        None
+    }
+}
+
+/// The render state a command needs: a material for draws, the query state
+/// (depth writes off) for occlusion queries. Switching it between commands is
+/// a state change (CHC++ paper, section 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderState {
+    /// Drawing with this material.
+    Material(u32),
+    /// Rasterizing query proxies.
+    Query,
+}
+
+/// Follows the render state across a frame's commands, so that every backend
+/// counts state changes by the same rule.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StateTracker(Option<RenderState>);
+
+impl StateTracker {
+    /// Moves to `state`; true when that is a change (setting the frame's
+    /// first state is not).
+    pub fn switch(&mut self, state: RenderState) -> bool {
+        let changed = self.0.is_some_and(|s| s != state);
+        self.0 = Some(state);
+        changed
+    }
 }
 
 /// What an oracle pass saw.
@@ -58,6 +93,10 @@ pub trait Backend {
 pub struct OracleView {
     /// Candidates with at least one pixel in the image.
     pub visible: Vec<u32>,
+    /// Each candidate's pixel count in the image, in candidate order (exact
+    /// on the soft backend; on a GPU whose occlusion queries are not precise
+    /// only zero or not zero is promised).
+    pub pixels: Vec<u64>,
     /// The depth image (normalized device depth, 1.0 where nothing was
     /// drawn), row 0 at the top.
     pub depth: Vec<f32>,
@@ -65,4 +104,13 @@ pub struct OracleView {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+}
+
+impl OracleView {
+    /// The view of `candidates` whose image holds `pixels[i]` pixels of
+    /// candidate `i`.
+    pub fn new(candidates: &[u32], pixels: Vec<u64>, depth: Vec<f32>, width: u32, height: u32) -> Self {
+        let visible = candidates.iter().zip(&pixels).filter(|(_, &p)| p > 0).map(|(&i, _)| i).collect();
+        Self { visible, pixels, depth, width, height }
+    }
 }

@@ -12,11 +12,12 @@ pub mod geometry;
 pub mod hierarchy;
 pub mod methods;
 pub mod path;
+pub mod query_box;
 pub mod rng;
 pub mod scene;
 pub mod stats;
 
-pub use backend::{Backend, OracleView, QueryHandle};
+pub use backend::{Backend, OracleView, QueryHandle, RenderState, StateTracker};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};

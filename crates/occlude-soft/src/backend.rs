@@ -11,23 +11,9 @@ use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
 use crate::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
 use glam::{Mat4, Vec4};
-use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, Scene};
+use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
+use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, RenderState, Scene, StateTracker};
 use std::time::Instant;
-
-/// Relative growth of query boxes, so geometry lying on a box face or edge
-/// can never round to outside the box's pixels.
-const QUERY_BOX_PAD: f32 = 1e-5;
-/// Depth bias of query boxes in normalized device depth (about 64 float
-/// steps near 1.0): the box's depth always rounds in front of geometry that
-/// lies on its faces, so a visible object's box is never reported hidden.
-const QUERY_DEPTH_BIAS: f32 = 4e-6;
-
-/// The render state a command needs; switching it is a state change.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum RenderState {
-    Material(u32),
-    Query,
-}
 
 /// A recorded command's place on the simulated GPU time line.
 #[derive(Clone, Copy, Debug)]
@@ -59,7 +45,7 @@ pub struct SoftBackend<'s> {
     view_projection: Mat4,
     clock: SimClock,
     stats: FrameStats,
-    state: Option<RenderState>,
+    state: StateTracker,
     pending_state_us: f64,
     triangles: Vec<[Vec4; 3]>,
     clip_scratch: Vec<Vec4>,
@@ -83,7 +69,7 @@ impl<'s> SoftBackend<'s> {
             view_projection: Mat4::IDENTITY,
             clock: SimClock::default(),
             stats: FrameStats::default(),
-            state: None,
+            state: StateTracker::default(),
             pending_state_us: 0.0,
             triangles: Vec::new(),
             clip_scratch: Vec::new(),
@@ -102,13 +88,10 @@ impl<'s> SoftBackend<'s> {
 
     /// Switches render state if needed, charging a state change.
     fn set_state(&mut self, state: RenderState) {
-        if self.state != Some(state) {
-            if self.state.is_some() {
-                self.stats.state_changes += 1;
-                self.clock.cpu_work(self.model.cpu_state_change_us);
-                self.pending_state_us += self.model.gpu_state_change_us;
-            }
-            self.state = Some(state);
+        if self.state.switch(state) {
+            self.stats.state_changes += 1;
+            self.clock.cpu_work(self.model.cpu_state_change_us);
+            self.pending_state_us += self.model.gpu_state_change_us;
         }
     }
 
@@ -132,12 +115,7 @@ impl<'s> SoftBackend<'s> {
             let v = self.view_projection * p.extend(1.0);
             Vec4::new(v.x, v.y, v.z - QUERY_DEPTH_BIAS * v.w, v.w)
         });
-        const FACES: [[usize; 4]; 6] =
-            [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
-        for [a, b, cc, d] in FACES {
-            self.triangles.push([c[a], c[b], c[cc]]);
-            self.triangles.push([c[a], c[cc], c[d]]);
-        }
+        self.triangles.extend(BOX_TRIANGLES.iter().map(|t| t.map(|i| c[i as usize])));
     }
 
     /// Records one raster command and its GPU time-line entry.
@@ -189,7 +167,7 @@ impl Backend for SoftBackend<'_> {
         self.depth.clear();
         self.clock = SimClock::default();
         self.stats = FrameStats::default();
-        self.state = None;
+        self.state = StateTracker::default();
         self.pending_state_us = 0.0;
         self.queries.clear();
         self.drawn.fill(false);
@@ -226,16 +204,11 @@ impl Backend for SoftBackend<'_> {
         self.stats.queries += 1;
         self.stats.query_boxes += boxes.len() as u64;
         let handle = self.queries.len() as u32;
-        let padded: Vec<Aabb> = boxes
-            .iter()
-            .map(|b| b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element()))
-            .collect();
-        let forced_visible = padded.iter().any(|b| camera.box_touches_near_region(b));
+        let padded = query_boxes(&camera, boxes);
+        let forced_visible = padded.is_none();
         let first = self.triangles.len();
-        if !forced_visible {
-            for b in &padded {
-                self.push_box_triangles(b);
-            }
+        for b in padded.iter().flatten() {
+            self.push_box_triangles(b);
         }
         self.queries.push(QueryState { pending: true, forced_visible, available_at_us: 0.0, pixels: 0 });
         let op = GpuOp {
@@ -302,12 +275,7 @@ impl Backend for SoftBackend<'_> {
         }));
         let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
         self.triangles.clear();
-        let visible = candidates
-            .iter()
-            .zip(&results[candidates.len()..])
-            .filter(|(_, r)| r.passed > 0)
-            .map(|(&i, _)| i)
-            .collect();
-        OracleView { visible, depth: self.depth.data.clone(), width: self.depth.width, height: self.depth.height }
+        let pixels = results[candidates.len()..].iter().map(|r| r.passed).collect();
+        OracleView::new(candidates, pixels, self.depth.data.clone(), self.depth.width, self.depth.height)
     }
 }

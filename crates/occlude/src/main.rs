@@ -5,7 +5,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use occlude::bench::config::{load_camera_path, parse_resolution, DEFAULT_METHODS};
+use occlude::bench::config::{load_camera_path, parse_resolution, BackendKind, DEFAULT_METHODS};
 use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, BenchConfig};
 use occlude_core::hierarchy::BuildOptions;
@@ -83,6 +83,10 @@ struct BenchArgs {
     /// Method parameter, method.key=value (repeatable), e.g. chc.tav=2.
     #[arg(long = "method-opt", value_name = "METHOD.KEY=VALUE")]
     method_opt: Vec<String>,
+    /// Backend: soft (exact CPU rasterizer, simulated GPU clock) or wgpu (a
+    /// real GPU; times measured).
+    #[arg(long, default_value = "soft")]
+    backend: BackendKind,
     /// Simulated GPU: a preset (gpu-2004, modern) or a TOML file.
     #[arg(long, default_value = "modern")]
     gpu_model: String,
@@ -138,9 +142,16 @@ enum Failure {
 
 /// A failed run is the user's input when a model file could not be imported
 /// (the scene is loaded in the run, not in `configure`, so as to read a large
-/// model once): exit code 2 like any bad argument; anything else exit code 1.
+/// model once) or `--backend wgpu` found no GPU adapter: exit code 2 like any
+/// bad argument; anything else exit code 1.
 fn run_failure(e: anyhow::Error) -> Failure {
-    if e.chain().any(|c| c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)) {
+    let no_adapter = |c: &(dyn std::error::Error + 'static)| {
+        matches!(c.downcast_ref::<occlude_wgpu::GpuError>(), Some(occlude_wgpu::GpuError::NoAdapter(_)))
+    };
+    let input = |c: &(dyn std::error::Error + 'static)| {
+        c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error) || no_adapter(c)
+    };
+    if e.chain().any(input) {
         Failure::Usage(e)
     } else {
         Failure::Run(e)
@@ -159,6 +170,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         resolution: args.resolution,
         hierarchy: args.hierarchy,
         build: BuildOptions { leaf_size: args.leaf_size, ..BuildOptions::default() },
+        backend: args.backend,
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
         import: ImportOptions { split_triangles: args.split_triangles, auto_path: args.auto_path },
@@ -232,7 +244,13 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
             eprintln!("wrote {}", path.display());
         }
     }
-    Ok(())
+    match &run.aborted {
+        Some(why) => anyhow::bail!(
+            "the run stopped early ({why}); the {} frames every method finished are reported above",
+            run.scene.frames
+        ),
+        None => Ok(()),
+    }
 }
 
 /// `occlude report`: unreadable or malformed input is the user's (exit code

@@ -342,6 +342,8 @@ mod tests {
             frames: 10,
             resolution: [160, 120],
             backend: "soft".into(),
+            adapter: None,
+            aborted: None,
             gpu_model: "modern".into(),
             hierarchy: "bvh".into(),
             seed: 7,

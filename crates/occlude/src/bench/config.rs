@@ -14,6 +14,36 @@ pub const NEAR_PLANE: f32 = 0.25;
 /// Methods `occlude bench` compares when none are named.
 pub const DEFAULT_METHODS: [&str; 4] = ["vfc", "sw", "chc", "opt"];
 
+/// Which backend renders the frames and answers the queries.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendKind {
+    /// The exact CPU rasterizer with the simulated GPU clock (deterministic).
+    #[default]
+    Soft,
+    /// A real GPU through wgpu (measured, wall-clock times).
+    Wgpu,
+}
+
+impl std::str::FromStr for BackendKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "soft" => Ok(Self::Soft),
+            "wgpu" => Ok(Self::Wgpu),
+            _ => Err(format!("unknown backend '{s}': expected 'soft' or 'wgpu'")),
+        }
+    }
+}
+
+impl std::fmt::Display for BackendKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Soft => "soft",
+            Self::Wgpu => "wgpu",
+        })
+    }
+}
+
 /// A validated benchmark configuration.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
@@ -33,7 +63,9 @@ pub struct BenchConfig {
     pub hierarchy: HierarchyKind,
     /// Hierarchy build options.
     pub build: BuildOptions,
-    /// Cost model of the simulated GPU.
+    /// Backend that renders and answers queries.
+    pub backend: BackendKind,
+    /// Cost model of the simulated GPU (soft backend).
     pub gpu_model: GpuModel,
     /// Method parameters (`--method-opt method.key=value`).
     pub options: MethodOptions,
@@ -57,6 +89,7 @@ impl Default for BenchConfig {
             resolution: (1024, 768),
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions::default(),
+            backend: BackendKind::Soft,
             gpu_model: GpuModel::modern(),
             options: MethodOptions::default(),
             import: ImportOptions::default(),

@@ -320,6 +320,8 @@ mod tests {
             frames,
             resolution: [64, 48],
             backend: "soft".into(),
+            adapter: None,
+            aborted: None,
             gpu_model: "gf6800".into(),
             hierarchy: "bvh".into(),
             seed: 1,

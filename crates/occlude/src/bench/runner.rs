@@ -1,7 +1,7 @@
 //! Runs the methods frame by frame and checks each against view-frustum
 //! culling's depth image (the correctness rule of DESIGN.md).
 
-use super::config::{BenchConfig, NEAR_PLANE};
+use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
@@ -9,7 +9,9 @@ use indicatif::ProgressBar;
 use occlude_core::methods::{create, BuiltMethod, DrawnSet};
 use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
+use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Everything a run measured, before summarising.
 pub struct BenchRun {
@@ -22,6 +24,46 @@ pub struct BenchRun {
     /// The decisions of frame [`BenchConfig::dump_frame`] of each method that
     /// records them, in configuration order (empty when none was asked for).
     pub dumps: Vec<FrameDump>,
+    /// The GPU adapter the wgpu backend ran on (`None` on the soft backend).
+    pub adapter: Option<String>,
+    /// Why the run stopped before the walkthrough's end (a lost GPU device):
+    /// the frames kept are those every method finished.
+    pub aborted: Option<String>,
+}
+
+/// Makes each method's backend: the soft rasterizer, or the wgpu backend
+/// over one scene upload shared by all methods.
+enum Renderer {
+    Soft,
+    Wgpu(Arc<GpuScene>),
+}
+
+impl Renderer {
+    /// Opens the GPU and uploads `scene` when `kind` asks for wgpu.
+    fn new(kind: BackendKind, scene: &Scene) -> Result<Self> {
+        Ok(match kind {
+            BackendKind::Soft => Self::Soft,
+            BackendKind::Wgpu => {
+                let ctx = Arc::new(GpuContext::new()?);
+                Self::Wgpu(Arc::new(GpuScene::new(ctx, scene)?))
+            }
+        })
+    }
+
+    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Box<dyn Backend + 's> {
+        let (w, h) = config.resolution;
+        match self {
+            Self::Soft => Box::new(SoftBackend::new(scene, w, h, config.gpu_model.clone())),
+            Self::Wgpu(gpu) => Box::new(WgpuBackend::new(Arc::clone(gpu), scene, w, h)),
+        }
+    }
+
+    fn adapter(&self) -> Option<String> {
+        match self {
+            Self::Soft => None,
+            Self::Wgpu(gpu) => Some(gpu.context().adapter_name()),
+        }
+    }
 }
 
 /// One method's measurements.
@@ -41,18 +83,17 @@ pub struct MethodRun {
 /// One method with its own backend and state across frames.
 struct Lane<'s> {
     built: BuiltMethod,
-    backend: SoftBackend<'s>,
+    backend: Box<dyn Backend + 's>,
     drawn: DrawnSet,
     frames: Vec<FrameStats>,
     counters: BTreeMap<String, Vec<f64>>,
 }
 
 impl<'s> Lane<'s> {
-    fn new(built: BuiltMethod, scene: &'s Scene, config: &BenchConfig) -> Self {
-        let (w, h) = config.resolution;
+    fn new(built: BuiltMethod, backend: Box<dyn Backend + 's>, config: &BenchConfig) -> Self {
         Self {
             built,
-            backend: SoftBackend::new(scene, w, h, config.gpu_model.clone()),
+            backend,
             drawn: DrawnSet::default(),
             frames: Vec::with_capacity(config.frames),
             counters: BTreeMap::new(),
@@ -72,9 +113,9 @@ impl<'s> Lane<'s> {
     /// Renders one frame; returns its statistics.
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> FrameStats {
         let mut ctx = FrameContext::new(scene, hierarchy, *camera, &mut self.drawn);
-        self.built.method.prepare(&mut ctx, &mut self.backend);
+        self.built.method.prepare(&mut ctx, self.backend.as_mut());
         self.backend.begin_frame(camera);
-        self.built.method.render(&mut ctx, &mut self.backend);
+        self.built.method.render(&mut ctx, self.backend.as_mut());
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
@@ -112,26 +153,36 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
-    let mut reference = Lane::new(create("vfc", &config.options)?, scene, config);
+    let renderer = Renderer::new(config.backend, scene)?;
+    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config), config);
     let mut lanes = config
         .methods
         .iter()
         .filter(|m| m.as_str() != "vfc")
-        .map(|m| Ok(Lane::new(create(m, &config.options)?, scene, config)))
+        .map(|m| Ok(Lane::new(create(m, &config.options)?, renderer.backend(scene, config), config)))
         .collect::<Result<Vec<_>>>()?;
 
     progress.set_length(cameras.len() as u64);
     progress.set_position(0);
     let mut dumps = Vec::new();
-    for (k, camera) in cameras.iter().enumerate() {
+    let mut aborted = None;
+    'frames: for (k, camera) in cameras.iter().enumerate() {
         let stats = reference.frame(scene, &hierarchy, camera);
         reference.frames.push(stats);
         let expected = reference.backend.depth_image();
+        if let Some(e) = reference.backend.failure() {
+            aborted = Some(format!("frame {k}, method vfc: {e}"));
+            break;
+        }
         let dump = config.dump_frame == Some(k);
         for lane in &mut lanes {
             lane.built.method.set_debug(dump);
             let mut stats = lane.frame(scene, &hierarchy, camera);
             let image = lane.backend.depth_image();
+            if let Some(e) = lane.backend.failure() {
+                aborted = Some(format!("frame {k}, method {}: {e}", lane.built.method.name()));
+                break 'frames;
+            }
             stats.missing_pixels = differing_pixels(&expected, &image);
             lane.frames.push(stats);
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
@@ -140,6 +191,14 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
             }
         }
         progress.inc(1);
+    }
+    // Keep only the frames every method finished.
+    let finished = lanes.iter().map(|l| l.frames.len()).chain([reference.frames.len()]).min().unwrap_or(0);
+    if aborted.is_some() {
+        reference.frames.truncate(finished);
+        lanes.iter_mut().for_each(|l| l.frames.truncate(finished));
+        lanes.iter_mut().flat_map(|l| l.counters.values_mut()).for_each(|c| c.truncate(finished));
+        reference.counters.values_mut().for_each(|c| c.truncate(finished));
     }
 
     let reference = reference.into_run();
@@ -150,10 +209,12 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
         .map(|m| if m == "vfc" { reference.clone() } else { lanes.next().expect("one lane per method") })
         .collect();
     Ok(BenchRun {
-        scene: SceneStats::new(scene, &hierarchy, cameras.len()),
+        scene: SceneStats::new(scene, &hierarchy, finished),
         methods,
         reference: reference.frames,
         dumps,
+        adapter: renderer.adapter(),
+        aborted,
     })
 }
 

@@ -1,6 +1,6 @@
 //! Per-method averages over a walkthrough, in the JSON schema of DESIGN.md.
 
-use super::config::BenchConfig;
+use super::config::{BackendKind, BenchConfig};
 use super::runner::BenchRun;
 use occlude_core::{FrameStats, Hierarchy, Scene};
 use serde::{Deserialize, Serialize};
@@ -101,7 +101,14 @@ pub struct BenchReport {
     pub resolution: [u32; 2],
     /// `soft` (simulated clock) or `wgpu`.
     pub backend: String,
-    /// Name of the GPU cost model.
+    /// The GPU adapter of a `wgpu` run (name, driver, graphics API).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
+    /// Why the run stopped early (a lost GPU device); the frames reported
+    /// are those every method finished.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aborted: Option<String>,
+    /// Name of the simulated GPU's cost model (`measured` on wgpu).
     pub gpu_model: String,
     /// Hierarchy builder (`bvh` or `kdtree`).
     pub hierarchy: String,
@@ -170,8 +177,13 @@ impl BenchReport {
             size: config.size.to_string(),
             frames: run.scene.frames,
             resolution: [config.resolution.0, config.resolution.1],
-            backend: "soft".into(),
-            gpu_model: config.gpu_model.name.clone(),
+            backend: config.backend.to_string(),
+            adapter: run.adapter.clone(),
+            aborted: run.aborted.clone(),
+            gpu_model: match config.backend {
+                BackendKind::Soft => config.gpu_model.name.clone(),
+                BackendKind::Wgpu => "measured".into(),
+            },
             hierarchy: config.hierarchy.to_string(),
             seed: config.seed,
             scene_stats: run.scene.clone(),

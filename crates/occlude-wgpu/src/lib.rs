@@ -1,0 +1,23 @@
+//! The wgpu visibility backend of `occlude`: scenes drawn on a real GPU
+//! (Vulkan, Metal, DX12 or GL through wgpu), hardware occlusion queries over
+//! box proxies, and their results read back with `map_async` without
+//! blocking the traversal (CHC paper, section 3: the latency between issuing a
+//! query and its result is what the methods hide).
+//!
+//! [`GpuContext`] opens the adapter once; [`GpuScene`] uploads a scene and
+//! builds the pipelines once per run; each method gets its own
+//! [`WgpuBackend`] (its own render target and queries) over that shared scene.
+
+#![warn(missing_docs)]
+
+mod backend;
+mod context;
+mod pipelines;
+mod queries;
+mod readback;
+mod scene_buffers;
+mod target;
+
+pub use backend::WgpuBackend;
+pub use context::{GpuContext, GpuError};
+pub use scene_buffers::GpuScene;

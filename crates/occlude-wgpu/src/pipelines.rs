@@ -1,0 +1,158 @@
+//! The three render pipelines: drawing instances, rasterizing query boxes,
+//! and the oracle's depth-equal test of instances.
+
+/// Depth format of every render target: 32-bit float, the same values the
+/// soft rasterizer stores.
+pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Bytes of one vertex (a position).
+const VERTEX_STRIDE: u64 = 12;
+
+/// Pipelines and bind-group layouts for one colour format.
+pub(crate) struct Pipelines {
+    /// Group 0: camera uniform, instance transforms, query boxes.
+    pub frame_layout: wgpu::BindGroupLayout,
+    /// Group 1: one material's colour; switching it is the state change the
+    /// CHC++ paper counts.
+    pub material_layout: wgpu::BindGroupLayout,
+    /// Instances, depth test less, depth writes on, shaded colour.
+    pub draw: wgpu::RenderPipeline,
+    /// Query boxes: front faces only, depth test less, no writes.
+    pub query: wgpu::RenderPipeline,
+    /// Instances again, depth test equal, no writes: which instances own a
+    /// pixel of the final image (`opt`'s oracle).
+    pub oracle: wgpu::RenderPipeline,
+}
+
+/// How one pipeline differs from the others.
+struct Variant<'a> {
+    label: &'a str,
+    vertex_entry: &'a str,
+    fragment_entry: &'a str,
+    instance_vertices: bool,
+    depth_write: bool,
+    compare: wgpu::CompareFunction,
+    cull_back: bool,
+    color: bool,
+}
+
+impl Pipelines {
+    /// Builds the pipelines for colour target `color_format`.
+    pub fn new(device: &wgpu::Device, color_format: wgpu::TextureFormat) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("occlude shaders"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+        });
+        let vertex = wgpu::ShaderStages::VERTEX;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame"),
+            entries: &[
+                layout_entry(0, vertex, wgpu::BufferBindingType::Uniform),
+                layout_entry(1, vertex, wgpu::BufferBindingType::Storage { read_only: true }),
+                layout_entry(2, vertex, wgpu::BufferBindingType::Storage { read_only: true }),
+            ],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("material"),
+            entries: &[layout_entry(0, wgpu::ShaderStages::FRAGMENT, wgpu::BufferBindingType::Uniform)],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("occlude"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
+        let build = |v: Variant| build_pipeline(device, &layout, &module, color_format, v);
+        let draw = build(Variant {
+            label: "draw",
+            vertex_entry: "vs_instance",
+            fragment_entry: "fs_shaded",
+            instance_vertices: true,
+            depth_write: true,
+            compare: wgpu::CompareFunction::Less,
+            cull_back: false,
+            color: true,
+        });
+        let query = build(Variant {
+            label: "query boxes",
+            vertex_entry: "vs_query_box",
+            fragment_entry: "fs_none",
+            instance_vertices: false,
+            depth_write: false,
+            compare: wgpu::CompareFunction::Less,
+            cull_back: true,
+            color: false,
+        });
+        let oracle = build(Variant {
+            label: "oracle",
+            vertex_entry: "vs_instance",
+            fragment_entry: "fs_none",
+            instance_vertices: true,
+            depth_write: false,
+            compare: wgpu::CompareFunction::Equal,
+            cull_back: false,
+            color: false,
+        });
+        Self { frame_layout, material_layout, draw, query, oracle }
+    }
+}
+
+fn layout_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BufferBindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
+}
+
+fn build_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    color_format: wgpu::TextureFormat,
+    v: Variant,
+) -> wgpu::RenderPipeline {
+    let positions = wgpu::VertexBufferLayout {
+        array_stride: VERTEX_STRIDE,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+    };
+    let buffers = if v.instance_vertices { vec![Some(positions)] } else { Vec::new() };
+    let write_mask = if v.color { wgpu::ColorWrites::ALL } else { wgpu::ColorWrites::empty() };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(v.label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(v.vertex_entry),
+            compilation_options: Default::default(),
+            buffers: &buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode: v.cull_back.then_some(wgpu::Face::Back),
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(v.depth_write),
+            depth_compare: Some(v.compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(v.fragment_entry),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState { format: color_format, blend: None, write_mask })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,141 @@
+//! GPU query resources: occlusion query sets, the buffers their results are
+//! resolved into and mapped from, and the timestamp queries that give a
+//! frame's GPU time.
+
+use crate::context::GpuContext;
+use crate::readback::{take_bytes, Mapping};
+
+/// Occlusion queries per query set (wgpu's maximum). A render pass uses one
+/// set, so a batch of queries never crosses a set boundary.
+pub(crate) const QUERIES_PER_SET: u32 = wgpu::QUERY_SET_MAX_QUERIES;
+
+/// Bytes of one resolved query value.
+const QUERY_BYTES: u64 = 8;
+
+/// A resolve buffer and the mappable buffer its values are copied into, big
+/// enough for one full query set.
+pub(crate) struct Readback {
+    pub resolve: wgpu::Buffer,
+    pub staging: wgpu::Buffer,
+}
+
+/// Query sets by index, and read-back buffers ready for reuse.
+#[derive(Default)]
+pub(crate) struct QueryPool {
+    sets: Vec<wgpu::QuerySet>,
+    free: Vec<Readback>,
+}
+
+impl QueryPool {
+    /// Occlusion query set `k`, created on first use.
+    pub fn set(&mut self, ctx: &GpuContext, k: usize) -> &wgpu::QuerySet {
+        while self.sets.len() <= k {
+            self.sets.push(ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("occlusion queries"),
+                ty: wgpu::QueryType::Occlusion,
+                count: QUERIES_PER_SET,
+            }));
+        }
+        &self.sets[k]
+    }
+
+    /// A read-back pair, reused when one is free.
+    pub fn readback(&mut self, ctx: &GpuContext) -> Readback {
+        self.free.pop().unwrap_or_else(|| new_readback(ctx, u64::from(QUERIES_PER_SET) * QUERY_BYTES, "queries"))
+    }
+
+    /// Returns an unmapped read-back pair for reuse.
+    pub fn recycle(&mut self, readback: Readback) {
+        self.free.push(readback);
+    }
+}
+
+fn new_readback(ctx: &GpuContext, size: u64, label: &str) -> Readback {
+    let buffer = |usage| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+    };
+    Readback {
+        resolve: buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
+        staging: buffer(wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ),
+    }
+}
+
+/// Encodes the resolve of `count` queries of `set` starting at `first` and
+/// their copy into `readback`'s mappable buffer; the returned byte count is
+/// what to map once the commands are submitted.
+pub(crate) fn encode_resolve(
+    encoder: &mut wgpu::CommandEncoder,
+    set: &wgpu::QuerySet,
+    first: u32,
+    count: u32,
+    readback: &Readback,
+) -> u64 {
+    let bytes = u64::from(count) * QUERY_BYTES;
+    encoder.resolve_query_set(set, first..first + count, &readback.resolve, 0);
+    encoder.copy_buffer_to_buffer(&readback.resolve, 0, &readback.staging, 0, bytes);
+    bytes
+}
+
+/// The values of a finished read-back of `bytes` bytes.
+pub(crate) fn read_values(readback: &Readback, bytes: u64) -> Result<Vec<u64>, String> {
+    let raw = take_bytes(&readback.staging, bytes)?;
+    Ok(raw.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8-byte chunk"))).collect())
+}
+
+/// Render passes of one frame whose GPU time is measured; passes past this
+/// count go untimed, and the frame's `gpu_ms` undercounts.
+const TIMED_PASSES: u32 = 2048;
+
+/// Timestamps at the start and end of each render pass of a frame; their
+/// differences summed are the frame's GPU busy time.
+pub(crate) struct PassTimer {
+    set: wgpu::QuerySet,
+    readback: Readback,
+    period_ns: f64,
+    passes: u32,
+}
+
+impl PassTimer {
+    /// A timer, when the device has timestamp queries.
+    pub fn new(ctx: &GpuContext) -> Option<Self> {
+        ctx.timestamps.then(|| Self {
+            set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * TIMED_PASSES,
+            }),
+            readback: new_readback(ctx, u64::from(2 * TIMED_PASSES) * QUERY_BYTES, "timestamps"),
+            period_ns: f64::from(ctx.queue.get_timestamp_period()),
+            passes: 0,
+        })
+    }
+
+    /// Timestamp writes for the next pass, while any are left.
+    pub fn next_pass(&mut self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        (self.passes < TIMED_PASSES).then(|| {
+            let k = self.passes;
+            self.passes += 1;
+            wgpu::RenderPassTimestampWrites {
+                query_set: &self.set,
+                beginning_of_pass_write_index: Some(2 * k),
+                end_of_pass_write_index: Some(2 * k + 1),
+            }
+        })
+    }
+
+    /// Reads the frame's timestamps back (blocking) and returns the GPU busy
+    /// time in milliseconds; resets for the next frame.
+    pub fn finish(&mut self, ctx: &GpuContext) -> Result<f64, String> {
+        let passes = std::mem::take(&mut self.passes);
+        if passes == 0 {
+            return Ok(0.0);
+        }
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let bytes = encode_resolve(&mut encoder, &self.set, 0, 2 * passes, &self.readback);
+        ctx.queue.submit([encoder.finish()]);
+        Mapping::start(&self.readback.staging, bytes).wait(ctx)?;
+        let stamps = read_values(&self.readback, bytes)?;
+        let ticks: u64 = stamps.chunks_exact(2).map(|p| p[1].saturating_sub(p[0])).sum();
+        Ok(ticks as f64 * self.period_ns * 1e-6)
+    }
+}

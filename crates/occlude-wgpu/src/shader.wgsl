@@ -1,0 +1,63 @@
+// Scene and query-proxy shaders of the wgpu backend.
+//
+// Instances are drawn from one vertex/index pool, their world transforms read
+// from a storage buffer at `instance_index` (the draw's first instance).
+// Query boxes are one draw of 36 corner indices per multi-query, one instance
+// per box.
+
+struct Camera {
+    view_projection: mat4x4<f32>,
+    // x: depth bias of query boxes (normalized device depth), see
+    // occlude_core::query_box::QUERY_DEPTH_BIAS.
+    query: vec4<f32>,
+}
+
+struct QueryBox {
+    lo: vec4<f32>,
+    hi: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<storage, read> transforms: array<mat4x4<f32>>;
+@group(0) @binding(2) var<storage, read> boxes: array<QueryBox>;
+@group(1) @binding(0) var<uniform> material_color: vec4<f32>;
+
+struct Shaded {
+    // Invariant: the drawing pipeline and the oracle's depth-equal pipeline
+    // must compute bit-identical depths for the same instance.
+    @builtin(position) @invariant clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+}
+
+@vertex
+fn vs_instance(@location(0) position: vec3<f32>, @builtin(instance_index) instance: u32) -> Shaded {
+    let world = transforms[instance] * vec4<f32>(position, 1.0);
+    var out: Shaded;
+    out.clip = camera.view_projection * world;
+    out.world = world.xyz;
+    return out;
+}
+
+// Flat shading from the screen-space derivatives of the world position: the
+// meshes carry no normals and the colour only helps a person see the scene.
+@fragment
+fn fs_shaded(in: Shaded) -> @location(0) vec4<f32> {
+    let n = normalize(cross(dpdx(in.world), dpdy(in.world)));
+    let light = 0.35 + 0.65 * abs(dot(n, normalize(vec3<f32>(0.4, 0.8, 0.3))));
+    return vec4<f32>(material_color.rgb * light, 1.0);
+}
+
+@vertex
+fn vs_query_box(@builtin(vertex_index) corner: u32, @builtin(instance_index) index: u32) -> @builtin(position) vec4<f32> {
+    let b = boxes[index];
+    let pick_max = vec3<bool>((corner & 1u) != 0u, (corner & 2u) != 0u, (corner & 4u) != 0u);
+    let c = camera.view_projection * vec4<f32>(select(b.lo.xyz, b.hi.xyz, pick_max), 1.0);
+    return vec4<f32>(c.x, c.y, c.z - camera.query.x * c.w, c.w);
+}
+
+// Queries and the oracle write no colour (the write mask is empty); the pass
+// has a colour target, so their pipelines still need a fragment stage.
+@fragment
+fn fs_none() -> @location(0) vec4<f32> {
+    return vec4<f32>(0.0);
+}

@@ -1,0 +1,141 @@
+//! The wgpu backend on a real adapter (lavapipe in CI, with
+//! `OCCLUDE_REQUIRE_GPU=1`; skipped with a message where no adapter exists):
+//! the correctness rule of DESIGN.md with depth images read back from the
+//! GPU, and a cross-check of what the GPU and the soft rasterizer see.
+
+use indicatif::ProgressBar;
+use occlude::bench::config::BackendKind;
+use occlude::bench::runner::{cameras, run_scene};
+use occlude::bench::BenchConfig;
+use occlude_core::{Backend, HierarchyKind, Scene};
+use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_soft::SoftBackend;
+use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
+use std::sync::Arc;
+
+/// Every method, on the wgpu backend.
+fn config(scene: &str, hierarchy: HierarchyKind, frames: usize) -> BenchConfig {
+    BenchConfig {
+        scene: scene.into(),
+        methods: ["vfc", "sw", "chc", "chcpp", "om", "opt"].map(String::from).to_vec(),
+        frames,
+        resolution: (320, 240),
+        hierarchy,
+        backend: BackendKind::Wgpu,
+        ..BenchConfig::default()
+    }
+}
+
+fn small(scene: &str) -> Scene {
+    generate(scene, Size::Small, 1).unwrap()
+}
+
+#[test]
+fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
+    if GpuContext::for_test("every_method_matches_vfc_on_the_gpu_on_every_frame").is_none() {
+        return;
+    }
+    let runs = SCENE_NAMES.iter().map(|&name| (name, HierarchyKind::Bvh)).chain([("city", HierarchyKind::KdTree)]);
+    for (name, hierarchy) in runs {
+        let scene = small(name);
+        let run = run_scene(&scene, &config(name, hierarchy, 90), &ProgressBar::hidden()).unwrap();
+        assert_eq!(run.aborted, None);
+        assert!(run.adapter.is_some());
+        for m in &run.methods {
+            assert_eq!(m.frames.len(), 90, "{name}/{}: frames lost", m.name);
+            for (f, stats) in m.frames.iter().enumerate() {
+                assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
+            }
+        }
+        // Occlusion works on the GPU too: the hierarchical methods draw less.
+        let triangles = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+        for m in 1..run.methods.len() {
+            assert!(
+                triangles(m) < triangles(0),
+                "{name}/{hierarchy}: {} drew {} triangles, vfc {}",
+                run.methods[m].name,
+                triangles(m),
+                triangles(0)
+            );
+        }
+    }
+}
+
+/// Soft and wgpu oracles over every instance in view: the visible sets agree
+/// except for objects the exact soft rasterizer sees with at most
+/// `ROUNDING_PIXELS` pixels (the two rasterizers round vertex positions
+/// differently); the worst disagreement is printed.
+#[test]
+fn soft_and_gpu_see_the_same_objects() {
+    const ROUNDING_PIXELS: u64 = 8;
+    let Some(ctx) = GpuContext::for_test("soft_and_gpu_see_the_same_objects") else { return };
+    let mut worst = (0u64, String::new());
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        let cfg = config(name, HierarchyKind::Bvh, 12);
+        let (w, h) = cfg.resolution;
+        let gpu = Arc::new(GpuScene::new(Arc::clone(&ctx), &scene).unwrap());
+        let mut on_gpu = WgpuBackend::new(gpu, &scene, w, h);
+        let mut soft = SoftBackend::new(&scene, w, h, cfg.gpu_model.clone());
+        let mut compared = 0;
+        for (k, camera) in cameras(&scene, &cfg).iter().enumerate() {
+            let frustum = camera.frustum();
+            let candidates: Vec<u32> = (0..scene.instances.len() as u32)
+                .filter(|&i| frustum.intersects(&scene.instances[i as usize].bounds))
+                .collect();
+            let a = soft.oracle(camera, &candidates);
+            let b = on_gpu.oracle(camera, &candidates);
+            assert_eq!(on_gpu.failure(), None);
+            for (j, &i) in candidates.iter().enumerate() {
+                let (s, g) = (a.pixels[j], b.pixels[j]);
+                if (s > 0) != (g > 0) {
+                    let what = format!("{name} frame {k} instance {i}: soft {s} px, gpu {g} px");
+                    assert!(s <= ROUNDING_PIXELS, "{what}");
+                    if s >= worst.0 {
+                        worst = (s, what);
+                    }
+                }
+            }
+            compared += a.visible.len();
+        }
+        assert!(compared > 0, "{name}: nothing visible");
+    }
+    eprintln!("worst soft/gpu visibility disagreement: {}", if worst.1.is_empty() { "none" } else { &worst.1 });
+}
+
+fn occlude(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_occlude"));
+    command.args(args).envs(env.iter().copied());
+    command.output().expect("occlude runs")
+}
+
+#[test]
+fn no_adapter_is_a_clear_error_with_exit_code_2() {
+    // Asking wgpu for a graphics API this platform lacks leaves no adapter.
+    let missing_api = if cfg!(target_os = "macos") { "dx12" } else { "metal" };
+    let out = occlude(&["bench", "--backend", "wgpu", "--frames", "2"], &[("WGPU_BACKEND", missing_api)]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("no GPU adapter") && stderr.contains("--backend soft"), "{stderr}");
+}
+
+#[test]
+fn wgpu_bench_writes_measured_times_and_the_adapter() {
+    if GpuContext::for_test("wgpu_bench_writes_measured_times_and_the_adapter").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("gpu.json");
+    let args = ["bench", "--backend", "wgpu", "--frames", "4", "--resolution", "160x120", "--methods", "vfc,chc"];
+    let out = occlude(&[&args[..], &["--json", json.to_str().unwrap()]].concat(), &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("backend wgpu") && !stdout.contains("sim ms"), "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["backend"], "wgpu");
+    assert!(report["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    for m in report["methods"].as_array().unwrap() {
+        assert!(m["mean_frame_ms"].as_f64().unwrap() > 0.0);
+        assert_eq!(m["missing_pixels"], 0);
+    }
+}
