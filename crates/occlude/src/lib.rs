@@ -4,5 +4,6 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod calibrate;
 pub mod report;
 pub mod scenes;

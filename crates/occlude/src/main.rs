@@ -30,6 +30,9 @@ enum Command {
     Bench(Box<BenchArgs>),
     /// Write a self-contained HTML report (tables and plots) of bench JSON files.
     Report(ReportArgs),
+    /// Measure this GPU's costs through the wgpu backend and write a GPU model
+    /// (TOML) for the soft backend's simulated clock.
+    Calibrate(CalibrateArgs),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         /// Sizes to list: small, medium, paper or all.
@@ -117,6 +120,38 @@ struct BenchArgs {
     /// Folder for the --dump-frame PNGs (created if missing).
     #[arg(long, value_name = "DIR", default_value = ".")]
     dump_dir: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct CalibrateArgs {
+    /// Backend to measure: only wgpu (a real GPU) can be measured.
+    #[arg(long, default_value = "wgpu")]
+    backend: BackendKind,
+    /// The GPU model file to write (load it with `bench --gpu-model FILE`).
+    #[arg(long, default_value = "calibrated.toml")]
+    out: PathBuf,
+    /// Image size of the measurements and of the check.
+    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Repeats of each measurement (the median counts).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// Scene of the check: every method on the GPU and on the soft backend
+    /// with the measured model, mean frame times compared.
+    #[arg(long, default_value = "city")]
+    check_scene: String,
+    /// Size of the check's scene.
+    #[arg(long, default_value = "small")]
+    check_size: String,
+    /// Frames of the check.
+    #[arg(long, default_value_t = 60)]
+    check_frames: usize,
+    /// Methods of the check.
+    #[arg(long, value_delimiter = ',', default_value = "vfc,sw,chc,chcpp,om,opt")]
+    check_methods: Vec<String>,
+    /// Skip the check.
+    #[arg(long)]
+    no_check: bool,
 }
 
 #[derive(clap::Args)]
@@ -253,6 +288,48 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     }
 }
 
+/// `occlude calibrate`: a backend other than wgpu, a bad check scene or
+/// method, or no adapter is the user's (exit code 2).
+fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
+    let usage = Failure::Usage;
+    if args.backend != BackendKind::Wgpu {
+        return Err(usage(anyhow::anyhow!(
+            "calibrate measures a real GPU: use --backend wgpu (the soft backend's costs are the model itself)"
+        )));
+    }
+    if args.repeats == 0 {
+        return Err(usage(anyhow::anyhow!("--repeats must be at least 1")));
+    }
+    let check = (!args.no_check)
+        .then(|| {
+            SceneSource::resolve(&args.check_scene)?;
+            let config = BenchConfig {
+                scene: args.check_scene.clone(),
+                size: args.check_size.parse::<Size>()?,
+                methods: args.check_methods.iter().map(|m| m.trim().to_string()).collect(),
+                frames: args.check_frames,
+                resolution: args.resolution,
+                ..BenchConfig::default()
+            };
+            config.validate()?;
+            anyhow::Ok(config)
+        })
+        .transpose()
+        .map_err(usage)?;
+    let config = occlude::calibrate::CalibrateConfig { resolution: args.resolution, repeats: args.repeats, check };
+    let progress = ProgressBar::new_spinner();
+    progress.enable_steady_tick(std::time::Duration::from_millis(200));
+    let calibration = occlude::calibrate::calibrate(&config, &progress).map_err(run_failure)?;
+    progress.finish_and_clear();
+    let text = calibration.to_toml().map_err(Failure::Run)?;
+    print!("{text}");
+    std::fs::write(&args.out, &text)
+        .with_context(|| format!("cannot write {}", args.out.display()))
+        .map_err(Failure::Run)?;
+    eprintln!("wrote {}", args.out.display());
+    Ok(())
+}
+
 /// `occlude report`: unreadable or malformed input is the user's (exit code
 /// 2); failing to write the output is not (exit code 1).
 fn report(args: &ReportArgs) -> Result<(), Failure> {
@@ -286,6 +363,7 @@ fn main() -> ExitCode {
     let outcome = match &cli.command {
         Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(run_failure)),
         Command::Report(args) => report(args),
+        Command::Calibrate(args) => calibrate(args),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

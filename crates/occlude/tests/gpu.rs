@@ -139,3 +139,27 @@ fn wgpu_bench_writes_measured_times_and_the_adapter() {
         assert_eq!(m["missing_pixels"], 0);
     }
 }
+
+#[test]
+fn calibrate_writes_a_model_the_soft_backend_loads() {
+    let out = occlude(&["calibrate", "--backend", "soft"], &[]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    if GpuContext::for_test("calibrate_writes_a_model_the_soft_backend_loads").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let toml = dir.path().join("gpu.toml");
+    let args = ["calibrate", "--repeats", "1", "--resolution", "160x120", "--check-frames", "3"];
+    let check = ["--check-methods", "vfc,chc", "--out", toml.to_str().unwrap()];
+    let out = occlude(&[&args[..], &check[..]].concat(), &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&toml).unwrap();
+    assert!(text.contains("# check vfc: measured") && text.contains("# check chc: measured"), "{text}");
+    let model = occlude_soft::GpuModel::load(toml.to_str().unwrap()).unwrap();
+    assert_eq!(model.name, "calibrated");
+    assert!(model.gpu_draw_call_us > 0.0 && model.gpu_fragment_ns > 0.0, "{model:?}");
+    // The model drives a soft run.
+    let run =
+        occlude(&["bench", "--frames", "2", "--resolution", "160x120", "--gpu-model", toml.to_str().unwrap()], &[]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+}

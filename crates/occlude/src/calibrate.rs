@@ -1,0 +1,317 @@
+//! `occlude calibrate --backend wgpu`: measures, through the wgpu backend, the
+//! costs the soft backend's simulated clock charges (`GpuModel`: draw calls,
+//! triangles, fragments, state changes, queries, query latency) on the current
+//! adapter, and checks how well the soft backend with those costs predicts
+//! the measured frame time of each method (DESIGN.md, "The simulated GPU
+//! clock": the model is "calibratable from measurements on the wgpu backend").
+//!
+//! Each cost comes from a synthetic frame that isolates it (many draws of an
+//! off-screen triangle, many zero-coverage triangles, full-screen quads, query
+//! boxes), minus an empty frame's time, as the median of several repeats.
+
+use crate::bench::config::BackendKind;
+use crate::bench::{runner, BenchConfig};
+use anyhow::{Context, Result};
+use glam::{Mat4, Vec3};
+use indicatif::ProgressBar;
+use occlude_core::{Aabb, Backend, Camera, CameraPath, FrameStats, Keyframe, Mesh, Scene};
+use occlude_soft::GpuModel;
+use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What to measure and how to check the result.
+#[derive(Clone, Debug)]
+pub struct CalibrateConfig {
+    /// Image size of the synthetic frames and of the check.
+    pub resolution: (u32, u32),
+    /// Repeats of each synthetic frame; the median counts.
+    pub repeats: usize,
+    /// The benchmark that checks the prediction (its backend is ignored:
+    /// it runs on wgpu and on soft with the calibrated model). `None` skips
+    /// the check.
+    pub check: Option<BenchConfig>,
+}
+
+/// How well the calibrated model predicts one method.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Method name.
+    pub method: String,
+    /// Mean frame time measured on the GPU, ms.
+    pub measured_ms: f64,
+    /// Mean frame time the soft backend predicts with the calibrated model, ms.
+    pub predicted_ms: f64,
+}
+
+impl Prediction {
+    /// Predicted over measured.
+    pub fn ratio(&self) -> f64 {
+        self.predicted_ms / self.measured_ms
+    }
+}
+
+/// A calibration's result.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    /// The adapter measured.
+    pub adapter: String,
+    /// The measured costs, named `calibrated`.
+    pub model: GpuModel,
+    /// Per method, the check of the prediction (empty when skipped).
+    pub predictions: Vec<Prediction>,
+}
+
+impl Calibration {
+    /// The model as a TOML file `--gpu-model` loads, with the adapter and the
+    /// check's ratios as comments.
+    pub fn to_toml(&self) -> Result<String> {
+        let mut text = format!(
+            "# GPU model measured by `occlude calibrate --backend wgpu` on {}.\n\
+             # cpu_node_us is not measured (CPU traversal cost): kept from the `modern` preset.\n",
+            self.adapter
+        );
+        for p in &self.predictions {
+            text += &format!(
+                "# check {}: measured {:.3} ms, predicted {:.3} ms, ratio {:.2}\n",
+                p.method,
+                p.measured_ms,
+                p.predicted_ms,
+                p.ratio()
+            );
+        }
+        text += &toml::to_string(&self.model).context("cannot write the GPU model as TOML")?;
+        Ok(text)
+    }
+}
+
+/// Instances of the synthetic scene.
+const OFF_SCREEN_A: u32 = 0;
+const OFF_SCREEN_B: u32 = 1;
+const SLIVERS: u32 = 2;
+const FIRST_QUAD: u32 = 3;
+/// Full-screen quads, drawn back to front so that every fragment passes.
+const QUADS: u32 = 24;
+/// Triangles of the sliver mesh: each smaller than a pixel, covering no
+/// pixel centre, so they cost setup and no fragments.
+const SLIVER_TRIANGLES: u32 = 20_000;
+/// Draw calls of the draw and state-change frames.
+const DRAWS: usize = 3000;
+/// Queries of the small-box frame and of the full-screen frame.
+const SMALL_QUERIES: usize = 1000;
+const SCREEN_QUERIES: usize = 50;
+/// Frames of the latency measurement.
+const LATENCY_FRAMES: usize = 30;
+
+/// The synthetic scene: two materials on an off-screen triangle, a mesh of
+/// slivers, and full-screen quads at increasing distance.
+fn synthetic_scene() -> Scene {
+    let mut scene = Scene {
+        name: "calibration".into(),
+        meshes: Vec::new(),
+        instances: Vec::new(),
+        material_count: 0,
+        path: CameraPath {
+            keyframes: vec![Keyframe { time: 0.0, position: Vec3::ZERO, target: Vec3::NEG_Z, fov_y_deg: 60.0 }],
+        },
+    };
+    let triangle = scene.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]));
+    let off_screen = Mat4::from_translation(Vec3::new(1000.0, 0.0, -10.0));
+    scene.add_instance(triangle, off_screen, 0);
+    scene.add_instance(triangle, off_screen, 1);
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for k in 0..SLIVER_TRIANGLES {
+        // Spread over the view at 10 m, 1 mm wide: far below a pixel.
+        let (x, y) = ((k % 200) as f32 * 0.05 - 5.0, (k / 200) as f32 * 0.05 - 2.5);
+        let base = positions.len() as u32;
+        positions.extend([Vec3::new(x, y, -10.0), Vec3::new(x + 1e-3, y, -10.0), Vec3::new(x, y + 1e-3, -10.0)]);
+        indices.extend([base, base + 1, base + 2]);
+    }
+    let slivers = scene.add_mesh(Mesh::new(positions, indices));
+    scene.add_instance(slivers, Mat4::IDENTITY, 0);
+    let quad = scene.add_mesh(Mesh::new(
+        vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+    ));
+    for k in 0..QUADS {
+        // Back to front: quad k is nearer than quad k - 1, and wide enough
+        // to fill a 60-degree view at its distance.
+        let z = 40.0 - k as f32;
+        scene.add_instance(quad, Mat4::from_translation(Vec3::new(0.0, 0.0, -z)) * Mat4::from_scale(Vec3::splat(z)), 0);
+    }
+    scene
+}
+
+/// Median of the values.
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Runs `body` in `repeats` frames and returns the median CPU and GPU time (ms).
+fn timed(
+    backend: &mut WgpuBackend<'_>,
+    camera: &Camera,
+    repeats: usize,
+    body: impl Fn(&mut WgpuBackend<'_>),
+) -> (f64, f64) {
+    let frames: Vec<FrameStats> = (0..repeats)
+        .map(|_| {
+            backend.begin_frame(camera);
+            body(backend);
+            backend.end_frame()
+        })
+        .collect();
+    (median(frames.iter().map(|f| f.cpu_ms).collect()), median(frames.iter().map(|f| f.gpu_ms).collect()))
+}
+
+/// Measures the cost model on `ctx`'s adapter.
+pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<GpuModel> {
+    anyhow::ensure!(
+        ctx.timestamps,
+        "GPU adapter '{}' has no timestamp queries: its GPU costs cannot be measured",
+        ctx.adapter_name()
+    );
+    let scene = synthetic_scene();
+    let (w, h) = config.resolution;
+    let gpu = Arc::new(GpuScene::new(Arc::clone(&ctx), &scene)?);
+    let mut backend = WgpuBackend::new(gpu, &scene, w, h);
+    let camera = Camera {
+        position: Vec3::ZERO,
+        target: Vec3::NEG_Z,
+        up: Vec3::Y,
+        fov_y_deg: 60.0,
+        aspect: w as f32 / h as f32,
+        near: 0.25,
+        far: 100.0,
+    };
+    let repeats = config.repeats.max(1);
+    let pixels = f64::from(w) * f64::from(h);
+    let per = |total_ms: f64, base_ms: f64, count: f64| ((total_ms - base_ms) / count).max(0.0);
+
+    let (cpu0, gpu0) = timed(&mut backend, &camera, repeats, |_| {});
+    let (cpu_draws, gpu_draws) = timed(&mut backend, &camera, repeats, |b| {
+        (0..DRAWS).for_each(|_| b.draw(&[OFF_SCREEN_A]));
+    });
+    let (cpu_states, gpu_states) = timed(&mut backend, &camera, repeats, |b| {
+        (0..DRAWS).for_each(|k| b.draw(&[if k % 2 == 0 { OFF_SCREEN_A } else { OFF_SCREEN_B }]));
+    });
+    let sliver_draws = 10;
+    let (_, gpu_slivers) = timed(&mut backend, &camera, repeats, |b| {
+        (0..sliver_draws).for_each(|_| b.draw(&[SLIVERS]));
+    });
+    let quad_list: Vec<u32> = (FIRST_QUAD..FIRST_QUAD + QUADS).collect();
+    let (_, gpu_quads) = timed(&mut backend, &camera, repeats, |b| b.draw(&quad_list));
+    let small_box = Aabb::new(Vec3::new(-0.05, -0.05, -50.0), Vec3::new(0.05, 0.05, -49.9));
+    let screen_box = Aabb::new(Vec3::new(-3.0, -3.0, -3.0), Vec3::new(3.0, 3.0, -2.0));
+    let (cpu_queries, gpu_queries) = timed(&mut backend, &camera, repeats, |b| {
+        (0..SMALL_QUERIES).for_each(|_| {
+            b.issue_query(&[small_box]);
+        });
+    });
+    let (_, gpu_screen_queries) = timed(&mut backend, &camera, repeats, |b| {
+        (0..SCREEN_QUERIES).for_each(|_| {
+            b.issue_query(&[screen_box]);
+        });
+    });
+
+    let draw_us = |total: f64, base: f64| per(total, base, DRAWS as f64) * 1e3;
+    let gpu_draw_call_us = draw_us(gpu_draws, gpu0);
+    let gpu_query_box_us = per(gpu_queries, gpu0, SMALL_QUERIES as f64) * 1e3;
+    let (latency_us, poll_us) = measure_latency(&mut backend, &camera, small_box, gpu_query_box_us);
+    Ok(GpuModel {
+        name: "calibrated".into(),
+        cpu_draw_call_us: draw_us(cpu_draws, cpu0),
+        cpu_state_change_us: draw_us(cpu_states, cpu_draws),
+        cpu_query_us: per(cpu_queries, cpu0, SMALL_QUERIES as f64) * 1e3,
+        cpu_query_poll_us: poll_us,
+        cpu_node_us: GpuModel::modern().cpu_node_us,
+        gpu_draw_call_us,
+        gpu_triangle_ns: per(gpu_slivers - gpu0 - sliver_draws as f64 * gpu_draw_call_us * 1e-3, 0.0, 1.0)
+            / (sliver_draws as f64 * f64::from(SLIVER_TRIANGLES))
+            * 1e6,
+        gpu_fragment_ns: per(gpu_quads - f64::from(QUADS) * gpu_draw_call_us * 1e-3, gpu0, f64::from(QUADS) * pixels)
+            * 1e6,
+        gpu_state_change_us: draw_us(gpu_states, gpu_draws),
+        gpu_query_box_us,
+        gpu_query_fragment_ns: per(
+            gpu_screen_queries - SCREEN_QUERIES as f64 * gpu_query_box_us * 1e-3,
+            gpu0,
+            SCREEN_QUERIES as f64 * pixels,
+        ) * 1e6,
+        query_latency_us: latency_us,
+    })
+}
+
+/// Time from a query's submission until its result is readable, minus the
+/// GPU time of its box (the model's latency, which so includes the cost of
+/// a submission and its render pass), and the CPU time of one availability
+/// check of a query in flight; medians over several frames, in µs.
+fn measure_latency(backend: &mut WgpuBackend<'_>, camera: &Camera, small_box: Aabb, box_us: f64) -> (f64, f64) {
+    let mut latencies = Vec::new();
+    let mut polls = Vec::new();
+    for _ in 0..LATENCY_FRAMES {
+        backend.begin_frame(camera);
+        // The frame's first pass clears the target: keep it out of the timing.
+        let clearing = backend.issue_query(&[small_box]);
+        backend.result(clearing);
+        let query = backend.issue_query(&[small_box]);
+        // The first check submits the query (and may already find it done).
+        let start = Instant::now();
+        let mut available = backend.is_available(query);
+        let submitted = Instant::now();
+        let mut checks = 0u32;
+        while !available && start.elapsed().as_secs() < 5 {
+            available = backend.is_available(query);
+            checks += 1;
+        }
+        let until_available = start.elapsed().as_secs_f64() * 1e6;
+        let polling_us = submitted.elapsed().as_secs_f64() * 1e6;
+        backend.end_frame();
+        latencies.push((until_available - box_us).max(0.0));
+        if checks > 0 {
+            polls.push(polling_us / f64::from(checks));
+        }
+    }
+    (median(latencies), median(polls))
+}
+
+/// Measures the model and, if asked, checks its predictions.
+pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Calibration> {
+    let ctx = Arc::new(GpuContext::new()?);
+    let adapter = ctx.adapter_name();
+    progress.set_message(format!("measuring {adapter}"));
+    let model = measure_model(ctx, config)?;
+    let predictions = match &config.check {
+        Some(check) => predict(check, &model, progress)?,
+        None => Vec::new(),
+    };
+    Ok(Calibration { adapter, model, predictions })
+}
+
+/// Runs `check` on the GPU and on the soft backend with `model`, and pairs
+/// the mean frame times per method.
+pub fn predict(check: &BenchConfig, model: &GpuModel, progress: &ProgressBar) -> Result<Vec<Prediction>> {
+    let measured = BenchConfig { backend: BackendKind::Wgpu, ..check.clone() };
+    let predicted = BenchConfig { backend: BackendKind::Soft, gpu_model: model.clone(), ..check.clone() };
+    progress.set_message(format!("checking on {} (wgpu)", check.scene));
+    let on_gpu = runner::run(&measured, progress)?.report(&measured);
+    progress.set_message(format!("checking on {} (soft, calibrated)", check.scene));
+    let on_soft = runner::run(&predicted, progress)?.report(&predicted);
+    Ok(on_gpu
+        .methods
+        .iter()
+        .zip(&on_soft.methods)
+        .map(|(g, s)| Prediction {
+            method: g.name.clone(),
+            measured_ms: g.mean_frame_ms,
+            predicted_ms: s.mean_frame_ms,
+        })
+        .collect())
+}
