@@ -157,7 +157,10 @@ fn calibrate_writes_a_model_the_soft_backend_loads() {
     assert!(text.contains("# check vfc: measured") && text.contains("# check chc: measured"), "{text}");
     let model = occlude_soft::GpuModel::load(toml.to_str().unwrap()).unwrap();
     assert_eq!(model.name, "calibrated");
-    assert!(model.gpu_draw_call_us > 0.0 && model.gpu_fragment_ns > 0.0, "{model:?}");
+    // Each cost may measure 0 on a noisy machine at this tiny size (a frame
+    // minus the empty frame's time is clamped at 0), but not all of them.
+    let measured = [model.gpu_draw_call_us, model.gpu_triangle_ns, model.gpu_fragment_ns, model.query_latency_us];
+    assert!(measured.iter().sum::<f64>() > 0.0, "{model:?}");
     // The model drives a soft run.
     let run =
         occlude(&["bench", "--frames", "2", "--resolution", "160x120", "--gpu-model", toml.to_str().unwrap()], &[]);
