@@ -11,11 +11,14 @@
 //! `paper` sizes with millions of triangles stay small in memory.
 //!
 //! [`load`] also imports real models (glTF 2.0, OBJ) by file name; see
-//! [`import`](mod@import).
+//! [`import`](mod@import). [`export::glb`] writes a scene as a GLB file, and
+//! [`building`] generates a building to be written so and imported.
 
 #![warn(missing_docs)]
 
+pub mod building;
 mod city;
+pub mod export;
 mod figures;
 pub mod import;
 pub mod newell;

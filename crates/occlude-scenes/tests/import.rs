@@ -5,7 +5,8 @@
 use base64::Engine;
 use glam::Vec3;
 use occlude_core::Aabb;
-use occlude_scenes::import::{import, Imported, ModelFormat};
+use occlude_scenes::import::{import, import_bytes, Imported, ModelFormat};
+use occlude_scenes::{building, export};
 use occlude_scenes::{load, AutoPath, ImportOptions, LoadError, Size};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -132,29 +133,28 @@ impl Gltf {
         write_json(dir, name, &self.document(Some(format!("data:application/octet-stream;base64,{data}"))))
     }
 
-    /// Writes `dir/name` with the buffer in the file `dir/bin`.
-    fn write_with_bin(&self, dir: &Path, name: &str, bin: &str) -> PathBuf {
-        std::fs::write(dir.join(bin), &self.bin).unwrap();
-        write_json(dir, name, &self.document(Some(bin.to_string())))
+    /// Writes `dir/name` with the buffer in the file `dir/file`, which the
+    /// document names by `uri`.
+    fn write_with_bin(&self, dir: &Path, name: &str, file: &str, uri: &str) -> PathBuf {
+        std::fs::write(dir.join(file), &self.bin).unwrap();
+        write_json(dir, name, &self.document(Some(uri.to_string())))
     }
 
     /// The model as GLB bytes.
     fn glb(&self) -> Vec<u8> {
-        let mut json = serde_json::to_vec(&self.document(None)).unwrap();
-        json.resize(json.len().next_multiple_of(4), b' ');
-        let mut bin = self.bin.clone();
-        bin.resize(bin.len().next_multiple_of(4), 0);
-        let length = 12 + 8 + json.len() + 8 + bin.len();
-        let mut out = Vec::with_capacity(length);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(length as u32).to_le_bytes());
-        for (kind, chunk) in [(b"JSON", &json), (b"BIN\0", &bin)] {
-            out.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-            out.extend_from_slice(kind);
-            out.extend_from_slice(chunk);
-        }
-        out
+        export::container(&serde_json::to_vec(&self.document(None)).unwrap(), &self.bin)
+    }
+
+    /// Overrides elements of accessor `accessor` by a sparse substitution:
+    /// `count` substitutions, the unsigned-byte `indices` and the bytes
+    /// `values` in buffer views of their own.
+    fn sparse(&mut self, accessor: usize, count: usize, indices: &[u8], values: &[u8]) {
+        let (i, v) = (self.view(indices), self.view(values));
+        self.accessors[accessor]["sparse"] = json!({
+            "count": count,
+            "indices": {"bufferView": i, "componentType": 5121},
+            "values": {"bufferView": v},
+        });
     }
 }
 
@@ -234,7 +234,8 @@ fn glb_and_external_buffer_give_the_same_scene_as_a_data_uri() {
     let dir = tempfile::tempdir().unwrap();
     let model = room();
     let reference = import_file(&model.write(dir.path(), "a.gltf"), ImportOptions::default()).scene;
-    for path in [model.write_with_bin(dir.path(), "b.gltf", "b.bin"), write(dir.path(), "c.glb", model.glb())] {
+    for path in [model.write_with_bin(dir.path(), "b.gltf", "b.bin", "b.bin"), write(dir.path(), "c.glb", model.glb())]
+    {
         let scene = import_file(&path, ImportOptions::default()).scene;
         assert_eq!(scene.instances.len(), reference.instances.len());
         assert_eq!(scene.triangle_count(), reference.triangle_count());
@@ -415,7 +416,7 @@ fn glb_header_claiming_2_gb_is_an_error_without_allocating_it() {
 #[test]
 fn gltf_with_a_missing_buffer_file_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
-    let path = room().write_with_bin(dir.path(), "room.gltf", "room.bin");
+    let path = room().write_with_bin(dir.path(), "room.gltf", "room.bin", "room.bin");
     std::fs::remove_file(dir.path().join("room.bin")).unwrap();
     let (e, message) = error(&path);
     assert!(matches!(e, LoadError::MissingFile { .. }), "{e:?}");
@@ -506,4 +507,280 @@ fn unknown_names_and_missing_files_are_errors() {
     assert!(message.contains("teapots") && message.contains(".glb") && message.contains(".obj"), "{message}");
     let (e, _) = error(&dir.path().join("absent.glb"));
     assert!(matches!(e, LoadError::Io { .. }), "{e:?}");
+}
+
+#[test]
+fn percent_encoded_buffer_uris_name_their_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = room();
+    let reference = import_file(&model.write(dir.path(), "a.gltf"), ImportOptions::default()).scene;
+    for (name, file, uri) in [
+        ("spaced.gltf", "my buffer (1).bin", "my%20buffer%20%281%29.bin"),
+        ("umlaut.gltf", "bär.bin", "b%C3%a4r.bin"),
+        ("plain.gltf", "50%.bin", "50%25.bin"),
+    ] {
+        let scene = import_file(&model.write_with_bin(dir.path(), name, file, uri), ImportOptions::default()).scene;
+        assert_eq!(scene.triangle_count(), reference.triangle_count(), "{uri}");
+        assert_eq!(scene.bounds(), reference.bounds(), "{uri}");
+    }
+    // Escapes are decoded, not taken literally: the file of that literal name is not read.
+    std::fs::write(dir.path().join("x%41.bin"), &model.bin).unwrap();
+    let (e, message) = error(&model.write_with_bin(dir.path(), "literal.gltf", "x%41.bin", "x%41.bin"));
+    assert!(matches!(e, LoadError::MissingFile { .. }), "{e:?}");
+    assert!(message.contains("xA.bin"), "{message}");
+}
+
+#[test]
+fn bad_percent_escapes_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = room();
+    for (name, uri, escape) in [
+        ("zz.gltf", "my%zzbuffer.bin", "'%zz' at byte 2"),
+        ("end.gltf", "buffer.bin%", "'%' at byte 10"),
+        ("short.gltf", "buffer.bin%4", "'%4' at byte 10"),
+        ("sign.gltf", "%+1buffer.bin", "'%+1' at byte 0"),
+    ] {
+        let (e, message) = error(&model.write_with_bin(dir.path(), name, "buffer.bin", uri));
+        assert!(matches!(e, LoadError::Invalid { .. }), "{e:?}");
+        assert!(message.contains(&format!("buffer 0: its URI '{uri}' has a bad percent escape {escape}")), "{message}");
+    }
+    let (_, message) = error(&model.write_with_bin(dir.path(), "latin1.gltf", "buffer.bin", "b%E4r.bin"));
+    assert!(message.contains("'b%E4r.bin' decodes to bytes that are not UTF-8"), "{message}");
+}
+
+/// Writes `g` as `dir/name` with one mesh at the root drawing its accessor 0
+/// as positions (no indices).
+fn write_over_accessor_0(mut g: Gltf, dir: &Path, name: &str) -> PathBuf {
+    let mesh = g.mesh(vec![json!({"attributes": {"POSITION": 0}})]);
+    g.root(json!({ "mesh": mesh }));
+    g.write(dir, name)
+}
+
+/// The positions of the one mesh of [`write_over_accessor_0`], imported.
+fn positions_of_accessor_0(g: Gltf, dir: &Path, name: &str) -> Vec<Vec3> {
+    let scene = import_file(&write_over_accessor_0(g, dir, name), options(0, AutoPath::Orbit)).scene;
+    assert_eq!(scene.meshes.len(), 1);
+    scene.meshes[0].positions.clone()
+}
+
+fn floats(values: &[[f32; 3]]) -> Vec<u8> {
+    values.iter().flatten().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+#[test]
+fn sparse_accessors_override_their_base_or_zeros() {
+    let dir = tempfile::tempdir().unwrap();
+    // On a base from a buffer view: vertices 1 and 4 of six move.
+    let mut g = Gltf::default();
+    let base: Vec<[f32; 3]> = (0..6).map(|k| [k as f32, 0.0, 0.0]).collect();
+    g.positions(&base);
+    g.sparse(0, 2, &[1, 4], &floats(&[[1.0, 5.0, 0.0], [4.0, 0.0, 7.0]]));
+    let mut expected: Vec<Vec3> = base.iter().map(|&p| Vec3::from(p)).collect();
+    expected[1] = Vec3::new(1.0, 5.0, 0.0);
+    expected[4] = Vec3::new(4.0, 0.0, 7.0);
+    assert_eq!(positions_of_accessor_0(g, dir.path(), "on_view.gltf"), expected);
+
+    // On zeros: an accessor without a buffer view.
+    let mut g = Gltf::default();
+    g.accessor(json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}));
+    g.sparse(0, 2, &[1, 2], &floats(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]));
+    assert_eq!(positions_of_accessor_0(g, dir.path(), "on_zeros.gltf"), [Vec3::ZERO, Vec3::X, Vec3::Y]);
+
+    // On indices: the same substitution for every element type.
+    let mut g = Gltf::default();
+    let quad = g.positions(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]);
+    let indices = g.indices(&[0, 1, 2, 0, 1, 2]);
+    g.sparse(indices, 2, &[4, 5], &[3, 0, 2, 0]);
+    let mesh = g.mesh(vec![json!({"attributes": {"POSITION": quad}, "indices": indices})]);
+    g.root(json!({ "mesh": mesh }));
+    let scene = import_file(&g.write(dir.path(), "indices.gltf"), options(0, AutoPath::Orbit)).scene;
+    assert_eq!(scene.meshes[0].indices, [0, 1, 2, 0, 3, 2]);
+}
+
+#[test]
+fn malformed_sparse_accessors_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = || {
+        let mut g = Gltf::default();
+        g.positions(&CUBE_POSITIONS);
+        g
+    };
+    let two = floats(&[[0.0; 3], [1.0; 3]]);
+    let without_view = |g: &mut Gltf| {
+        g.accessors[0].as_object_mut().unwrap().remove("bufferView");
+        g.accessors[0]["count"] = json!(3_000_000_000u64);
+        g.sparse(0, 2, &[1, 2], &two);
+    };
+    type Damage<'a> = Box<dyn Fn(&mut Gltf) + 'a>;
+    let cases: [(&str, Damage, &str); 6] = [
+        (
+            "range.gltf",
+            Box::new(|g| g.sparse(0, 2, &[1, 8], &two)),
+            "accessor 0: sparse index 8 (substitution 1) is out of range: the accessor has 8 elements",
+        ),
+        (
+            "count.gltf",
+            Box::new(|g| g.sparse(0, 9, &[0; 9], &floats(&[[0.0; 3]; 9]))),
+            "accessor 0 has a sparse count of 9, more than its 8 elements",
+        ),
+        (
+            "order.gltf",
+            Box::new(|g| g.sparse(0, 2, &[3, 3], &two)),
+            "accessor 0: sparse index 3 (substitution 1) does not increase",
+        ),
+        (
+            "indices.gltf",
+            Box::new(|g| g.sparse(0, 3, &[1, 2], &floats(&[[0.0; 3]; 3]))),
+            "accessor 0: its sparse indices reads 3 elements of 1 bytes from byte 0 but buffer view 1 has only 2",
+        ),
+        (
+            "values.gltf",
+            Box::new(|g| g.sparse(0, 2, &[1, 2], &two[..20])),
+            "accessor 0: its sparse values reads 2 elements of 12 bytes from byte 0 but buffer view 2 has only 20",
+        ),
+        ("zeros.gltf", Box::new(without_view), "accessor 0 has no buffer view and claims 3000000000 elements of zeros"),
+    ];
+    for (name, damage, problem) in cases {
+        let mut g = cube();
+        damage(&mut g);
+        let (e, message) = error(&write_over_accessor_0(g, dir.path(), name));
+        assert!(matches!(e, LoadError::Invalid { .. }), "{name}: {e:?}");
+        assert!(message.contains(problem), "{name}: {message}");
+    }
+}
+
+#[test]
+fn exported_scenes_import_as_they_were() {
+    for scene in [occlude_scenes::generate("city", Size::Small, 1).unwrap(), building::generate(2, 2, 7)] {
+        let glb = export::glb(&scene);
+        let imported = import_bytes(Path::new("export.glb"), &glb, ModelFormat::Glb, &options(0, AutoPath::Orbit));
+        let back = imported.unwrap_or_else(|e| panic!("{}: {e}", scene.name)).scene;
+        assert_eq!(back.instances.len(), scene.instances.len(), "{}", scene.name);
+        assert_eq!(back.material_count, scene.material_count, "{}", scene.name);
+        assert_eq!(back.triangle_count(), scene.triangle_count(), "{}", scene.name);
+        for (a, b) in scene.instances.iter().zip(&back.instances) {
+            assert_eq!((a.transform, a.material, a.bounds), (b.transform, b.material, b.bounds), "{}", scene.name);
+            let (ma, mb) = (&scene.meshes[a.mesh as usize], &back.meshes[b.mesh as usize]);
+            assert_eq!((&ma.positions, &ma.indices), (&mb.positions, &mb.indices), "{}", scene.name);
+        }
+    }
+}
+
+#[test]
+fn generated_building_is_walked_from_room_to_room_on_its_ground_floor() {
+    let scene = building::generate(2, 3, 1);
+    assert!(scene.instances.len() > 100 && scene.triangle_count() > 30_000, "{} instances", scene.instances.len());
+    let path = Path::new("building.glb");
+    let imported = import_bytes(path, &export::glb(&scene), ModelFormat::Glb, &options(0, AutoPath::Walk)).unwrap();
+    assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
+    let keys = &imported.scene.path.keyframes;
+    let visited = Aabb::from_points(keys.iter().map(|k| &k.position));
+    assert!(visited.extent().max_element() > 6.0, "the walk leaves the first 5 m room: {visited:?}");
+    assert!(keys.iter().all(|k| (k.position.y - (1.7 - 0.2)).abs() < 1e-4), "eye height over the ground slab");
+}
+
+/// Found by fuzzing: the `gltf` crate's validation panicked on a POSITION
+/// accessor index past the accessors.
+#[test]
+fn position_accessor_that_does_not_exist_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = room();
+    g.meshes[0]["primitives"][0]["attributes"]["POSITION"] = json!(99);
+    for path in [g.write(dir.path(), "position.gltf"), write(dir.path(), "position.glb", g.glb())] {
+        let (e, message) = error(&path);
+        assert!(matches!(e, LoadError::Malformed { .. }), "{e:?}");
+        assert!(
+            message.contains("mesh 0 primitive 0: its POSITION accessor 99 does not exist: there are 6"),
+            "{message}"
+        );
+    }
+}
+
+/// Found by fuzzing: positions or transforms of about 1e31 m are finite, but
+/// the automatic path around them was not. Placements beyond 1e9 m from the
+/// origin are an error naming the node or object; 1e8 m still imports.
+#[test]
+fn models_reaching_beyond_1e9_metres_are_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let far = |name: &str, node: Value| {
+        let mut g = Gltf::default();
+        let cube = g.cube(None);
+        g.root(json!({ "mesh": cube }));
+        let mut node = node;
+        node["mesh"] = json!(cube);
+        g.root(node);
+        g.write(dir.path(), name)
+    };
+    let near = import_file(&far("near.gltf", json!({"translation": [1e8, 0, 0]})), ImportOptions::default());
+    assert!(near.scene.path.keyframes.iter().all(|k| k.position.is_finite()));
+    for (name, node) in [
+        ("scaled.gltf", json!({"scale": [1e30, 1, 1]})),
+        ("moved.gltf", json!({"translation": [0, -2e9, 0]})),
+        ("overflow.gltf", json!({"scale": [1e30, 1, 1], "translation": [3e38, 0, 0]})),
+    ] {
+        let (e, message) = error(&far(name, node));
+        assert!(matches!(e, LoadError::Invalid { .. }), "{e:?}");
+        assert!(message.contains("node 1: its world box reaches") && message.contains("beyond the 1e9 m"), "{message}");
+    }
+    let (_, message) = error(&write(dir.path(), "far.obj", "o far\nv 0 0 0\nv 1 0 0\nv 0 4e31 0\nf 1 2 3\n"));
+    assert!(message.contains("object 'far': its world box reaches 4e31 m"), "{message}");
+}
+
+/// Found by fuzzing: an OBJ object without faces became an instance with an
+/// empty (infinite) box. Objects and primitives without triangles are left
+/// out.
+#[test]
+fn objects_without_triangles_are_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\no lines\nl 1 2\no points\np 3\no triangle\nf 1 2 3\n";
+    let mut g = Gltf::default();
+    let (two, three) = (g.primitive(&CUBE_POSITIONS, &[0, 1], None), g.primitive(&CUBE_POSITIONS, &[0, 1, 2], None));
+    let mesh = g.mesh(vec![two, three]);
+    g.root(json!({ "mesh": mesh }));
+    for path in [write(dir.path(), "lines.obj", obj), g.write(dir.path(), "short.gltf")] {
+        let scene = import_file(&path, ImportOptions::default()).scene;
+        assert_eq!(scene.instances.len(), 1, "{}", path.display());
+        assert_eq!(scene.meshes.len(), 1, "{}", path.display());
+        assert!(!scene.instances[0].bounds.is_empty() && scene.instances[0].bounds.is_finite());
+    }
+}
+
+#[test]
+fn interleaved_positions_are_read_with_their_stride_and_offset() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    // Each vertex: 4 bytes of something else, then its position; the view
+    // ends with the last position.
+    let bytes: Vec<u8> = quad.iter().flat_map(|p| [7.0f32, p[0], p[1], p[2]]).flat_map(f32::to_le_bytes).collect();
+    let view = g.view(&bytes);
+    g.views[view]["byteStride"] = json!(16);
+    g.accessor(json!({"bufferView": view, "byteOffset": 4, "componentType": 5126, "count": 4, "type": "VEC3",
+                      "min": [0, 0, 0], "max": [1, 1, 0]}));
+    let positions = positions_of_accessor_0(g, dir.path(), "interleaved.gltf");
+    assert_eq!(positions, quad.map(Vec3::from));
+}
+
+/// Accessors without a buffer view are zeros that no byte of the file pays
+/// for: together they may have at most 2^22 elements, so a small file cannot
+/// make the importer allocate gigabytes.
+#[test]
+fn zeros_without_bytes_are_capped_per_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    let substitutes = floats(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+    for _ in 0..2 {
+        let zeros =
+            json!({"componentType": 5126, "count": 3_000_000, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]});
+        let a = g.accessor(zeros);
+        g.sparse(a, 2, &[1, 2], &substitutes);
+    }
+    let triangle = g.indices(&[0, 1, 2]);
+    let primitives = (0..2).map(|p| json!({"attributes": {"POSITION": p}, "indices": triangle})).collect();
+    let mesh = g.mesh(primitives);
+    g.root(json!({ "mesh": mesh }));
+    let (e, message) = error(&g.write(dir.path(), "zeros.gltf"));
+    assert!(matches!(e, LoadError::Invalid { .. }), "{e:?}");
+    let problem = "mesh 0 primitive 1: accessor 1 has no buffer view and claims 3000000 elements of zeros";
+    assert!(message.contains(problem) && message.contains("(1194304 left)"), "{message}");
 }

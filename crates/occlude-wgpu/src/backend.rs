@@ -131,6 +131,26 @@ impl<'s> WgpuBackend<'s> {
         &self.gpu.ctx
     }
 
+    /// The colour image of the last frame (format [`crate::COLOR_FORMAT`],
+    /// the backend's size), for a viewer to draw to a window or to draw over
+    /// after `end_frame`; the next frame clears it.
+    pub fn color_view(&self) -> &wgpu::TextureView {
+        &self.target.color_view
+    }
+
+    /// The colour image of the last frame as RGBA8 rows, row 0 at the top,
+    /// after everything submitted so far (blocking; outside the frame's
+    /// clock): a screenshot.
+    pub fn color_image(&mut self) -> Result<Vec<u8>, String> {
+        self.settle();
+        self.target.read_color(&self.gpu.ctx)
+    }
+
+    /// Width and height of the render target in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.target.width, self.target.height)
+    }
+
     /// Pixels of the image: what a query that cannot be answered reports, so
     /// that a failure never hides geometry.
     fn all_pixels(&self) -> u64 {

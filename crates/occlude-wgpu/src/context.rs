@@ -8,8 +8,9 @@ use std::sync::{Arc, Mutex};
 pub enum GpuError {
     /// No adapter at all (no driver, no GPU, no software Vulkan).
     #[error(
-        "no GPU adapter found ({0}). Use --backend soft (the default), or install a Vulkan driver; \
-         on Debian, `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan"
+        "no GPU adapter found ({0}). Install a Vulkan driver (on Debian, `apt-get install \
+         mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan), or benchmark without a GPU: \
+         `occlude bench --backend soft` (the default)"
     )]
     NoAdapter(String),
     /// The adapter exists but refused to open a device.

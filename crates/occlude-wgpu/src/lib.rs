@@ -20,4 +20,4 @@ mod target;
 
 pub use backend::WgpuBackend;
 pub use context::{GpuContext, GpuError};
-pub use scene_buffers::GpuScene;
+pub use scene_buffers::{GpuScene, COLOR_FORMAT};

@@ -12,8 +12,9 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
-/// Colour target format of the backend's off-screen render target.
-pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Colour target format of the backend's off-screen render target (what a
+/// viewer drawing over [`crate::WgpuBackend::color_view`] must render to).
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 /// Where a mesh lies in the index and vertex pools.
 #[derive(Clone, Copy, Debug)]

@@ -1,5 +1,5 @@
-//! The `occlude` tool as a library: the benchmark runner and its reports, so
-//! that tests drive exactly what the command line runs.
+//! The `occlude` tool as a library: the benchmark runner and its reports, and
+//! the viewer, so that tests drive exactly what the command line runs.
 
 #![warn(missing_docs)]
 
@@ -7,3 +7,4 @@ pub mod bench;
 pub mod calibrate;
 pub mod report;
 pub mod scenes;
+pub mod view;

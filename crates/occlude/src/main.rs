@@ -1,6 +1,7 @@
 //! The `occlude` command line: `bench` compares culling methods on a scene
-//! and walkthrough, `report` turns its JSON into an HTML (and Markdown)
-//! report, `scenes` lists the procedural scenes.
+//! and walkthrough, `view` flies through it in a window, `report` turns
+//! bench JSON into an HTML (and Markdown) report, `scenes` lists the
+//! procedural scenes.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -33,6 +34,9 @@ enum Command {
     /// Measure this GPU's costs through the wgpu backend and write a GPU model
     /// (TOML) for the soft backend's simulated clock.
     Calibrate(CalibrateArgs),
+    /// Fly through a scene in a window with any method on the GPU, its
+    /// statistics shown, and its query boxes on key V (CHC paper, Figure 4).
+    View(Box<ViewArgs>),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         /// Sizes to list: small, medium, paper or all.
@@ -44,8 +48,10 @@ enum Command {
     },
 }
 
+/// The scene, hierarchy and method parameters: options `bench` and `view`
+/// share.
 #[derive(clap::Args)]
-struct BenchArgs {
+struct SceneArgs {
     /// Scene: teapots, city, plant or figures, or a model file (.gltf, .glb, .obj;
     /// y-up, metres).
     #[arg(long, default_value = "city")]
@@ -68,15 +74,6 @@ struct BenchArgs {
     /// Seed of the procedural generator.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Comma-separated methods, in table order.
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from))]
-    methods: Vec<String>,
-    /// Frames sampled along the walkthrough.
-    #[arg(long, default_value_t = 300)]
-    frames: usize,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
-    resolution: (u32, u32),
     /// Hierarchy: bvh or kdtree.
     #[arg(long, default_value = "bvh")]
     hierarchy: HierarchyKind,
@@ -86,6 +83,41 @@ struct BenchArgs {
     /// Method parameter, method.key=value (repeatable), e.g. chc.tav=2.
     #[arg(long = "method-opt", value_name = "METHOD.KEY=VALUE")]
     method_opt: Vec<String>,
+}
+
+impl SceneArgs {
+    /// A configuration with these settings checked and every other one at
+    /// its default; a bad value is the user's (exit code 2).
+    fn config(&self) -> Result<BenchConfig, Failure> {
+        let usage = Failure::Usage;
+        SceneSource::resolve(&self.scene).map_err(|e| usage(e.into()))?;
+        Ok(BenchConfig {
+            scene: self.scene.clone(),
+            size: self.size.parse::<Size>().map_err(|e| usage(e.into()))?,
+            seed: self.seed,
+            hierarchy: self.hierarchy,
+            build: BuildOptions { leaf_size: self.leaf_size, ..BuildOptions::default() },
+            options: MethodOptions::parse(&self.method_opt).map_err(|e| usage(e.into()))?,
+            import: ImportOptions { split_triangles: self.split_triangles, auto_path: self.auto_path },
+            camera_path: self.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
+            ..BenchConfig::default()
+        })
+    }
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Comma-separated methods, in table order.
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from))]
+    methods: Vec<String>,
+    /// Frames sampled along the walkthrough.
+    #[arg(long, default_value_t = 300)]
+    frames: usize,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
+    resolution: (u32, u32),
     /// Backend: soft (exact CPU rasterizer, simulated GPU clock) or wgpu (a
     /// real GPU; times measured).
     #[arg(long, default_value = "soft")]
@@ -120,6 +152,36 @@ struct BenchArgs {
     /// Folder for the --dump-frame PNGs (created if missing).
     #[arg(long, value_name = "DIR", default_value = ".")]
     dump_dir: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The method shown first (keys 1-6 and M switch).
+    #[arg(long, default_value = occlude::view::DEFAULT_METHOD)]
+    method: String,
+    /// Window size, WIDTHxHEIGHT (the screenshot's size).
+    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
+    resolution: (u32, u32),
+    /// Play the walkthrough from the start (key P).
+    #[arg(long)]
+    play: bool,
+    /// Show the query boxes, green visible and red occluded, from the first
+    /// frame (key V).
+    #[arg(long)]
+    figure4: bool,
+    /// Render --frames frames (along the walkthrough with --play, else of the
+    /// first view), save the last as this PNG and exit.
+    #[arg(long, value_name = "FILE.png")]
+    screenshot: Option<PathBuf>,
+    /// Frames rendered before --screenshot.
+    #[arg(long, default_value_t = 60)]
+    frames: usize,
+    /// Where key R writes the recorded camera path (JSON for
+    /// `bench --camera-path`).
+    #[arg(long, value_name = "FILE", default_value = occlude::view::DEFAULT_RECORD_FILE)]
+    record: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -177,14 +239,17 @@ enum Failure {
 
 /// A failed run is the user's input when a model file could not be imported
 /// (the scene is loaded in the run, not in `configure`, so as to read a large
-/// model once) or `--backend wgpu` found no GPU adapter: exit code 2 like any
-/// bad argument; anything else exit code 1.
+/// model once), `--backend wgpu` or `view` found no GPU adapter, or `view`
+/// found no display: exit code 2 like any bad argument; anything else exit
+/// code 1.
 fn run_failure(e: anyhow::Error) -> Failure {
     let no_adapter = |c: &(dyn std::error::Error + 'static)| {
         matches!(c.downcast_ref::<occlude_wgpu::GpuError>(), Some(occlude_wgpu::GpuError::NoAdapter(_)))
     };
     let input = |c: &(dyn std::error::Error + 'static)| {
-        c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error) || no_adapter(c)
+        c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)
+            || no_adapter(c)
+            || c.is::<occlude::view::ViewError>()
     };
     if e.chain().any(input) {
         Failure::Usage(e)
@@ -195,22 +260,14 @@ fn run_failure(e: anyhow::Error) -> Failure {
 
 fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     let usage = Failure::Usage;
-    SceneSource::resolve(&args.scene).map_err(|e| usage(e.into()))?;
     let config = BenchConfig {
-        scene: args.scene.clone(),
-        size: args.size.parse::<Size>().map_err(|e| usage(e.into()))?,
-        seed: args.seed,
         methods: args.methods.iter().map(|m| m.trim().to_string()).collect(),
         frames: args.frames,
         resolution: args.resolution,
-        hierarchy: args.hierarchy,
-        build: BuildOptions { leaf_size: args.leaf_size, ..BuildOptions::default() },
         backend: args.backend,
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
-        options: MethodOptions::parse(&args.method_opt).map_err(|e| usage(e.into()))?,
-        import: ImportOptions { split_triangles: args.split_triangles, auto_path: args.auto_path },
-        camera_path: args.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
         dump_frame: args.dump_frame,
+        ..args.scene.config()?
     };
     config.validate().map_err(usage)?;
     if let Some(paper) = &args.paper {
@@ -330,6 +387,26 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `occlude view`: bad options, no display or no GPU adapter are the user's
+/// (exit code 2).
+fn view(args: &ViewArgs) -> Result<(), Failure> {
+    let config = occlude::view::ViewConfig {
+        scene: BenchConfig {
+            frames: args.frames,
+            resolution: args.resolution,
+            backend: BackendKind::Wgpu,
+            ..args.scene.config()?
+        },
+        method: args.method.trim().to_string(),
+        play: args.play,
+        figure4: args.figure4,
+        screenshot: args.screenshot.clone(),
+        record: args.record.clone(),
+    };
+    config.validate().map_err(Failure::Usage)?;
+    occlude::view::run(&config).map_err(run_failure)
+}
+
 /// `occlude report`: unreadable or malformed input is the user's (exit code
 /// 2); failing to write the output is not (exit code 1).
 fn report(args: &ReportArgs) -> Result<(), Failure> {
@@ -364,6 +441,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(run_failure)),
         Command::Report(args) => report(args),
         Command::Calibrate(args) => calibrate(args),
+        Command::View(args) => view(args),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

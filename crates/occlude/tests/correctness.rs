@@ -1,14 +1,15 @@
-//! The correctness rule of DESIGN.md on every frame of every `small` scene,
-//! for both hierarchies: conservative methods produce view-frustum culling's
-//! depth image bit for bit, and `opt` draws exactly the leaves holding an
-//! instance that the oracle sees.
+//! The correctness rule of DESIGN.md on every frame of every `small` scene
+//! and of an imported building, for both hierarchies: conservative methods
+//! produce view-frustum culling's depth image bit for bit, and `opt` draws
+//! exactly the leaves holding an instance that the oracle sees.
 
 use indicatif::ProgressBar;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
 use occlude_core::methods::{create, DrawnSet, MethodOptions};
 use occlude_core::{Backend, FrameContext, Hierarchy, HierarchyKind, Scene};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::import::{import, ModelFormat};
+use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
 use std::collections::HashSet;
 
@@ -196,6 +197,29 @@ fn chcpp_saves_queries_and_state_changes_over_chc() {
     };
     let queries_nav0: u64 = exact_run(&scene, &every_frame).methods[0].frames.iter().map(|f| f.queries).sum();
     assert!(total(1, |f| f.queries) < queries_nav0, "nav=10 should query less than nav=0");
+}
+
+/// An imported model with real occlusion: the generated building (two
+/// floors of two by two rooms, furnished) written as GLB and imported with its
+/// automatic walk, as `occlude bench --scene building.glb --auto-path walk`
+/// would. Every conservative method is exact, walls and ceilings hide most
+/// of what is in the frustum, and CHC++ renders less than view-frustum
+/// culling.
+#[test]
+fn conservative_methods_match_vfc_on_an_imported_building() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("building.glb");
+    std::fs::write(&path, export::glb(&building::generate(2, 2, 1))).unwrap();
+    let options = ImportOptions { auto_path: AutoPath::Walk, ..ImportOptions::default() };
+    let imported = import(&path, ModelFormat::Glb, &options).unwrap();
+    assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
+    for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        let run = exact_run(&imported.scene, &config("building.glb", hierarchy));
+        let triangles = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+        let (vfc, chcpp, opt) = (triangles(0), triangles(3), triangles(4));
+        assert!(opt * 2 < vfc, "{hierarchy}: walls and ceilings hide most of it: opt {opt}, vfc {vfc}");
+        assert!(chcpp < vfc, "{hierarchy}: chcpp {chcpp} vs vfc {vfc}");
+    }
 }
 
 #[test]

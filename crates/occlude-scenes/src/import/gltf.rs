@@ -5,9 +5,12 @@
 use super::{Builder, LoadError};
 use base64::Engine;
 use glam::{Mat4, Vec3};
+use gltf::accessor::sparse::IndexType;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Accessor, Document, Semantic};
+use std::borrow::Cow;
+use std::cell::Cell;
 use std::collections::hash_map::{Entry, HashMap};
 
 /// GLB chunk type of the JSON chunk (`JSON`, little endian).
@@ -15,17 +18,18 @@ const CHUNK_JSON: u32 = 0x4E4F_534A;
 /// GLB chunk type of the binary chunk (`BIN\0`, little endian).
 const CHUNK_BIN: u32 = 0x004E_4942;
 
-/// Imports the glTF (`binary`: GLB) file of `builder` into it: the default
-/// scene (else the first, else every root node), its node tree flattened into
-/// instances with world transforms. A glTF mesh used by several nodes is read
-/// once and instanced. Material ids are glTF material indices; primitives
-/// without a material share the id after the last. Triangle strips and fans
-/// become triangle lists; points and lines are skipped with a warning.
-pub(super) fn import(builder: &mut Builder, binary: bool) -> Result<(), LoadError> {
-    let bytes = std::fs::read(&builder.path).map_err(|reason| LoadError::Io { path: builder.path.clone(), reason })?;
-    let (json, blob) = if binary { glb_chunks(builder, &bytes)? } else { (&bytes[..], None) };
+/// Imports glTF (`binary`: GLB) `bytes`, the file of `builder`, into it: the
+/// default scene (else the first, else every root node), its node tree
+/// flattened into instances with world transforms. A glTF mesh used by
+/// several nodes is read once and instanced. Material ids are glTF material
+/// indices; primitives without a material share the id after the last.
+/// Triangle strips and fans become triangle lists; points and lines are
+/// skipped with a warning.
+pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Result<(), LoadError> {
+    let (json, blob) = if binary { glb_chunks(builder, bytes)? } else { (bytes, None) };
     let format = if binary { "GLB" } else { "glTF" };
     let root = gltf::json::Root::from_slice(json).map_err(|e| builder.malformed(format, e.to_string()))?;
+    check_position_accessors(&root).map_err(|e| builder.malformed(format, e))?;
     let document = Document::from_json(root).map_err(|e| builder.malformed(format, e.to_string()))?;
     let buffers = load_buffers(builder, &document, blob)?;
     let default_material = document.materials().len() as u32;
@@ -57,10 +61,32 @@ pub(super) fn import(builder: &mut Builder, binary: bool) -> Result<(), LoadErro
                 Entry::Vacant(entry) => entry.insert(read_mesh(builder, &mesh, &buffers, default_material)?),
             };
             for (parts, material) in parts.iter() {
-                builder.place(parts, world, *material);
+                builder.place(&format!("node {}", node.index()), parts, world, *material)?;
             }
         }
         stack.extend(node.children().collect::<Vec<_>>().into_iter().rev().map(|c| (c, world)));
+    }
+    Ok(())
+}
+
+/// Checks that the POSITION accessor of every primitive exists. The `gltf`
+/// crate's validation (1.4.1) looks it up without checking and panics on an
+/// index past the accessors (found by fuzzing), so this runs before it.
+fn check_position_accessors(root: &gltf::json::Root) -> Result<(), String> {
+    let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            match primitive.attributes.get(&position) {
+                Some(index) if index.value() >= root.accessors.len() => {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: its POSITION accessor {} does not exist: there are {} accessors",
+                        index.value(),
+                        root.accessors.len()
+                    ))
+                }
+                _ => {}
+            }
+        }
     }
     Ok(())
 }
@@ -110,19 +136,27 @@ fn glb_chunks<'b>(builder: &Builder, bytes: &'b [u8]) -> Result<(&'b [u8], Optio
     }
 }
 
+/// The bytes of a file's buffers, and how many more elements accessors
+/// without a buffer view may fill with zeros (see [`MAX_ZERO_ELEMENTS`]).
+struct Buffers<'b> {
+    /// Per glTF buffer, its bytes.
+    bytes: Vec<Cow<'b, [u8]>>,
+    /// What is left of [`MAX_ZERO_ELEMENTS`].
+    zeros_left: Cell<usize>,
+}
+
 /// The bytes of every buffer of `document`: the GLB binary chunk, a base64
-/// data URI, or a file beside the model; each at least its declared length.
-fn load_buffers(builder: &Builder, document: &Document, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, LoadError> {
-    document
+/// data URI, or a file beside the model (its URI percent-decoded); each at
+/// least its declared length.
+fn load_buffers<'b>(builder: &Builder, document: &Document, blob: Option<&'b [u8]>) -> Result<Buffers<'b>, LoadError> {
+    let bytes = document
         .buffers()
         .map(|buffer| {
             let i = buffer.index();
-            let data = match buffer.source() {
-                gltf::buffer::Source::Bin => blob
-                    .ok_or_else(|| {
-                        builder.invalid(format!("buffer {i} refers to the GLB binary chunk, which is missing"))
-                    })?
-                    .to_vec(),
+            let data: Cow<[u8]> = match buffer.source() {
+                gltf::buffer::Source::Bin => Cow::Borrowed(blob.ok_or_else(|| {
+                    builder.invalid(format!("buffer {i} refers to the GLB binary chunk, which is missing"))
+                })?),
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                     let (_, payload) = uri
                         .split_once(";base64,")
@@ -130,14 +164,14 @@ fn load_buffers(builder: &Builder, document: &Document, blob: Option<&[u8]>) -> 
                     base64::engine::general_purpose::STANDARD
                         .decode(payload)
                         .map_err(|e| builder.invalid(format!("buffer {i}: bad base64 data URI: {e}")))?
+                        .into()
                 }
                 gltf::buffer::Source::Uri(uri) => {
-                    let file = builder.path.parent().unwrap_or(std::path::Path::new("")).join(uri);
-                    std::fs::read(&file).map_err(|reason| LoadError::MissingFile {
-                        path: builder.path.clone(),
-                        file,
-                        reason,
-                    })?
+                    let relative = percent_decode(uri).map_err(|e| builder.invalid(format!("buffer {i}: {e}")))?;
+                    let file = builder.path.parent().unwrap_or(std::path::Path::new("")).join(relative);
+                    std::fs::read(&file)
+                        .map_err(|reason| LoadError::MissingFile { path: builder.path.clone(), file, reason })?
+                        .into()
                 }
             };
             if data.len() < buffer.length() {
@@ -149,7 +183,36 @@ fn load_buffers(builder: &Builder, document: &Document, blob: Option<&[u8]>) -> 
             }
             Ok(data)
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    Ok(Buffers { bytes, zeros_left: Cell::new(MAX_ZERO_ELEMENTS) })
+}
+
+/// `uri` with its percent escapes decoded (`my%20buffer.bin` is the file
+/// `my buffer.bin`): glTF URIs are RFC 3986 references. An escape that is not
+/// `%` and two hex digits, or bytes that are not UTF-8, are an error.
+fn percent_decode(uri: &str) -> Result<String, String> {
+    let bytes = uri.as_bytes();
+    let mut decoded = Vec::with_capacity(bytes.len());
+    let mut at = 0;
+    while at < bytes.len() {
+        if bytes[at] != b'%' {
+            decoded.push(bytes[at]);
+            at += 1;
+            continue;
+        }
+        let digit = |k: usize| bytes.get(at + k).and_then(|&b| (b as char).to_digit(16));
+        match (digit(1), digit(2)) {
+            (Some(high), Some(low)) => decoded.push((high * 16 + low) as u8),
+            _ => {
+                let escape = String::from_utf8_lossy(&bytes[at..bytes.len().min(at + 3)]);
+                return Err(format!(
+                    "its URI '{uri}' has a bad percent escape '{escape}' at byte {at}: expected '%' and two hex digits"
+                ));
+            }
+        }
+        at += 3;
+    }
+    String::from_utf8(decoded).map_err(|_| format!("its URI '{uri}' decodes to bytes that are not UTF-8"))
 }
 
 /// Reads every triangle primitive of `mesh` as meshes of `builder`, with its
@@ -157,7 +220,7 @@ fn load_buffers(builder: &Builder, document: &Document, blob: Option<&[u8]>) -> 
 fn read_mesh(
     builder: &mut Builder,
     mesh: &gltf::Mesh,
-    buffers: &[Vec<u8>],
+    buffers: &Buffers,
     default_material: u32,
 ) -> Result<Vec<(Vec<u32>, u32)>, LoadError> {
     let mut parts = Vec::new();
@@ -201,26 +264,104 @@ fn triangle_list(mode: Mode, indices: Vec<u32>) -> Vec<u32> {
     }
 }
 
-/// The elements of `accessor`: one byte slice per element, bounds checked.
-fn elements<'b>(accessor: &Accessor, buffers: &'b [Vec<u8>]) -> Result<Vec<&'b [u8]>, String> {
+/// Most elements that the accessors of a file without a buffer view (sparse
+/// on a base of zeros) may have together. Their counts are the only sizes
+/// taken from a file without bytes behind them, so they are capped: 2^22
+/// elements, 48 MiB of positions.
+const MAX_ZERO_ELEMENTS: usize = 1 << 22;
+
+/// The elements of `accessor`, each decoded by `decode` from its
+/// `accessor.size()` bytes: read from its buffer view, or `zero` for each
+/// where it has none, then overridden by its sparse substitutions (glTF 2.0,
+/// section 3.6.2.3). Every byte range and sparse index is checked.
+fn read_accessor<T: Copy>(
+    accessor: &Accessor,
+    buffers: &Buffers,
+    zero: T,
+    decode: impl Fn(&[u8]) -> T,
+) -> Result<Vec<T>, String> {
     let a = accessor.index();
-    if accessor.sparse().is_some() {
-        return Err(format!("accessor {a} is sparse, which is not supported"));
+    let (count, size) = (accessor.count(), accessor.size());
+    let mut values: Vec<T> = match accessor.view() {
+        Some(view) => {
+            let stride = view.stride().unwrap_or(size);
+            if stride < size {
+                return Err(format!(
+                    "buffer view {} has a stride of {stride} bytes, less than its {size}-byte elements",
+                    view.index()
+                ));
+            }
+            strided(&view, &buffers.bytes, accessor.offset(), count, size, stride)
+                .map_err(|e| format!("accessor {a} {e}"))?
+                .map(&decode)
+                .collect()
+        }
+        None => {
+            let left = buffers.zeros_left.get();
+            if count > left {
+                return Err(format!(
+                    "accessor {a} has no buffer view and claims {count} elements of zeros; a file may fill at most \
+                     {MAX_ZERO_ELEMENTS} elements without bytes behind them ({left} left)"
+                ));
+            }
+            buffers.zeros_left.set(left - count);
+            vec![zero; count]
+        }
+    };
+    if let Some(sparse) = accessor.sparse() {
+        let substitutions = sparse.count();
+        if substitutions > count {
+            return Err(format!("accessor {a} has a sparse count of {substitutions}, more than its {count} elements"));
+        }
+        let indices = sparse.indices();
+        let (index_size, index): (usize, fn(&[u8]) -> u32) = match indices.index_type() {
+            IndexType::U8 => (1, unsigned::<1>),
+            IndexType::U16 => (2, unsigned::<2>),
+            IndexType::U32 => (4, unsigned::<4>),
+        };
+        let indices = strided(&indices.view(), &buffers.bytes, indices.offset(), substitutions, index_size, index_size)
+            .map_err(|e| format!("accessor {a}: its sparse indices {e}"))?;
+        let substitutes = sparse.values();
+        let substitutes = strided(&substitutes.view(), &buffers.bytes, substitutes.offset(), substitutions, size, size)
+            .map_err(|e| format!("accessor {a}: its sparse values {e}"))?;
+        let mut previous = None;
+        for (k, (index, value)) in indices.map(index).zip(substitutes).enumerate() {
+            let i = index as usize;
+            if i >= count {
+                return Err(format!(
+                    "accessor {a}: sparse index {index} (substitution {k}) is out of range: the accessor has {count} \
+                     elements"
+                ));
+            }
+            if previous.is_some_and(|p| i <= p) {
+                return Err(format!(
+                    "accessor {a}: sparse index {index} (substitution {k}) does not increase on the one before; \
+                     sparse indices must strictly increase"
+                ));
+            }
+            previous = Some(i);
+            values[i] = decode(value);
+        }
     }
-    let view = accessor.view().ok_or_else(|| format!("accessor {a} has no buffer view"))?;
-    let size = accessor.size();
-    let stride = view.stride().unwrap_or(size);
-    if stride < size {
-        return Err(format!(
-            "buffer view {} has a stride of {stride} bytes, less than its {size}-byte elements",
-            view.index()
-        ));
-    }
+    Ok(values)
+}
+
+/// `count` elements of `size` bytes, `stride` bytes apart, from byte `offset`
+/// of buffer `view`; the error says what does not fit (to follow the name of
+/// what is read, "accessor 3 ...").
+fn strided<'b>(
+    view: &gltf::buffer::View,
+    buffers: &'b [Cow<[u8]>],
+    offset: usize,
+    count: usize,
+    size: usize,
+    stride: usize,
+) -> Result<impl Iterator<Item = &'b [u8]> + 'b, String> {
     let buffer = &buffers[view.buffer().index()];
     let view_bytes =
         view.offset().checked_add(view.length()).and_then(|end| buffer.get(view.offset()..end)).ok_or_else(|| {
             format!(
-                "buffer view {} (bytes {} + {}) lies outside buffer {} of {} bytes",
+                "uses buffer view {} (bytes {} + {}), which lies outside buffer {} of {} bytes",
                 view.index(),
                 view.offset(),
                 view.length(),
@@ -228,26 +369,31 @@ fn elements<'b>(accessor: &Accessor, buffers: &'b [Vec<u8>]) -> Result<Vec<&'b [
                 buffer.len()
             )
         })?;
-    let count = accessor.count();
     let needed = count
         .checked_sub(1)
         .map_or(Some(0), |last| last.checked_mul(stride).and_then(|n| n.checked_add(size)))
-        .and_then(|n| n.checked_add(accessor.offset()));
+        .and_then(|n| n.checked_add(offset));
     match needed {
-        Some(n) if n <= view_bytes.len() => {
-            Ok((0..count).map(|i| &view_bytes[accessor.offset() + i * stride..][..size]).collect())
-        }
+        // `count` chunks: all but the last `stride` bytes, the last `size`.
+        Some(n) if n <= view_bytes.len() => Ok(view_bytes[offset..n].chunks(stride).map(move |c| &c[..size])),
         _ => Err(format!(
-            "accessor {a} reads {count} elements of {size} bytes from byte {} but buffer view {} has only {} bytes",
-            accessor.offset(),
+            "reads {count} elements of {size} bytes from byte {offset} but buffer view {} has only {} bytes",
             view.index(),
             view_bytes.len()
         )),
     }
 }
 
+/// A little-endian unsigned integer of `N` bytes (1, 2 or 4: glTF index
+/// types), a function per size so that reading indices inlines it.
+fn unsigned<const N: usize>(bytes: &[u8]) -> u32 {
+    let mut word = [0; 4];
+    word[..N].copy_from_slice(&bytes[..N]);
+    u32::from_le_bytes(word)
+}
+
 /// Positions: an accessor of float VEC3.
-fn read_positions(accessor: &Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>, String> {
+fn read_positions(accessor: &Accessor, buffers: &Buffers) -> Result<Vec<Vec3>, String> {
     if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
         return Err(format!(
             "position accessor {} holds {:?} {:?}, not F32 Vec3",
@@ -257,18 +403,17 @@ fn read_positions(accessor: &Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>,
         ));
     }
     let float = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    Ok(elements(accessor, buffers)?.into_iter().map(|e| Vec3::new(float(e), float(&e[4..]), float(&e[8..]))).collect())
+    read_accessor(accessor, buffers, Vec3::ZERO, |e| Vec3::new(float(e), float(&e[4..]), float(&e[8..])))
 }
 
 /// Indices: an accessor of unsigned 8-, 16- or 32-bit scalars.
-fn read_indices(accessor: &Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
-    let read: fn(&[u8]) -> u32 = match (accessor.dimensions(), accessor.data_type()) {
-        (Dimensions::Scalar, DataType::U8) => |b| b[0] as u32,
-        (Dimensions::Scalar, DataType::U16) => |b| u16::from_le_bytes([b[0], b[1]]) as u32,
-        (Dimensions::Scalar, DataType::U32) => |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+fn read_indices(accessor: &Accessor, buffers: &Buffers) -> Result<Vec<u32>, String> {
+    match (accessor.dimensions(), accessor.data_type()) {
+        (Dimensions::Scalar, DataType::U8) => read_accessor(accessor, buffers, 0, unsigned::<1>),
+        (Dimensions::Scalar, DataType::U16) => read_accessor(accessor, buffers, 0, unsigned::<2>),
+        (Dimensions::Scalar, DataType::U32) => read_accessor(accessor, buffers, 0, unsigned::<4>),
         (dims, kind) => {
-            return Err(format!("index accessor {} holds {dims:?} {kind:?}, not unsigned scalars", accessor.index()))
+            Err(format!("index accessor {} holds {dims:?} {kind:?}, not unsigned scalars", accessor.index()))
         }
-    };
-    Ok(elements(accessor, buffers)?.into_iter().map(read).collect())
+    }
 }

@@ -1,5 +1,6 @@
-//! Import of real models: glTF 2.0 (`.gltf` with external or data-URI
-//! buffers, `.glb`) and Wavefront OBJ (`.obj` with its `.mtl`).
+//! Import of real models: glTF 2.0 (`.gltf` with external, percent-encoded
+//! or data-URI buffers, `.glb`; sparse accessors) and Wavefront OBJ (`.obj`
+//! with its `.mtl`).
 //!
 //! Both formats become the same [`Scene`]: one occlude [`Mesh`] per glTF
 //! primitive or OBJ object (split spatially when large, see [`ImportOptions`]),
@@ -11,7 +12,10 @@
 //! Every byte range, index and number read from a file is checked before use:
 //! bad input gives a [`LoadError`] naming the file and the problem, never a
 //! panic, and nothing is allocated from a size a file claims, only from the
-//! bytes it really has.
+//! bytes it really has (the one exception, sparse glTF accessors on a base of
+//! zeros, is capped per file). Placed meshes must stay within
+//! [`MAX_COORDINATE`] of the origin; meshes without triangles are left out.
+//! Both importers are fuzzed (`fuzz/` at the workspace root).
 
 mod autopath;
 mod gltf;
@@ -25,6 +29,12 @@ use occlude_core::{Mesh, Scene, SceneError};
 use std::io;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
+
+/// Farthest a placed mesh may reach from the origin along any axis, metres.
+/// Paths, cameras and hierarchies square distances in 32-bit floats, which
+/// overflow from about 1e19; 1e9 m (beyond the Moon's orbit) leaves room
+/// for any real model, even in millimetres or geocentric coordinates.
+pub const MAX_COORDINATE: f32 = 1e9;
 
 /// The file extensions [`load`] imports, lower case, without the dot.
 pub const MODEL_EXTENSIONS: [&str; 3] = ["gltf", "glb", "obj"];
@@ -233,12 +243,27 @@ pub fn load(name_or_path: &str, size: Size, seed: u64, options: &ImportOptions) 
 /// Imports the model file `path` of `format`, checked by
 /// [`Scene::validate`], with its automatic walkthrough.
 pub fn import(path: &Path, format: ModelFormat, options: &ImportOptions) -> Result<Imported, LoadError> {
+    let bytes = std::fs::read(path).map_err(|reason| LoadError::Io { path: path.to_path_buf(), reason })?;
+    import_bytes(path, &bytes, format, options)
+}
+
+/// Imports a model of `format` held in memory as if it were the file `path`:
+/// errors and the scene name come from `path`, and the files the model refers
+/// to (glTF buffers, OBJ materials) are looked for beside it. For models that
+/// are not files (generated in memory, fuzzing); [`import`] reads the file
+/// and calls this.
+pub fn import_bytes(
+    path: &Path,
+    bytes: &[u8],
+    format: ModelFormat,
+    options: &ImportOptions,
+) -> Result<Imported, LoadError> {
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let mut builder =
         Builder { path: path.to_path_buf(), scene: empty_scene(&name), options: *options, warnings: vec![] };
     match format {
-        ModelFormat::Gltf | ModelFormat::Glb => gltf::import(&mut builder, format == ModelFormat::Glb)?,
-        ModelFormat::Obj => obj::import(&mut builder)?,
+        ModelFormat::Gltf | ModelFormat::Glb => gltf::import(&mut builder, bytes, format == ModelFormat::Glb)?,
+        ModelFormat::Obj => obj::import(&mut builder, bytes)?,
     }
     builder.finish()
 }
@@ -271,8 +296,9 @@ impl Builder {
 
     /// Adds the triangles `indices` over `positions` as one or more meshes
     /// (split when larger than [`ImportOptions::split_triangles`]) and
-    /// returns their indices. `what` names the source (`mesh 2 primitive 0`)
-    /// in errors about non-finite positions or indices out of range.
+    /// returns their indices (none without triangles). `what` names the
+    /// source (`mesh 2 primitive 0`) in errors about non-finite positions or
+    /// indices out of range.
     fn add_geometry(&mut self, what: &str, positions: Vec<Vec3>, indices: Vec<u32>) -> Result<Vec<u32>, LoadError> {
         if let Some((v, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
             return Err(self.invalid(format!("{what}: vertex {v} has a non-finite position {p}")));
@@ -282,15 +308,30 @@ impl Builder {
                 self.invalid(format!("{what}: index {i} is out of range: there are {} vertices", positions.len()))
             );
         }
+        if indices.is_empty() {
+            // Nothing to draw: an instance of it would have an empty box.
+            return Ok(Vec::new());
+        }
         let meshes = split::split(Mesh::new(positions, indices), self.options.split_triangles);
         Ok(meshes.into_iter().map(|m| self.scene.add_mesh(m)).collect())
     }
 
-    /// Places every mesh of `meshes` with `transform` and `material`.
-    fn place(&mut self, meshes: &[u32], transform: Mat4, material: u32) {
+    /// Places every mesh of `meshes` with `transform` and `material`; `what`
+    /// names the placement (`node 3`) in the error when a placed mesh reaches
+    /// beyond [`MAX_COORDINATE`].
+    fn place(&mut self, what: &str, meshes: &[u32], transform: Mat4, material: u32) -> Result<(), LoadError> {
         for &mesh in meshes {
             self.scene.add_instance(mesh, transform, material);
+            let bounds = self.scene.instances.last().map(|i| i.bounds).unwrap_or_default();
+            let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+            if !(bounds.is_finite() && reach <= MAX_COORDINATE) {
+                return Err(self.invalid(format!(
+                    "{what}: its world box reaches {reach:e} m from the origin, beyond the {MAX_COORDINATE:e} m \
+                     that 32-bit rendering handles"
+                )));
+            }
         }
+        Ok(())
     }
 
     /// Validates the scene and gives it its walkthrough.

@@ -7,7 +7,7 @@ use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{create, BuiltMethod, DrawnSet};
-use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, Scene};
+use occlude_core::{Backend, Camera, CullingMethod, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::collections::BTreeMap;
@@ -112,22 +112,43 @@ impl<'s> Lane<'s> {
 
     /// Renders one frame; returns its statistics.
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> FrameStats {
-        let mut ctx = FrameContext::new(scene, hierarchy, *camera, &mut self.drawn);
-        self.built.method.prepare(&mut ctx, self.backend.as_mut());
-        self.backend.begin_frame(camera);
-        self.built.method.render(&mut ctx, self.backend.as_mut());
+        let method = self.built.method.as_mut();
+        let stats = render_frame(method, self.backend.as_mut(), scene, hierarchy, camera, &mut self.drawn);
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
-        self.backend.end_frame()
+        stats
     }
+}
+
+/// Renders one frame of `method` on `backend` (prepare, `begin_frame`,
+/// render, `end_frame`) and returns its statistics: how `bench` and
+/// `view` both drive a method.
+pub fn render_frame(
+    method: &mut dyn CullingMethod,
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    hierarchy: &Hierarchy,
+    camera: &Camera,
+    drawn: &mut DrawnSet,
+) -> FrameStats {
+    let mut ctx = FrameContext::new(scene, hierarchy, *camera, drawn);
+    method.prepare(&mut ctx, backend);
+    backend.begin_frame(camera);
+    method.render(&mut ctx, backend);
+    backend.end_frame()
+}
+
+/// Far clipping distance of every camera in `scene`: beyond the whole scene
+/// seen from anywhere in it.
+pub fn far_plane(scene: &Scene) -> f32 {
+    (scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0)
 }
 
 /// The walkthrough's cameras for `scene` at the configured resolution.
 pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
     let (w, h) = config.resolution;
-    let far = (scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0);
-    scene.path.sample(config.frames, w as f32 / h as f32, NEAR_PLANE, far)
+    scene.path.sample(config.frames, w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
 }
 
 /// Generates or imports the scene (an import error stays an
@@ -138,12 +159,21 @@ pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
 /// frame.
 pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     config.validate()?;
+    let scene = load_scene(config)?;
+    run_scene(&scene, config, progress)
+}
+
+/// The configured scene, generated or imported, with the configured camera
+/// path in place of its own walkthrough if one is given, validated. An
+/// import error stays an [`occlude_scenes::LoadError`] inside the returned
+/// error.
+pub fn load_scene(config: &BenchConfig) -> Result<Scene> {
     let mut scene = occlude_scenes::load(&config.scene, config.size, config.seed, &config.import)?;
     if let Some(path) = &config.camera_path {
         scene.path = path.clone();
     }
     scene.validate().with_context(|| format!("scene '{}' is not usable", config.scene))?;
-    run_scene(&scene, config, progress)
+    Ok(scene)
 }
 
 /// Runs every method of `config` on an existing scene.
