@@ -139,7 +139,7 @@ impl<'s> SoftBackend<'s> {
                     q.pending = false;
                     q.available_at_us = end + self.model.query_latency_us;
                     q.pixels = if q.forced_visible {
-                        u64::from(self.depth.width) * u64::from(self.depth.height)
+                        u64::from(self.depth.width()) * u64::from(self.depth.height())
                     } else {
                         r.passed
                     };
@@ -252,7 +252,7 @@ impl Backend for SoftBackend<'_> {
 
     fn depth_image(&mut self) -> Vec<f32> {
         self.flush();
-        self.depth.data.clone()
+        self.depth.to_vec()
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
@@ -276,6 +276,6 @@ impl Backend for SoftBackend<'_> {
         let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
         self.triangles.clear();
         let pixels = results[candidates.len()..].iter().map(|r| r.passed).collect();
-        OracleView::new(candidates, pixels, self.depth.data.clone(), self.depth.width, self.depth.height)
+        OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
     }
 }

@@ -7,11 +7,14 @@
 //! [`GpuContext`] opens the adapter once; [`GpuScene`] uploads a scene and
 //! builds the pipelines once per run; each method gets its own
 //! [`WgpuBackend`] (its own render target and queries) over that shared scene.
+//! [`DepthRaster`] is bare depth rasterization of clip-space triangles, for
+//! comparing the GPU with the soft rasterizer on the same triangles.
 
 #![warn(missing_docs)]
 
 mod backend;
 mod context;
+mod depth_raster;
 mod pipelines;
 mod queries;
 mod readback;
@@ -20,4 +23,5 @@ mod target;
 
 pub use backend::WgpuBackend;
 pub use context::{GpuContext, GpuError};
+pub use depth_raster::DepthRaster;
 pub use scene_buffers::{GpuScene, COLOR_FORMAT};

@@ -37,6 +37,10 @@ enum Command {
     /// Fly through a scene in a window with any method on the GPU, its
     /// statistics shown, and its query boxes on key V (CHC paper, Figure 4).
     View(Box<ViewArgs>),
+    /// Measure the soft depth rasterizer on the field's workloads (fill rate of
+    /// random right triangles, occlusion queries) and print MTris/s, GPix/s and
+    /// queries/s.
+    RasterBench(occlude::raster_bench::RasterBenchArgs),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         /// Sizes to list: small, medium, paper or all.
@@ -239,8 +243,8 @@ enum Failure {
 
 /// A failed run is the user's input when a model file could not be imported
 /// (the scene is loaded in the run, not in `configure`, so as to read a large
-/// model once), `--backend wgpu` or `view` found no GPU adapter, or `view`
-/// found no display: exit code 2 like any bad argument; anything else exit
+/// model once), `--backend wgpu`, `view` or `raster-bench --gpu required`
+/// found no GPU adapter, or `view` found no display: exit code 2 like any bad argument; anything else exit
 /// code 1.
 fn run_failure(e: anyhow::Error) -> Failure {
     let no_adapter = |c: &(dyn std::error::Error + 'static)| {
@@ -442,6 +446,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report(args),
         Command::Calibrate(args) => calibrate(args),
         Command::View(args) => view(args),
+        Command::RasterBench(args) => occlude::raster_bench::run(args).map_err(run_failure),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

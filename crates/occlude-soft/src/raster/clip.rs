@@ -60,54 +60,58 @@ impl GuardBand {
     }
 }
 
-/// Clips `tri` to the near plane and the guard band, writing the result to `out`.
-///
-/// Returns `false` (and leaves `out` unspecified) when nothing of the triangle can
-/// cover a pixel centre: it has a non-finite coordinate, lies entirely behind the
-/// near plane, or entirely outside one side of the viewport.
-pub(super) fn clip_triangle(tri: &[Vec4; 3], guard: GuardBand, out: &mut Polygon) -> bool {
+/// What clipping a triangle left of it.
+pub(super) enum Clipped {
+    /// Nothing that can cover a pixel centre: a non-finite coordinate, or the
+    /// triangle lies entirely behind the near plane or outside one side of the
+    /// viewport.
+    Outside,
+    /// The whole triangle (in `f64`), inside every clipping plane.
+    Inside([DVec4; 3]),
+    /// The polygon left in the `out` argument of [`clip_triangle`].
+    Polygon,
+}
+
+/// Clips `tri` to the near plane and the guard band; a clipped polygon is written to
+/// `out`.
+pub(super) fn clip_triangle(tri: &[Vec4; 3], guard: GuardBand, out: &mut Polygon) -> Clipped {
     if !tri.iter().all(|v| v.is_finite()) {
-        return false;
+        return Clipped::Outside;
     }
     let verts = tri.map(|v| v.as_dvec4());
 
     // Trivial rejection against the near plane and the viewport sides: if all three
     // vertices are outside one of these planes, so is every point of the triangle.
-    let outside = |d: fn(DVec4) -> f64| verts.iter().all(|&v| d(v) < 0.0);
-    if outside(|v| v.z)
-        || outside(|v| v.w - v.x)
-        || outside(|v| v.w + v.x)
-        || outside(|v| v.w - v.y)
-        || outside(|v| v.w + v.y)
-    {
-        return false;
+    let outside = |v: DVec4| {
+        u8::from(v.z < 0.0)
+            | u8::from(v.w - v.x < 0.0) << 1
+            | u8::from(v.w + v.x < 0.0) << 2
+            | u8::from(v.w - v.y < 0.0) << 3
+            | u8::from(v.w + v.y < 0.0) << 4
+    };
+    if outside(verts[0]) & outside(verts[1]) & outside(verts[2]) != 0 {
+        return Clipped::Outside;
     }
 
+    let mask =
+        |v: DVec4| guard.distances(v).iter().enumerate().fold(0u8, |m, (plane, &d)| m | u8::from(d < 0.0) << plane);
+    let crossed = mask(verts[0]) | mask(verts[1]) | mask(verts[2]);
+    if crossed == 0 {
+        return Clipped::Inside(verts);
+    }
     out.verts[..3].copy_from_slice(&verts);
     out.len = 3;
-    let mut mask = [0u8; 3];
-    for (m, &v) in mask.iter_mut().zip(&verts) {
-        for (plane, d) in guard.distances(v).into_iter().enumerate() {
-            if d < 0.0 {
-                *m |= 1 << plane;
-            }
-        }
-    }
-    if mask.iter().all(|&m| m == 0) {
-        return true;
-    }
-    let crossed = mask[0] | mask[1] | mask[2];
     let mut scratch = Polygon::new();
     for plane in 0..5 {
         if crossed & (1 << plane) != 0 {
             clip_plane(out, &mut scratch, |v| guard.distances(v)[plane]);
             std::mem::swap(out, &mut scratch);
             if out.len < 3 {
-                return false;
+                return Clipped::Outside;
             }
         }
     }
-    true
+    Clipped::Polygon
 }
 
 /// One Sutherland-Hodgman step: clips `input` against the half-space `dist >= 0`.

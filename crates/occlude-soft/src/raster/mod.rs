@@ -10,27 +10,48 @@
 //!   coverage is decided by exact `i64` edge functions at pixel centres with the
 //!   top-left fill rule, so triangles sharing an edge cover each pixel exactly once;
 //! - the depth at a pixel is a fixed formula of the triangle's depth plane and the
-//!   pixel's coordinates, identical whatever the tile, thread or command order.
+//!   pixel's coordinates, identical whatever the tile, thread, command order or
+//!   instruction set.
 //!
-//! [`Rasterizer::execute`] runs a list of [`Command`]s (draws and occlusion queries):
-//! it sets up the triangles in parallel, bins them to 64x64-pixel tiles, then runs
-//! every tile's triangles in command order, the tiles in parallel on the current
-//! rayon thread pool.
+//! [`Rasterizer::execute`] runs a list of [`Command`]s (draws and occlusion queries)
+//! in three steps:
+//!
+//! 1. `setup` and `bin`, in parallel over chunks of the input: clip and set up each
+//!    triangle, then index the chunk's triangles by the 64x64-pixel tiles their
+//!    bounding boxes touch;
+//! 2. `tile`, in parallel over tiles: each tile runs its triangles in command order,
+//!    on its own pixels; per triangle, `hiz` rejects the 8x8 blocks whose stored
+//!    depths it cannot pass, `span` walks its exact row spans incrementally, and
+//!    `shade` depth-tests them 8 pixels at a time (AVX2 where the CPU has it, a
+//!    scalar loop otherwise, with identical results);
+//! 3. the tiles' fragment counts are summed per command.
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+mod bin;
 mod clip;
+mod hiz;
 mod setup;
+mod shade;
+mod span;
+mod split;
 mod tile;
 
 #[cfg(test)]
 mod tests;
 
 use std::ops::Range;
+use std::sync::atomic::AtomicBool;
 
 use glam::Vec4;
 use rayon::prelude::*;
 
+use bin::{Chunk, TileGrid};
+use hiz::TileHiZ;
 use setup::{setup_triangle, SetupTri, Viewport};
-use tile::{raster_tile, TileView, TILE};
+use span::RasterTri;
+use split::Tiles;
+use tile::{raster_tile, Commands, Kernel, TILE};
 
 pub use setup::SUBPIXEL_BITS;
 
@@ -38,24 +59,45 @@ pub use setup::SUBPIXEL_BITS;
 /// coordinates (guard band included) far from `i64` overflow in the edge functions.
 pub const MAX_DIMENSION: u32 = 16384;
 
-/// Triangles set up per parallel work item.
-const SETUP_CHUNK: usize = 1024;
-/// Bits of a bin entry holding the triangle's index within its setup chunk; a chunk
-/// yields at most 6 triangles per input triangle (a clipped polygon has at most 8
-/// vertices), so `6 * SETUP_CHUNK` must fit.
-const CHUNK_INDEX_BITS: u32 = 13;
-const _: () = assert!(6 * SETUP_CHUNK < 1 << CHUNK_INDEX_BITS);
+/// Most triangles set up per parallel work item. Each tile reads its triangles chunk
+/// by chunk, so larger chunks mean longer runs of consecutive reads; smaller ones
+/// share the setup between threads.
+const SETUP_CHUNK: usize = 4096;
+/// Fewest triangles set up per parallel work item.
+const MIN_SETUP_CHUNK: usize = 256;
 
-/// Row-major depth image, row 0 at the top, cleared to 1.0 (the far plane).
-#[derive(Clone, Debug, PartialEq)]
+/// A depth image, row 0 at the top, cleared to 1.0 (the far plane), with the
+/// hierarchical depth (per 8x8 block, a bound of its depths) that lets the rasterizer
+/// skip blocks a triangle cannot pass.
+///
+/// The pixels are stored tile by tile (each 64x64 tile contiguous, padded at the
+/// buffer's right and bottom edges), so that a tile fills the caches evenly whatever
+/// the width; [`Self::to_vec`], [`Self::get`] and [`Self::set`] give the row-major
+/// view.
+#[derive(Clone, Debug)]
 pub struct DepthBuffer {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// `width * height` depth values, row by row from the top.
-    pub data: Vec<f32>,
+    width: u32,
+    height: u32,
+    /// Tile after tile, row by row of tiles; within a tile, `TILE` rows of `TILE`
+    /// pixels ([`Self::pixels`]).
+    data: Vec<Line>,
+    /// One per tile, in the same order.
+    hiz: Vec<TileHiZ>,
 }
+
+/// Pixels stored per tile.
+const TILE_PIXELS: usize = (TILE * TILE) as usize;
+
+/// One cache line of pixels: the depth buffer's storage unit, so that every 8-pixel
+/// group of a tile row lies within one cache line (a vector load or store that
+/// crosses two costs more).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Line([f32; LINE_PIXELS]);
+
+/// Pixels per [`Line`].
+const LINE_PIXELS: usize = 16;
+const _: () = assert!(std::mem::size_of::<Line>() == 4 * LINE_PIXELS && TILE_PIXELS.is_multiple_of(LINE_PIXELS));
 
 impl DepthBuffer {
     /// A `width` x `height` buffer cleared to the far plane (1.0).
@@ -67,12 +109,85 @@ impl DepthBuffer {
             width <= MAX_DIMENSION && height <= MAX_DIMENSION,
             "depth buffer {width}x{height} exceeds {MAX_DIMENSION} pixels per side"
         );
-        Self { width, height, data: vec![1.0; width as usize * height as usize] }
+        let tiles = TileGrid::new(width, height).len();
+        let data = vec![Line([1.0; LINE_PIXELS]); tiles * TILE_PIXELS / LINE_PIXELS];
+        Self { width, height, data, hiz: vec![TileHiZ::cleared(); tiles] }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The stored pixels, tile after tile.
+    fn pixels(&self) -> &[f32] {
+        // SAFETY: a `Line` is `LINE_PIXELS` `f32`s without padding (`repr(C)`).
+        unsafe { std::slice::from_raw_parts(self.data.as_ptr().cast(), self.data.len() * LINE_PIXELS) }
+    }
+
+    /// The stored pixels, for writing.
+    fn pixels_mut(&mut self) -> &mut [f32] {
+        // SAFETY: as in `pixels`.
+        unsafe { std::slice::from_raw_parts_mut(self.data.as_mut_ptr().cast(), self.data.len() * LINE_PIXELS) }
+    }
+
+    /// Index in [`Self::pixels`] of the pixel `(x, y)`.
+    fn index(&self, x: u32, y: u32) -> usize {
+        assert!(x < self.width && y < self.height, "pixel {x},{y} outside {}x{}", self.width, self.height);
+        let tile = (y / TILE) as usize * TileGrid::new(self.width, self.height).tiles_x + (x / TILE) as usize;
+        tile * TILE_PIXELS + ((y % TILE) * TILE + x % TILE) as usize
+    }
+
+    /// The depth of the pixel `(x, y)`.
+    ///
+    /// # Panics
+    /// If the pixel is outside the buffer.
+    pub fn get(&self, x: u32, y: u32) -> f32 {
+        self.pixels()[self.index(x, y)]
+    }
+
+    /// Writes the depth of the pixel `(x, y)` from outside the rasterizer.
+    ///
+    /// # Panics
+    /// If the pixel is outside the buffer.
+    pub fn set(&mut self, x: u32, y: u32, depth: f32) {
+        let i = self.index(x, y);
+        self.pixels_mut()[i] = depth;
+        self.hiz[i / TILE_PIXELS].invalidate();
+    }
+
+    /// The `width * height` depth values, row by row from the top.
+    pub fn to_vec(&self) -> Vec<f32> {
+        let grid = TileGrid::new(self.width, self.height);
+        let (width, tile) = (self.width as usize, TILE as usize);
+        let mut out = Vec::with_capacity(width * self.height as usize);
+        for y in 0..self.height as usize {
+            for tx in 0..grid.tiles_x {
+                let start = ((y / tile) * grid.tiles_x + tx) * TILE_PIXELS + (y % tile) * tile;
+                out.extend_from_slice(&self.pixels()[start..start + tile.min(width - tx * tile)]);
+            }
+        }
+        out
     }
 
     /// Resets every pixel to the far plane (1.0), for the next frame.
     pub fn clear(&mut self) {
-        self.data.fill(1.0);
+        self.pixels_mut().fill(1.0);
+        self.hiz.fill(TileHiZ::cleared());
+    }
+}
+
+/// Two buffers are equal when their sizes and depth values are (the hierarchical
+/// depth is a cache of the values).
+impl PartialEq for DepthBuffer {
+    fn eq(&self, other: &Self) -> bool {
+        // Padding is never written, so comparing the storage compares the pixels.
+        (self.width, self.height) == (other.width, other.height) && self.pixels() == other.pixels()
     }
 }
 
@@ -94,6 +209,11 @@ pub enum CommandKind {
     /// No depth write: count fragments passing `DepthTest` against the current depth
     /// (an occlusion query).
     Query(DepthTest),
+    /// An occlusion query that only asks whether any fragment passes `DepthTest`, for
+    /// callers that need visibility and not a count: it stops testing as soon as one
+    /// fragment passes. Its result's `passed` is 1 if one does, else 0, and its
+    /// `fragments` is not counted (0).
+    QueryAny(DepthTest),
 }
 
 /// One draw or query: a range of triangles and how to rasterize them.
@@ -121,23 +241,45 @@ pub struct CommandResult {
 
 /// A depth rasterizer holding scratch buffers that are reused between calls to
 /// [`Rasterizer::execute`], so that steady-state frames allocate little.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Rasterizer {
-    /// Set-up triangles, one vector per chunk of `SETUP_CHUNK` input triangles.
-    chunks: Vec<Vec<SetupTri>>,
+    /// The instruction set the tiles run on.
+    kernel: Kernel,
+    /// Set-up and binned triangles, one chunk per up to `SETUP_CHUNK` input
+    /// triangles.
+    chunks: Vec<Chunk>,
     /// Start of each command in the concatenation of all commands' triangles.
     starts: Vec<usize>,
-    /// Per tile, the set-up triangles touching it, in command order, as
-    /// `chunk << CHUNK_INDEX_BITS | index`.
-    bins: Vec<Vec<u32>>,
     /// The command kinds, indexed by command.
     kinds: Vec<CommandKind>,
+    /// Per command, whether a passing fragment of a `QueryAny` was found.
+    found: Vec<AtomicBool>,
+    /// The tiles some triangle touches.
+    busy: Vec<usize>,
+}
+
+impl Default for Rasterizer {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Rasterizer {
-    /// A rasterizer with empty scratch buffers.
+    /// A rasterizer with empty scratch buffers, using the widest SIMD instructions
+    /// the running CPU supports.
     pub fn new() -> Self {
-        Self::default()
+        Self::with_kernel(Kernel::detect())
+    }
+
+    fn with_kernel(kernel: Kernel) -> Self {
+        Self { kernel, chunks: Vec::new(), starts: Vec::new(), kinds: Vec::new(), found: Vec::new(), busy: Vec::new() }
+    }
+
+    /// A rasterizer that runs the portable scalar code whatever the CPU, to test it
+    /// against the SIMD code.
+    #[cfg(test)]
+    fn scalar() -> Self {
+        Self::with_kernel(Kernel::Scalar)
     }
 
     /// Executes `commands` in order against `depth`, as if one after the other,
@@ -146,17 +288,13 @@ impl Rasterizer {
     /// and the depth buffer are identical whatever the number of threads.
     ///
     /// # Panics
-    /// If a command's triangle range is out of bounds of `triangles`, or
-    /// `depth.data` does not hold `width * height` values.
+    /// If a command's triangle range is out of bounds of `triangles`.
     pub fn execute(
         &mut self,
         depth: &mut DepthBuffer,
         triangles: &[[Vec4; 3]],
         commands: &[Command],
     ) -> Vec<CommandResult> {
-        let (width, height) = (depth.width, depth.height);
-        assert_eq!(depth.data.len(), width as usize * height as usize);
-        assert!(width <= MAX_DIMENSION && height <= MAX_DIMENSION);
         for c in commands {
             assert!(
                 c.triangles.start <= c.triangles.end && c.triangles.end as usize <= triangles.len(),
@@ -166,29 +304,40 @@ impl Rasterizer {
             );
         }
         let mut results = vec![CommandResult::default(); commands.len()];
+        let (width, height) = (depth.width, depth.height);
         if width == 0 || height == 0 {
             return results;
         }
-        self.setup(Viewport::new(width, height), triangles, commands);
-        let tiles_x = width.div_ceil(TILE) as usize;
-        let tiles_y = height.div_ceil(TILE) as usize;
-        self.bin(tiles_x, tiles_y);
+        let grid = TileGrid::new(width, height);
+        self.setup_and_bin(Viewport::new(width, height), grid, triangles, commands);
         self.kinds.clear();
         self.kinds.extend(commands.iter().map(|c| c.kind));
+        self.found.clear();
+        self.found.resize_with(commands.len(), AtomicBool::default);
+        let chunks = &self.chunks[..];
+        self.busy.clear();
+        self.busy.extend((0..grid.len()).filter(|&tile| chunks.iter().any(|c| !c.tile(tile).is_empty())));
 
-        let jobs = tile_views(depth, tiles_x, &self.bins);
-        let (chunks, bins, kinds) = (&self.chunks, &self.bins, &self.kinds[..]);
-        let n = commands.len();
-        let sums = jobs
-            .into_par_iter()
+        let tiles = Tiles::new(depth, grid);
+        let (kernel, n) = (self.kernel, commands.len());
+        let commands_view = Commands { kinds: &self.kinds, found: &self.found };
+        let busy = &self.busy[..];
+        let sums = busy
+            .par_iter()
+            .enumerate()
             .fold(
                 || vec![CommandResult::default(); n],
-                |mut acc, (index, mut view)| {
-                    let tris = bins[index].iter().map(|&e| {
-                        let chunk = (e >> CHUNK_INDEX_BITS) as usize;
-                        &chunks[chunk][(e & ((1 << CHUNK_INDEX_BITS) - 1)) as usize]
-                    });
-                    raster_tile(&mut view, tris, kinds, &mut acc);
+                |mut acc, (i, &index)| {
+                    // A thread usually runs the next busy tile next: start loading its
+                    // pixels (cold after a clear) while this one runs.
+                    if let Some(&next) = busy.get(i + 1) {
+                        tiles.prefetch(next);
+                    }
+                    // SAFETY: each busy tile appears once, so its view is the only one
+                    // while it lives.
+                    let mut view = unsafe { tiles.view(index) };
+                    let tris = chunks.iter().flat_map(|c| c.tile(index));
+                    raster_tile(kernel, &mut view, tris, &commands_view, &mut acc);
                     acc
                 },
             )
@@ -199,12 +348,17 @@ impl Rasterizer {
                 r.passed += p.passed;
             }
         }
+        for (r, c) in results.iter_mut().zip(commands) {
+            if let CommandKind::QueryAny(_) = c.kind {
+                r.passed = r.passed.min(1);
+            }
+        }
         results
     }
 
-    /// Clips and sets up every command's triangles into `self.chunks`, in command
-    /// order, in parallel over chunks of `SETUP_CHUNK` triangles.
-    fn setup(&mut self, viewport: Viewport, triangles: &[[Vec4; 3]], commands: &[Command]) {
+    /// Clips, sets up and bins every command's triangles into `self.chunks`, in
+    /// command order, in parallel over chunks of consecutive triangles.
+    fn setup_and_bin(&mut self, viewport: Viewport, grid: TileGrid, triangles: &[[Vec4; 3]], commands: &[Command]) {
         self.starts.clear();
         let mut total = 0usize;
         for c in commands {
@@ -212,16 +366,22 @@ impl Rasterizer {
             total += c.triangles.len();
         }
         self.starts.push(total);
-        let n_chunks = total.div_ceil(SETUP_CHUNK);
-        assert!(n_chunks < 1 << (32 - CHUNK_INDEX_BITS), "too many triangles in one execute call");
-        self.chunks.resize_with(n_chunks, Vec::new);
+        // About four chunks per thread, for balance.
+        let chunk_len = total.div_ceil(4 * rayon::current_num_threads()).clamp(MIN_SETUP_CHUNK, SETUP_CHUNK);
+        let n_chunks = total.div_ceil(chunk_len);
+        self.chunks.resize_with(n_chunks, Chunk::default);
         self.chunks.truncate(n_chunks);
         let starts = &self.starts[..];
-        self.chunks.par_iter_mut().enumerate().for_each(|(ci, out)| {
-            out.clear();
+        self.chunks.par_iter_mut().enumerate().for_each(|(ci, chunk)| {
+            chunk.clear(grid);
+            let mut emit = |t: SetupTri| {
+                if let Some(r) = RasterTri::new(&t) {
+                    chunk.push(grid, r);
+                }
+            };
             let mut poly = clip::Polygon::new();
-            let lo = ci * SETUP_CHUNK;
-            let hi = (lo + SETUP_CHUNK).min(total);
+            let lo = ci * chunk_len;
+            let hi = (lo + chunk_len).min(total);
             // The last command starting at or before `lo` (skipping empty ones).
             let mut cmd = starts.partition_point(|&s| s <= lo) - 1;
             let mut g = lo;
@@ -230,35 +390,13 @@ impl Rasterizer {
                 let end = hi.min(starts[cmd + 1]);
                 let first = c.triangles.start as usize + (g - starts[cmd]);
                 for tri in &triangles[first..first + (end - g)] {
-                    setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, out);
+                    setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit);
                 }
                 g = end;
                 cmd += 1;
             }
+            chunk.bin(grid);
         });
-    }
-
-    /// Fills `self.bins` with, per tile, the set-up triangles whose bounding box
-    /// touches it, in command order.
-    fn bin(&mut self, tiles_x: usize, tiles_y: usize) {
-        self.bins.resize_with(tiles_x * tiles_y, Vec::new);
-        self.bins.truncate(tiles_x * tiles_y);
-        for b in &mut self.bins {
-            b.clear();
-        }
-        for (ci, chunk) in self.chunks.iter().enumerate() {
-            for (i, t) in chunk.iter().enumerate() {
-                let entry = ((ci as u32) << CHUNK_INDEX_BITS) | i as u32;
-                let (tx0, tx1) = (t.x0 as u32 / TILE, t.x1 as u32 / TILE);
-                let (ty0, ty1) = (t.y0 as u32 / TILE, t.y1 as u32 / TILE);
-                for ty in ty0..=ty1 {
-                    let row = ty as usize * tiles_x;
-                    for tx in tx0..=tx1 {
-                        self.bins[row + tx as usize].push(entry);
-                    }
-                }
-            }
-        }
     }
 }
 
@@ -266,28 +404,4 @@ impl Rasterizer {
 /// Callers rasterizing every frame should keep a `Rasterizer` to reuse its buffers.
 pub fn execute(depth: &mut DepthBuffer, triangles: &[[Vec4; 3]], commands: &[Command]) -> Vec<CommandResult> {
     Rasterizer::new().execute(depth, triangles, commands)
-}
-
-/// Splits `depth` into disjoint per-tile views, one per tile with a non-empty bin,
-/// paired with the tile's index.
-fn tile_views<'a>(depth: &'a mut DepthBuffer, tiles_x: usize, bins: &[Vec<u32>]) -> Vec<(usize, TileView<'a>)> {
-    let width = depth.width as usize;
-    let tile = TILE as usize;
-    let mut jobs = Vec::new();
-    for (ty, band) in depth.data.chunks_mut(width * tile).enumerate() {
-        if bins[ty * tiles_x..(ty + 1) * tiles_x].iter().all(Vec::is_empty) {
-            continue;
-        }
-        let mut row_parts: Vec<_> = band.chunks_mut(width).map(|r| r.chunks_mut(tile)).collect();
-        for tx in 0..tiles_x {
-            let rows: Vec<&mut [f32]> =
-                row_parts.iter_mut().map(|parts| parts.next().expect("a tile column per row")).collect();
-            let index = ty * tiles_x + tx;
-            if bins[index].is_empty() {
-                continue;
-            }
-            jobs.push((index, TileView { x0: (tx * tile) as i32, y0: (ty * tile) as i32, rows }));
-        }
-    }
-    jobs
 }

@@ -1,9 +1,9 @@
 //! Triangle setup: projection to fixed-point screen coordinates, culling, and the
 //! integer edge functions and depth plane the tile rasterizer evaluates.
 
-use glam::Vec4;
+use glam::{DVec4, Vec4};
 
-use super::clip::{clip_triangle, GuardBand, Polygon};
+use super::clip::{clip_triangle, Clipped, GuardBand, Polygon};
 
 /// Sub-pixel bits of the fixed-point screen coordinates.
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -34,23 +34,49 @@ impl Viewport {
     }
 }
 
+/// A vertex snapped to fixed point, `[x, y]` with [`SUBPIXEL_BITS`] fractional bits,
+/// `y` down. Vertices lie within `COORD_LIMIT` pixels, so `i32` holds them.
+pub(super) type Fixed = [i32; 2];
+
 /// One edge function, evaluated as `origin + step_x * dx + step_y * dy` at the centre
-/// of the pixel `(x0 + dx, y0 + dy)` of the triangle's bounding box. A pixel is
-/// covered when this is `>= 0` for all three edges (the top-left fill-rule bias is
-/// already subtracted from `origin`).
+/// of the pixel `dx` columns right of and `dy` rows below the pixel it is set up at. A
+/// pixel is covered when this is `>= 0` for all three edges (the top-left fill-rule
+/// bias is already subtracted from `origin`).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Edge {
     /// Change per pixel to the right.
     pub step_x: i64,
     /// Change per pixel down.
     pub step_y: i64,
-    /// Value (minus the fill-rule bias) at the centre of the bounding box's top-left
-    /// pixel.
+    /// Value (minus the fill-rule bias) at the centre of the pixel it is set up at.
     pub origin: i64,
 }
 
+/// The edge functions of the triangle `v` (in the order of positive area: clockwise
+/// on the screen) set up at the centre of the pixel `(x, y)`. The one definition of
+/// coverage: every path evaluates these, at whatever pixel it starts from (the
+/// functions are linear, so the values are the same).
+#[inline(always)]
+pub(super) fn edges_at(v: &[Fixed; 3], x: i32, y: i32) -> [Edge; 3] {
+    let (ref_x, ref_y) = (i64::from(x) * ONE + HALF, i64::from(y) * ONE + HALF);
+    let edge = |a: Fixed, b: Fixed| {
+        let [ax, ay] = a.map(i64::from);
+        let (dx, dy) = (i64::from(b[0]) - ax, i64::from(b[1]) - ay);
+        // Top-left rule (y down, positive area): an edge is top when horizontal with
+        // the interior below it, left when it goes up. Pixel centres exactly on other
+        // edges are not covered.
+        let top_left = dy < 0 || (dy == 0 && dx > 0);
+        Edge {
+            step_x: -dy * ONE,
+            step_y: dx * ONE,
+            origin: dx * (ref_y - ay) - dy * (ref_x - ax) - i64::from(!top_left),
+        }
+    };
+    [edge(v[0], v[1]), edge(v[1], v[2]), edge(v[2], v[0])]
+}
+
 /// A triangle ready to rasterize: screen-space pixel bounding box (inclusive,
-/// clipped to the viewport), edge functions and depth plane.
+/// clipped to the viewport), vertices and depth plane.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct SetupTri {
     /// Index of the command the triangle belongs to.
@@ -63,8 +89,8 @@ pub(super) struct SetupTri {
     pub x1: i32,
     /// Bottom pixel row (inclusive).
     pub y1: i32,
-    /// The three edge functions.
-    pub edges: [Edge; 3],
+    /// The vertices, in the order of positive area.
+    pub verts: [Fixed; 3],
     /// Depth at the centre of pixel `(x0, y0)`.
     pub z_origin: f32,
     /// Depth change per pixel to the right.
@@ -74,25 +100,49 @@ pub(super) struct SetupTri {
 }
 
 impl SetupTri {
-    /// Depth of the triangle's plane at the centre of the pixel `(x0 + dx, y0 + dy)`,
-    /// where `z_row = self.row_depth(dy)`. A pure function of the triangle and the
-    /// pixel, so every tile and thread computes the same bits. Negative values
-    /// (rounding just past the near plane) become `+0.0`, so that depth values that
-    /// compare equal are also bit-identical.
+    /// The edge functions, set up at the bounding box's top-left pixel.
+    pub fn edges(&self) -> [Edge; 3] {
+        edges_at(&self.verts, self.x0, self.y0)
+    }
+
+    /// The depth plane along the pixel row `y0 + dy`.
+    #[cfg(test)]
+    pub fn row_plane(&self, dy: i32) -> RowPlane {
+        RowPlane::of(self.z_origin, self.z_dx, self.z_dy, dy)
+    }
+}
+
+/// A triangle's depth plane along one pixel row: the one formula for a pixel's depth
+/// that every path (scalar, SIMD, the tests' reference) evaluates.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RowPlane {
+    /// Depth at the centre of the row's pixel in the bounding box's first column.
+    pub z_row: f32,
+    /// Depth change per pixel to the right.
+    pub z_dx: f32,
+}
+
+impl RowPlane {
+    /// The plane `z_origin + z_dx * dx + z_dy * dy` along the row `dy` below its
+    /// origin.
     #[inline(always)]
-    pub fn depth(&self, z_row: f32, dx: i32) -> f32 {
-        let z = z_row + self.z_dx * dx as f32;
+    pub fn of(z_origin: f32, z_dx: f32, z_dy: f32, dy: i32) -> Self {
+        Self { z_row: z_origin + z_dy * dy as f32, z_dx }
+    }
+
+    /// Depth at the centre of the pixel `dx` columns right of the bounding box's
+    /// first column. A pure function of the triangle and the pixel, so every tile and
+    /// thread computes the same bits. Negative values (rounding just past the near
+    /// plane) and NaN become `+0.0`, so that depth values that compare equal are also
+    /// bit-identical.
+    #[inline(always)]
+    pub fn depth(&self, dx: i32) -> f32 {
+        let z = self.z_row + self.z_dx * dx as f32;
         if z > 0.0 {
             z
         } else {
             0.0
         }
-    }
-
-    /// The depth plane's value at the start of row `y0 + dy` (see [`Self::depth`]).
-    #[inline(always)]
-    pub fn row_depth(&self, dy: i32) -> f32 {
-        self.z_origin + self.z_dy * dy as f32
     }
 }
 
@@ -104,8 +154,8 @@ struct ScreenVertex {
     z: f64,
 }
 
-/// Clips `tri` (clip space) and appends its rasterizable pieces (0 to 6 triangles)
-/// to `out`. Degenerate, non-finite, back-facing (when `cull_back`) and off-screen
+/// Clips `tri` (clip space) and passes its rasterizable pieces (0 to 6 triangles)
+/// to `emit`. Degenerate, non-finite, back-facing (when `cull_back`) and off-screen
 /// pieces are dropped.
 pub(super) fn setup_triangle(
     tri: &[Vec4; 3],
@@ -113,29 +163,37 @@ pub(super) fn setup_triangle(
     cmd: u32,
     viewport: Viewport,
     poly: &mut Polygon,
-    out: &mut Vec<SetupTri>,
+    mut emit: impl FnMut(SetupTri),
 ) {
-    if !clip_triangle(tri, viewport.guard, poly) {
-        return;
+    match clip_triangle(tri, viewport.guard, poly) {
+        Clipped::Outside => {}
+        Clipped::Inside(verts) => setup_polygon(&verts, cull_back, cmd, viewport, &mut emit),
+        Clipped::Polygon => setup_polygon(poly.as_slice(), cull_back, cmd, viewport, &mut emit),
     }
+}
+
+/// Projects the convex polygon `verts` (clip space, inside the clipping planes) and
+/// passes the triangles of its fan that cover some pixel centre to `emit`.
+#[inline(always)]
+fn setup_polygon(verts: &[DVec4], cull_back: bool, cmd: u32, viewport: Viewport, emit: &mut impl FnMut(SetupTri)) {
     let mut screen = [ScreenVertex { x: 0, y: 0, z: 0.0 }; super::clip::MAX_POLY];
-    for (s, v) in screen.iter_mut().zip(poly.as_slice()) {
+    for (s, v) in screen.iter_mut().zip(verts) {
         match project(*v, viewport) {
             Some(p) => *s = p,
             None => return,
         }
     }
-    let screen = &screen[..poly.len];
+    let screen = &screen[..verts.len()];
     for i in 1..screen.len() - 1 {
         if let Some(t) = setup_screen([screen[0], screen[i], screen[i + 1]], cull_back, cmd, viewport) {
-            out.push(t);
+            emit(t);
         }
     }
 }
 
 /// Projects a clip-space vertex to fixed-point screen coordinates (x right, y down,
 /// row 0 at the top). `None` when the result is not finite or out of range.
-fn project(v: glam::DVec4, viewport: Viewport) -> Option<ScreenVertex> {
+fn project(v: DVec4, viewport: Viewport) -> Option<ScreenVertex> {
     let sx = (v.x / v.w + 1.0) * 0.5 * f64::from(viewport.width);
     let sy = (1.0 - v.y / v.w) * 0.5 * f64::from(viewport.height);
     let z = v.z / v.w;
@@ -143,7 +201,17 @@ fn project(v: glam::DVec4, viewport: Viewport) -> Option<ScreenVertex> {
     if !(sx.abs() <= COORD_LIMIT && sy.abs() <= COORD_LIMIT && z.is_finite()) {
         return None;
     }
-    Some(ScreenVertex { x: (sx * ONE as f64).round() as i64, y: (sy * ONE as f64).round() as i64, z })
+    Some(ScreenVertex { x: round(sx * ONE as f64), y: round(sy * ONE as f64), z })
+}
+
+/// `x.round() as i64` (halves away from zero) for `|x| < 2^52`, without the libm call
+/// that `f64::round` costs where SSE4.1 is not assumed.
+#[inline(always)]
+pub(super) fn round(x: f64) -> i64 {
+    let t = x as i64;
+    // Exact: x and t have the same sign and differ by less than 1.
+    let frac = x - t as f64;
+    t + i64::from(frac >= 0.5) - i64::from(frac <= -0.5)
 }
 
 /// Sets up one screen-space triangle. `None` when it is degenerate, culled, covers no
@@ -170,21 +238,6 @@ fn setup_screen(mut v: [ScreenVertex; 3], cull_back: bool, cmd: u32, viewport: V
     if x0 > x1 || y0 > y1 {
         return None;
     }
-    let (ref_x, ref_y) = (x0 * ONE + HALF, y0 * ONE + HALF);
-
-    let edge = |a: ScreenVertex, b: ScreenVertex| {
-        let (dx, dy) = (b.x - a.x, b.y - a.y);
-        // Top-left rule (y down, positive area): an edge is top when horizontal with
-        // the interior below it, left when it goes up. Pixel centres exactly on other
-        // edges are not covered.
-        let top_left = dy < 0 || (dy == 0 && dx > 0);
-        Edge {
-            step_x: -dy * ONE,
-            step_y: dx * ONE,
-            origin: dx * (ref_y - a.y) - dy * (ref_x - a.x) - i64::from(!top_left),
-        }
-    };
-    let edges = [edge(v[0], v[1]), edge(v[1], v[2]), edge(v[2], v[0])];
 
     // Depth plane z = z0 + a * (x - x0) + b * (y - y0) in pixel units; z/w is affine
     // in screen space.
@@ -201,7 +254,8 @@ fn setup_screen(mut v: [ScreenVertex; 3], cull_back: bool, cmd: u32, viewport: V
         return None;
     }
 
-    Some(SetupTri { cmd, x0: x0 as i32, y0: y0 as i32, x1: x1 as i32, y1: y1 as i32, edges, z_origin, z_dx, z_dy })
+    let verts = v.map(|p| [p.x as i32, p.y as i32]);
+    Some(SetupTri { cmd, x0: x0 as i32, y0: y0 as i32, x1: x1 as i32, y1: y1 as i32, verts, z_origin, z_dx, z_dy })
 }
 
 /// `ceil(n / d)` for `d > 0`.

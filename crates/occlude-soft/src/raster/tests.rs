@@ -1,10 +1,11 @@
 use glam::{Mat4, Vec3, Vec4};
 
-use super::clip::Polygon;
-use super::setup::{setup_triangle, Viewport};
 use super::*;
 
 use occlude_core::rng::Rng;
+
+mod properties;
+mod reference;
 
 /// Clip-space vertex of screen position `(sx, sy)` (pixels, y down), NDC depth `z`,
 /// scaled by `w`.
@@ -41,7 +42,7 @@ fn screen_quad_covers_every_pixel_once() {
     let r = draw_all(&mut depth, &quad(1.0, 0.5));
     assert_eq!(r.fragments, 200 * 150);
     assert_eq!(r.passed, 200 * 150);
-    assert!(depth.data.iter().all(|&d| d == 0.5));
+    assert!(depth.to_vec().iter().all(|&d| d == 0.5));
 }
 
 /// A jittered-grid triangulation of the screen rectangle `[x0, x1) x [y0, y1)`
@@ -110,9 +111,9 @@ fn triangulated_rectangle_covers_each_pixel_once() {
                 * centres_in(clamp(rect[1], size.1), clamp(rect[3], size.1));
             assert_eq!(r.fragments, expected, "rect {rect:?} w {w}");
             assert_eq!(r.passed, expected, "rect {rect:?} w {w}");
-            let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+            let written = depth.to_vec().iter().filter(|&&d| d < 1.0).count() as u64;
             assert_eq!(written, expected, "rect {rect:?} w {w}");
-            for (i, &d) in depth.data.iter().enumerate() {
+            for (i, &d) in depth.to_vec().iter().enumerate() {
                 let (px, py) = ((i as u32 % size.0) as f32 + 0.5, (i as u32 / size.0) as f32 + 0.5);
                 let inside = rect[0] <= px && px < rect[2] && rect[1] <= py && py < rect[3];
                 assert_eq!(inside, d < 1.0, "pixel {px},{py} of rect {rect:?}");
@@ -126,7 +127,7 @@ fn huge_quad_is_clipped_to_the_guard_band_without_gaps() {
     let mut depth = DepthBuffer::new(300, 200);
     let r = draw_all(&mut depth, &quad(1.0e5, 0.25));
     assert_eq!(r.fragments, 300 * 200);
-    assert!(depth.data.iter().all(|&d| d == 0.25));
+    assert!(depth.to_vec().iter().all(|&d| d == 0.25));
 }
 
 /// The 12 triangles of the axis-aligned cube `center +- 0.5`, each face
@@ -177,7 +178,7 @@ fn cube_covers_its_front_face() {
     // Two-sided: the back face (depth 1.0) is covered too but fails LESS vs 1.0.
     assert_eq!(r[1], CommandResult { fragments: 8192, passed: 4096 });
     assert_eq!(r[2], CommandResult { fragments: 4096, passed: 4096 });
-    for (i, &d) in depth.data.iter().enumerate() {
+    for (i, &d) in depth.to_vec().iter().enumerate() {
         let (x, y) = (i % 128, i / 128);
         let inside = (48..112).contains(&x) && (40..104).contains(&y);
         assert_eq!(d, if inside { 0.0 } else { 1.0 }, "pixel {x},{y}");
@@ -192,7 +193,7 @@ fn near_plane_clips_affine_depth() {
     let mut depth = DepthBuffer::new(64, 32);
     let r = draw_all(&mut depth, &tris);
     assert_eq!(r.fragments, 32 * 32);
-    for (i, &d) in depth.data.iter().enumerate() {
+    for (i, &d) in depth.to_vec().iter().enumerate() {
         let x = i % 64;
         if x < 32 {
             assert_eq!(d, 1.0);
@@ -222,7 +223,7 @@ fn near_plane_clips_a_ground_triangle_reaching_behind_the_eye() {
         // the horizon; nothing wraps around above it.
         assert_eq!(r.fragments, u64::from(w * h / 2), "cull_back {cull_back}");
         assert_eq!(r.passed, r.fragments);
-        for (i, &d) in depth.data.iter().enumerate() {
+        for (i, &d) in depth.to_vec().iter().enumerate() {
             if i < (w * h / 2) as usize {
                 assert_eq!(d, 1.0);
             } else {
@@ -271,7 +272,7 @@ fn near_clipped_mesh_is_watertight() {
     let r = execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 0..n, true)])[0];
     assert_eq!(r.fragments, u64::from(w * h / 2));
     assert_eq!(r.passed, r.fragments);
-    let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+    let written = depth.to_vec().iter().filter(|&&d| d < 1.0).count() as u64;
     assert_eq!(written, r.fragments);
 }
 
@@ -295,7 +296,7 @@ fn degenerate_and_non_finite_triangles_are_dropped() {
         let r = execute(&mut depth, &tris, &commands);
         assert!(r.iter().all(|r| *r == CommandResult::default()), "{r:?}");
     }
-    assert!(depth.data.iter().all(|&d| d == 1.0));
+    assert!(depth.to_vec().iter().all(|&d| d == 1.0));
 }
 
 #[test]
@@ -321,9 +322,9 @@ fn query_less_counts_unoccluded_fragments() {
     assert_eq!(r[2], CommandResult { fragments: all, passed: all });
     assert_eq!(r[3], CommandResult { fragments: left, passed: 0 });
     // Queries do not write depth.
-    let written = depth.data.iter().filter(|&&d| d == 0.5).count() as u64;
+    let written = depth.to_vec().iter().filter(|&&d| d == 0.5).count() as u64;
     assert_eq!(written, left);
-    assert_eq!(depth.data.iter().filter(|&&d| d == 1.0).count() as u64, all - left);
+    assert_eq!(depth.to_vec().iter().filter(|&&d| d == 1.0).count() as u64, all - left);
 }
 
 /// A random scene of `n` triangles in clip space: on and off screen, crossing the
@@ -385,7 +386,7 @@ fn query_equal_passes_redrawn_geometry() {
     };
     let r = execute(&mut depth, &tris, &commands);
     assert_eq!(depth, before, "queries do not write depth");
-    let written = depth.data.iter().filter(|&&d| d < 1.0).count() as u64;
+    let written = depth.to_vec().iter().filter(|&&d| d < 1.0).count() as u64;
     let equal: u64 = r[1..].iter().map(|r| r.passed).sum();
     assert!(written > 1000);
     assert!(equal >= written, "{equal} < {written}");
@@ -394,14 +395,7 @@ fn query_equal_passes_redrawn_geometry() {
 #[test]
 fn thread_count_does_not_change_results() {
     let tris = random_scene(400, 3);
-    let n = tris.len() as u32;
-    let mut commands = vec![cmd(CommandKind::Draw, 0..n / 2, false)];
-    for i in (0..n).step_by(12) {
-        let end = (i + 12).min(n);
-        commands.push(cmd(CommandKind::Query(DepthTest::Less), i..end, true));
-        commands.push(cmd(CommandKind::Query(DepthTest::Equal), i..end, false));
-    }
-    commands.push(cmd(CommandKind::Draw, n / 2..n, true));
+    let commands = mixed_commands(tris.len() as u32);
     let run = |threads| {
         in_pool(threads, || {
             let mut depth = DepthBuffer::new(333, 251);
@@ -415,7 +409,6 @@ fn thread_count_does_not_change_results() {
     assert!(r1.iter().any(|r| r.passed > 0));
     assert_eq!(r1, r2);
     assert_eq!(r1, r4);
-    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&d1), bits(&d2));
     assert_eq!(bits(&d1), bits(&d4));
 }
@@ -434,48 +427,188 @@ fn draw_order_does_not_change_depth() {
     let rb = raster.execute(&mut b, &rev, &commands);
     let frags: u64 = rb.iter().map(|r| r.fragments).sum();
     assert_eq!(ra[0].fragments, frags);
-    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&a), bits(&b));
 }
 
+/// The depth image's bits, to compare buffers exactly (NaN and signed zeros
+/// included).
+fn bits(d: &DepthBuffer) -> Vec<u32> {
+    float_bits(&d.to_vec())
+}
+
+/// The bits of `values`.
+fn float_bits(values: &[f32]) -> Vec<u32> {
+    values.iter().map(|v| v.to_bits()).collect()
+}
+
+/// Runs `calls` (command lists, one `execute` each, on the same buffer) with
+/// `raster` and with the reference, and checks that every result and the final depth
+/// image agree bit for bit. Returns the results.
+fn check_against_reference(
+    raster: &mut Rasterizer,
+    size: (u32, u32),
+    tris: &[[Vec4; 3]],
+    calls: &[Vec<Command>],
+) -> Vec<CommandResult> {
+    let mut depth = DepthBuffer::new(size.0, size.1);
+    let mut expected = vec![1.0; size.0 as usize * size.1 as usize];
+    let mut all = Vec::new();
+    for commands in calls {
+        let r = raster.execute(&mut depth, tris, commands);
+        let e = reference::execute(&mut expected, size.0, size.1, tris, commands);
+        assert_eq!(r, e, "results of {commands:?}");
+        assert!(bits(&depth) == float_bits(&expected), "depth images differ after {commands:?}");
+        all.extend(r);
+    }
+    all
+}
+
+/// Draws, then LESS, EQUAL and any-pass queries of every few triangles of `tris`,
+/// then the rest of the draws: every kind of command against a partly drawn buffer.
+fn mixed_commands(n: u32) -> Vec<Command> {
+    let mut commands = vec![cmd(CommandKind::Draw, 0..n / 2, false)];
+    for i in (0..n).step_by(7) {
+        let end = (i + 7).min(n);
+        commands.push(cmd(CommandKind::Query(DepthTest::Less), i..end, true));
+        commands.push(cmd(CommandKind::Query(DepthTest::Equal), i..end, false));
+        commands.push(cmd(CommandKind::QueryAny(DepthTest::Less), i..end, false));
+        commands.push(cmd(CommandKind::QueryAny(DepthTest::Equal), i..end, true));
+    }
+    commands.push(cmd(CommandKind::Draw, n / 2..n, true));
+    commands
+}
+
 #[test]
-fn matches_a_per_pixel_reference() {
-    // Reference: evaluate every set-up triangle's edge functions directly at every
-    // pixel of its bounding box, with no tiles and no spans.
-    let (w, h) = (190u32, 140u32);
+fn simd_and_scalar_match_the_per_pixel_reference() {
+    // Odd sizes, several tiles, a few execute calls on the same buffer so that the
+    // hierarchical depth of one call serves the next.
     let tris = random_scene(300, 9);
-    let viewport = Viewport::new(w, h);
-    let mut expected = DepthBuffer::new(w, h);
-    let mut expected_r = CommandResult::default();
-    let mut poly = Polygon::new();
+    let n = tris.len() as u32;
+    let calls = vec![mixed_commands(n), mixed_commands(n), vec![cmd(CommandKind::Query(DepthTest::Less), 0..n, true)]];
+    for size in [(190, 140), (333, 251), (64, 64), (65, 1)] {
+        let simd = check_against_reference(&mut Rasterizer::new(), size, &tris, &calls);
+        let scalar = check_against_reference(&mut Rasterizer::scalar(), size, &tris, &calls);
+        assert_eq!(simd, scalar);
+        if size.0 > 100 {
+            assert!(simd[0].fragments > 10_000);
+            assert!(simd.iter().any(|r| r.passed == 0) && simd.iter().any(|r| r.passed > 1));
+        }
+    }
+}
+
+#[test]
+fn hidden_and_visible_queries_after_external_writes_and_clears() {
+    // A full occluder at 0.5, then queries behind it (hidden: the hierarchical depth
+    // rejects them) and in front of it; then writes from outside and a clear, after
+    // which a stale hierarchical depth would hide pixels that are visible.
+    let (w, h) = (150u32, 90u32);
+    let all = u64::from(w * h);
+    let mut tris = quad(1.0, 0.5).to_vec();
+    tris.extend(quad(1.0, 0.7));
+    tris.extend(quad(1.0, 0.3));
+    let q = |kind, range| cmd(kind, range, true);
+    let (less, any) = (CommandKind::Query(DepthTest::Less), CommandKind::QueryAny(DepthTest::Less));
+    for mut raster in [Rasterizer::new(), Rasterizer::scalar()] {
+        let mut depth = DepthBuffer::new(w, h);
+        raster.execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 0..2, false)]);
+        for _ in 0..2 {
+            let r = raster.execute(&mut depth, &tris, &[q(less, 2..4), q(less, 4..6), q(any, 2..4), q(any, 4..6)]);
+            assert_eq!(r[0], CommandResult { fragments: all, passed: 0 });
+            assert_eq!(r[1], CommandResult { fragments: all, passed: all });
+            assert_eq!(r[2], CommandResult { fragments: 0, passed: 0 });
+            assert_eq!(r[3], CommandResult { fragments: 0, passed: 1 });
+        }
+        depth.set(120, 70, 0.9);
+        let r = raster.execute(&mut depth, &tris, &[q(less, 2..4), q(any, 2..4)]);
+        assert_eq!(r[0].passed, 1);
+        assert_eq!(r[1].passed, 1);
+        depth.clear();
+        let r = raster.execute(&mut depth, &tris, &[q(less, 2..4), cmd(CommandKind::Draw, 0..2, false)]);
+        assert_eq!(r[0].passed, all);
+        assert_eq!(r[1].passed, all);
+    }
+}
+
+/// Rasterizes `t` with operation `OP` over the whole of `rows` (a tile at the
+/// origin), with the AVX2 window rasterizer and with the span walk, and checks that
+/// they agree bit for bit; returns how many pixels changed.
+#[cfg(target_arch = "x86_64")]
+fn check_window_rasterizers<const OP: u8>(
+    avx2: avx2::Avx2,
+    t: &span::RasterTri,
+    rows: &[Vec<f32>],
+    rejected: u64,
+) -> usize {
+    let window = [0, rows[0].len() as i32 - 1, 0, rows.len() as i32 - 1];
+    let (width, height) = (rows[0].len(), rows.len());
+    let run = |simd: bool| {
+        let mut data: Vec<f32> = rows.concat();
+        let mut hiz = hiz::TileHiZ::cleared();
+        let rows = split::TileRows::new(&mut data, width, height, width);
+        let mut tile = split::TileView { x0: 0, y0: 0, rows, hiz: &mut hiz };
+        let r = if simd {
+            avx2.window::<OP>(&mut tile, t, window, rejected, false).expect("small edge functions")
+        } else {
+            tile::raster_spans::<OP>(&mut tile, t, window, rejected, false)
+        };
+        (r, data)
+    };
+    let ((ra, a), (rb, b)) = (run(true), run(false));
+    assert_eq!(ra, rb, "{t:?}");
+    let bits = |data: &[f32]| data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&b), "{t:?}");
+    bits(&a).iter().zip(bits(&rows.concat())).filter(|(x, y)| *x != y).count()
+}
+
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn window_rasterizers_agree_on_special_values() {
+    // Signed zeros, infinities, NaN, subnormals in the plane and in the buffer: the
+    // AVX2 rasterizer must round, clamp and compare exactly as the scalar one, in
+    // whole groups and in a group cut by the end of the row.
+    let Some(avx2) = avx2::Avx2::detect() else {
+        eprintln!("no AVX2 on this CPU: nothing to compare");
+        return;
+    };
+    let specials = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        0.5,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        f32::MAX,
+        -f32::MAX,
+        1e-40,
+        -1e-40,
+        f32::MIN_POSITIVE,
+    ];
+    // 21 pixels wide: two whole groups and a cut one; a triangle covering it all.
+    let (w, h) = (21u32, 3u32);
+    let v = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
     let mut setups = Vec::new();
-    for t in &tris {
-        setups.clear();
-        setup_triangle(t, false, 0, viewport, &mut poly, &mut setups);
-        for s in &setups {
-            for dy in 0..=(s.y1 - s.y0) {
-                for dx in 0..=(s.x1 - s.x0) {
-                    let covered =
-                        s.edges.iter().all(|e| e.origin + e.step_x * i64::from(dx) + e.step_y * i64::from(dy) >= 0);
-                    if covered {
-                        let z = s.depth(s.row_depth(dy), dx);
-                        let d = &mut expected.data[((s.y0 + dy) as u32 * w + (s.x0 + dx) as u32) as usize];
-                        expected_r.fragments += 1;
-                        if z < *d {
-                            *d = z;
-                            expected_r.passed += 1;
-                        }
-                    }
+    let big = [v(-1.0, -1.0), v(3.0, -1.0), v(-1.0, 3.0)];
+    setup::setup_triangle(&big, false, 0, setup::Viewport::new(w, h), &mut clip::Polygon::new(), |t| setups.push(t));
+    let base = span::RasterTri::new(&setups[0]).expect("covers rows");
+    let rows: Vec<Vec<f32>> =
+        (0..h as usize).map(|y| (0..w as usize).map(|x| specials[(x + 5 * y) % 13]).collect()).collect();
+    let mut writes = 0;
+    for &z_origin in &specials {
+        for &z_dx in &specials {
+            for z_dy in [0.0, -0.0, 1.0, f32::NAN, f32::INFINITY] {
+                let mut t = base;
+                (t.z_origin, t.z_dx, t.z_dy) = (z_origin, z_dx, z_dy);
+                for rejected in [0, 0b010, 0b101] {
+                    writes += check_window_rasterizers::<{ shade::DRAW }>(avx2, &t, &rows, rejected);
+                    check_window_rasterizers::<{ shade::LESS }>(avx2, &t, &rows, rejected);
+                    check_window_rasterizers::<{ shade::EQUAL }>(avx2, &t, &rows, rejected);
                 }
             }
         }
     }
-    let mut depth = DepthBuffer::new(w, h);
-    let r = draw_all(&mut depth, &tris);
-    assert_eq!(r, expected_r);
-    assert!(r.fragments > 10_000);
-    let bits = |d: &DepthBuffer| d.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(&depth), bits(&expected));
+    assert!(writes > 1000, "the special values must exercise the writes: {writes}");
 }
 
 #[test]
@@ -487,7 +620,7 @@ fn empty_inputs() {
     assert!(execute(&mut depth, &tris, &[]).is_empty());
     let r = execute(&mut depth, &tris, &[cmd(CommandKind::Draw, 1..1, false)]);
     assert_eq!(r, vec![CommandResult::default()]);
-    depth.data[3] = 0.0;
+    depth.set(3, 0, 0.0);
     depth.clear();
-    assert!(depth.data.iter().all(|&d| d == 1.0));
+    assert!(depth.to_vec().iter().all(|&d| d == 1.0));
 }

@@ -1,0 +1,268 @@
+//! The AVX2 window rasterizer: a triangle's edge functions and depth plane evaluated
+//! 8 pixels at a time over its window in a tile, with results identical to the span
+//! walker's and the scalar depth test's.
+//!
+//! Coverage uses the reduced edge functions of [`RasterTri::edges_at`] in `i32`
+//! lanes.
+//! Per window, an edge that holds at the four corners of the window (widened to whole
+//! 8-pixel groups) holds everywhere in it and is dropped; one that fails at all four
+//! fails everywhere, and the window is empty; an edge that crosses the window takes
+//! values within its slopes times the window's size, which the guard band keeps far
+//! inside `i32` (the window is left to the span walker if not). Coverage is then a
+//! sign test of the three edge values or-ed together.
+//!
+//! Depth is [`RowPlane::depth`] per lane: the same `f32` product and sum (never a
+//! fused multiply-add), and `max(z, 0)` in the operand order that, like `depth`,
+//! turns NaN and `-0.0` into `+0.0`.
+
+use std::arch::x86_64::*;
+
+use super::hiz::BLOCKS;
+use super::shade::{test_pixel, DRAW, EQUAL, GROUP};
+use super::span::RasterTri;
+use super::split::TileView;
+use super::CommandResult;
+
+/// Proof that the running CPU supports AVX2 and POPCNT: a value exists only where it
+/// does, which makes calling this module's `target_feature` functions sound.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Avx2(());
+
+impl Avx2 {
+    /// `Some` when the running CPU supports AVX2 and POPCNT.
+    pub fn detect() -> Option<Self> {
+        (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("popcnt")).then_some(Self(()))
+    }
+
+    /// Rasterizes `t` with operation `OP` over `window` (its columns `x0..=x1` and rows
+    /// `y0..=y1` in `tile`, absolute, not empty), skipping the depth tests of the
+    /// hierarchical-depth blocks set in `rejected`; with `stop_at_pass`, stops after
+    /// the first row with a passing fragment. `None` where an edge function might
+    /// not fit an `i32` lane (the caller then walks spans).
+    pub fn window<const OP: u8>(
+        self,
+        tile: &mut TileView<'_>,
+        t: &RasterTri,
+        window: [i32; 4],
+        rejected: u64,
+        stop_at_pass: bool,
+    ) -> Option<CommandResult> {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2 and POPCNT.
+        unsafe { raster_window::<OP>(tile, t, window, rejected, stop_at_pass) }
+    }
+}
+
+/// Edge functions per lane: the value at the window's first row for each lane of its
+/// first group, and the steps per group to the right and per row down.
+struct Edges {
+    row: [__m256i; 3],
+    per_group: [__m256i; 3],
+    per_row: [__m256i; 3],
+    /// How many edges do not hold on the whole window (the others are zero here).
+    live: usize,
+}
+
+/// Sets up `t`'s edges over the columns `c0..=c1` and rows `y0..=y1` (absolute;
+/// `c0..c0 + 8` the first group's lanes): `Err` with empty counts where an edge
+/// excludes all of it, `Ok(None)` where a value might not fit an `i32`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Option<Edges>, CommandResult> {
+    let (i1, j1) = (i64::from(c1 - c0), i64::from(y1 - y0));
+    let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    let zero = _mm256_setzero_si256();
+    let mut out = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
+    for (k, (g, a, b)) in t.edges_at(c0, y0).into_iter().enumerate() {
+        // The extremes of g + a * i + b * j over the window, at its corners.
+        let (ai, bj) = (a * i1, b * j1);
+        let (lo, hi) = (g + ai.min(0) + bj.min(0), g + ai.max(0) + bj.max(0));
+        if lo >= 0 {
+            // Holds everywhere: a zero edge function that never changes.
+            continue;
+        }
+        if hi < 0 {
+            return Err(CommandResult::default());
+        }
+        if lo < i64::from(i32::MIN) || hi > i64::from(i32::MAX) {
+            return Ok(None);
+        }
+        // All values in between fit, and so do the slopes (|a|, |b| are at most 2^24,
+        // so 8 * a fits too).
+        out.row[k] =
+            _mm256_add_epi32(_mm256_set1_epi32(g as i32), _mm256_mullo_epi32(_mm256_set1_epi32(a as i32), lanes));
+        out.per_group[k] = _mm256_set1_epi32(8 * a as i32);
+        out.per_row[k] = _mm256_set1_epi32(b as i32);
+        out.live += 1;
+    }
+    Ok(Some(out))
+}
+
+/// [`Avx2::window`].
+///
+/// # Safety
+/// The CPU must support AVX2 and POPCNT.
+#[target_feature(enable = "avx2,popcnt")]
+#[inline(never)]
+unsafe fn raster_window<const OP: u8>(
+    tile: &mut TileView<'_>,
+    t: &RasterTri,
+    window: [i32; 4],
+    rejected: u64,
+    stop_at_pass: bool,
+) -> Option<CommandResult> {
+    let [x0, x1, y0, y1] = window;
+    let row_len = tile.rows.width();
+    // Groups before `whole` lie wholly inside the tile's rows; a last group cut by
+    // the end of the row is done pixel by pixel.
+    let whole = row_len / GROUP;
+    let (first, last) = ((x0 - tile.x0) as usize / GROUP, (x1 - tile.x0) as usize / GROUP);
+    let c0 = tile.x0 + (first * GROUP) as i32;
+    let edges = match edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1) {
+        Err(empty) => return Some(empty),
+        Ok(None) => return None,
+        Ok(Some(edges)) => edges,
+    };
+    let window = Window { first, end: (last + 1).min(whole), cut: last >= whole, c0, y0, y1 };
+    // A window wholly inside the triangle needs no coverage test. Its groups lie
+    // wholly in the window: the pixels of a group outside the window are outside
+    // the bounding box (or the viewport), so not covered.
+    debug_assert!(
+        edges.live > 0 || (x0 == c0 && (last >= whole || x1 == c0 + ((last - first + 1) * GROUP) as i32 - 1))
+    );
+    let counts = if edges.live == 0 {
+        rows::<OP, FULL>(tile, t, &window, &edges, rejected, stop_at_pass)
+    } else {
+        rows::<OP, EDGES>(tile, t, &window, &edges, rejected, stop_at_pass)
+    };
+    Some(counts)
+}
+
+/// The whole groups `first..end` (and group `end` if `cut`) of the rows `y0..=y1`
+/// of a window; `c0` is the first group's first column.
+struct Window {
+    first: usize,
+    end: usize,
+    cut: bool,
+    c0: i32,
+    y0: i32,
+    y1: i32,
+}
+
+/// How [`rows`] finds the covered lanes: none to find, the window lies wholly inside
+/// the triangle.
+const FULL: u8 = 0;
+/// By testing the edge functions of every group of every row.
+const EDGES: u8 = 1;
+
+/// The rows of [`raster_window`], finding the covered lanes as `COVER` says.
+///
+/// # Safety
+/// The CPU must support AVX2 and POPCNT.
+#[target_feature(enable = "avx2,popcnt")]
+#[inline]
+unsafe fn rows<const OP: u8, const COVER: u8>(
+    tile: &mut TileView<'_>,
+    t: &RasterTri,
+    window: &Window,
+    edges: &Edges,
+    rejected: u64,
+    stop_at_pass: bool,
+) -> CommandResult {
+    let &Window { first, end, cut, c0, y0, y1 } = window;
+    let whole = tile.rows.width() / GROUP;
+    let mut e_row = edges.row;
+    let zero = _mm256_setzero_ps();
+    let eight = _mm256_set1_ps(GROUP as f32);
+    let z_dx = _mm256_set1_ps(t.z_dx);
+    // The plane's pixel offsets (`dx` of `RowPlane::depth`) of the first group's
+    // lanes: integers below 2^24, so exact in f32, and so are their sums with 8s.
+    let dx_first =
+        _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    let dx0 = tile.x0 - t.x0;
+    let cut_lanes = (1u32 << (tile.rows.width() - whole * GROUP)) - 1;
+    let (mut fragments, mut scalar_passed) = (0u32, 0u32);
+    // Per lane, minus the fragments that passed (a passing lane's mask is -1).
+    let mut minus_passed = _mm256_setzero_si256();
+    for ly in (y0 - tile.y0) as usize..=(y1 - tile.y0) as usize {
+        let row = tile.rows.row_mut(ly);
+        let plane = t.row_plane(tile.y0 + ly as i32);
+        let z_row = _mm256_set1_ps(plane.z_row);
+        let skip = (rejected >> (BLOCKS * (ly / GROUP))) as u8;
+        let pixels = row.as_mut_ptr();
+        let mut e = e_row;
+        let mut dx = dx_first;
+        for g in first..end {
+            // Sign bit set: some edge function is negative, the lane is not covered.
+            let outside =
+                if COVER == FULL { _mm256_setzero_si256() } else { _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]) };
+            let outside_bits = _mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32;
+            // An any-pass query counts no fragments, so it has nothing to do in a
+            // rejected block. A group wholly outside the triangle is tested all the
+            // same (nothing passes): cheaper than the mispredicted branches that
+            // skipping it costs.
+            if !(stop_at_pass && skip & (1 << g) != 0) {
+                fragments += (!outside_bits & 0xFF).count_ones();
+                if skip & (1 << g) == 0 {
+                    // max(z, 0) returns its second operand (+0.0) unless z > 0, as
+                    // `depth`.
+                    let z = _mm256_max_ps(_mm256_add_ps(z_row, _mm256_mul_ps(z_dx, dx)), zero);
+                    // SAFETY: g < whole: the group's 8 pixels lie inside `row`.
+                    let p = unsafe { pixels.add(g * GROUP) };
+                    // SAFETY: as above.
+                    let mut d = unsafe { _mm256_loadu_ps(p) };
+                    // An empty statement that hides where `d` came from: LLVM would
+                    // otherwise fuse the load, blend and store below into a masked
+                    // store (vmaskmovps), which is microcoded and many times slower
+                    // on AMD Zen.
+                    // SAFETY: the statement does nothing; `d` keeps its value.
+                    unsafe {
+                        std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags))
+                    };
+                    let test =
+                        if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
+                    let pass = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_srai_epi32::<31>(outside)), test);
+                    if OP == DRAW {
+                        // SAFETY: as above.
+                        unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
+                    }
+                    minus_passed = _mm256_add_epi32(minus_passed, _mm256_castps_si256(pass));
+                }
+            }
+            if COVER != FULL {
+                for (ek, step) in e.iter_mut().zip(&edges.per_group) {
+                    *ek = _mm256_add_epi32(*ek, *step);
+                }
+            }
+            dx = _mm256_add_ps(dx, eight);
+        }
+        if cut {
+            // `e` is now at group `whole`, cut by the end of the row.
+            let outside = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
+            let mut covered = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & cut_lanes;
+            fragments += covered.count_ones();
+            if skip & (1 << whole) == 0 {
+                while covered != 0 {
+                    let c = whole * GROUP + covered.trailing_zeros() as usize;
+                    covered &= covered - 1;
+                    scalar_passed += u32::from(test_pixel::<OP>(plane.depth(dx0 + c as i32), &mut row[c]));
+                }
+            }
+        }
+        if COVER != FULL {
+            for (ek, step) in e_row.iter_mut().zip(&edges.per_row) {
+                *ek = _mm256_add_epi32(*ek, *step);
+            }
+        }
+        if stop_at_pass && (scalar_passed > 0 || _mm256_testz_si256(minus_passed, minus_passed) == 0) {
+            break;
+        }
+    }
+    let halves = _mm_add_epi32(_mm256_castsi256_si128(minus_passed), _mm256_extracti128_si256::<1>(minus_passed));
+    let pairs = _mm_add_epi32(halves, _mm_unpackhi_epi64(halves, halves));
+    let minus = _mm_cvtsi128_si32(_mm_add_epi32(pairs, _mm_shuffle_epi32::<1>(pairs)));
+    let passed = scalar_passed + minus.wrapping_neg() as u32;
+    CommandResult { fragments: u64::from(fragments), passed: u64::from(passed) }
+}

@@ -1,0 +1,144 @@
+//! Property tests: on random scenes at random sizes, the optimized rasterizer (AVX2
+//! where the CPU has it, and the scalar fallback) agrees with the per-pixel reference
+//! bit for bit, and the hierarchical depth's bound is below every depth it bounds.
+
+use glam::Vec4;
+use proptest::prelude::*;
+
+use super::super::clip::Polygon;
+use super::super::hiz::min_depth;
+use super::super::setup::{round, setup_triangle, Viewport};
+use super::super::span::{floor_divmod, RasterTri};
+use super::super::{Command, CommandKind, DepthTest, Rasterizer};
+use super::{bits, check_against_reference, cmd, float_bits, DepthBuffer};
+
+/// A clip-space vertex at NDC `(x, y, z)` scaled by `w`.
+fn clip(x: f32, y: f32, z: f32, w: f32) -> Vec4 {
+    Vec4::new(x, y, z, 1.0) * w
+}
+
+/// Triangles of every kind the rasterizer must handle.
+fn triangle() -> impl Strategy<Value = [Vec4; 3]> {
+    let ndc = || -1.6f32..1.6;
+    let vertex =
+        move |w: std::ops::Range<f32>| (ndc(), ndc(), -0.2f32..1.1, w).prop_map(|(x, y, z, w)| clip(x, y, z, w));
+    prop_oneof![
+        // Anywhere, any size: crossing tiles, the near plane, the viewport's sides.
+        4 => [vertex(0.2..3.0), vertex(0.2..3.0), vertex(0.2..3.0)],
+        // Small: around a pixel or below.
+        3 => (ndc(), ndc(), 0.0f32..1.0, prop::array::uniform3((-0.03f32..0.03, -0.03f32..0.03)))
+            .prop_map(|(x, y, z, d)| d.map(|(dx, dy)| clip(x + dx, y + dy, z, 1.0))),
+        // Degenerate: the third vertex on the line through the first two.
+        1 => (vertex(1.0..1.0001), vertex(1.0..1.0001), -1.0f32..2.0).prop_map(|(a, b, t)| [a, b, a.lerp(b, t)]),
+        // Reaching behind the eye (w <= 0).
+        1 => [vertex(-1.0..1.0), vertex(0.2..2.0), vertex(-1.0..1.0)],
+        // Far past the guard band.
+        1 => [vertex(0.5..1.0), vertex(0.5..1.0), vertex(0.5..1.0)].prop_map(|t| t.map(|v| clip(v.x * 1e4, v.y, v.z, v.w))),
+        // Depths up to f32::MAX: planes so steep that depths overflow to infinity and
+        // NaN (clamped to 0) inside the triangle.
+        1 => prop::array::uniform3((ndc(), ndc(), 0.0f32..3.4e38)).prop_map(|v| v.map(|(x, y, z)| clip(x, y, z, 1.0))),
+        // On a coarse grid: vertices and edges through pixel centres and corners, edges
+        // shared between triangles (ties of the fill rule).
+        2 => prop::array::uniform3((0i32..=16, 0i32..=16, 0.0f32..1.0))
+            .prop_map(|v| v.map(|(x, y, z)| clip(x as f32 / 8.0 - 1.0, y as f32 / 8.0 - 1.0, z, 1.0))),
+    ]
+}
+
+/// A command over `triangles` (a range taken modulo their count): any kind, culling
+/// on or off. Ranges overlap, so the same triangles are drawn and queried again
+/// (EQUAL queries then pass).
+fn command(n: u32) -> impl Strategy<Value = Command> {
+    (0..5u8, 0..n, 0..n, any::<bool>()).prop_map(|(kind, a, b, cull_back)| {
+        let kind = match kind {
+            0 => CommandKind::Draw,
+            1 => CommandKind::Query(DepthTest::Less),
+            2 => CommandKind::Query(DepthTest::Equal),
+            3 => CommandKind::QueryAny(DepthTest::Less),
+            _ => CommandKind::QueryAny(DepthTest::Equal),
+        };
+        cmd(kind, a.min(b)..a.max(b) + 1, cull_back)
+    })
+}
+
+/// A buffer size, triangles, and the commands of a few `execute` calls.
+type Scene = ((u32, u32), Vec<[Vec4; 3]>, Vec<Vec<Command>>);
+
+/// A random scene: a size (odd ones included, rarely a multiple of the tile), its
+/// triangles, and a few `execute` calls' commands.
+fn scene() -> impl Strategy<Value = Scene> {
+    let size = (1u32..200, 1u32..150);
+    (size, prop::collection::vec(triangle(), 1..40)).prop_flat_map(|(size, tris)| {
+        let n = tris.len() as u32;
+        let calls = prop::collection::vec(prop::collection::vec(command(n), 1..12), 1..4);
+        (Just(size), Just(tris), calls)
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn optimized_paths_match_the_reference((size, tris, calls) in scene()) {
+        let simd = check_against_reference(&mut Rasterizer::new(), size, &tris, &calls);
+        let scalar = check_against_reference(&mut Rasterizer::scalar(), size, &tris, &calls);
+        prop_assert_eq!(simd, scalar);
+    }
+
+    #[test]
+    fn results_survive_external_writes(
+        (size, tris, calls) in scene(),
+        at in any::<prop::sample::Index>(),
+        value in 0.0f32..1.0,
+    ) {
+        // Like `optimized_paths_match_the_reference`, with one pixel overwritten from
+        // outside between the calls: the hierarchical depth must not go stale.
+        let mut raster = Rasterizer::new();
+        let mut depth = DepthBuffer::new(size.0, size.1);
+        let mut expected = vec![1.0; size.0 as usize * size.1 as usize];
+        for commands in &calls {
+            let r = raster.execute(&mut depth, &tris, commands);
+            let e = super::reference::execute(&mut expected, size.0, size.1, &tris, commands);
+            prop_assert_eq!(r, e);
+            prop_assert!(bits(&depth) == float_bits(&expected));
+            let i = at.index(expected.len());
+            depth.set(i as u32 % size.0, i as u32 / size.0, value);
+            expected[i] = value;
+        }
+    }
+
+    #[test]
+    fn arithmetic_shortcuts_are_exact(
+        x in prop_oneof![-1e15f64..1e15, (-1000i64..1000).prop_map(|h| h as f64 * 0.5), -2.0f64..2.0],
+        n in prop_oneof![-(1i64 << 52)..(1i64 << 52), -1000i64..1000],
+        d in prop_oneof![1u32..=(1 << 24), 1u32..10],
+    ) {
+        prop_assert_eq!(round(x), x.round() as i64);
+        let (q, r) = floor_divmod(n, d);
+        prop_assert_eq!((q, i64::from(r)), (n.div_euclid(i64::from(d)), n.rem_euclid(i64::from(d))));
+    }
+
+    #[test]
+    fn hierarchical_bound_is_below_every_depth(
+        tri in triangle(),
+        size in (1u32..300, 1u32..300),
+        corners in prop::array::uniform4(0.0f64..1.0),
+    ) {
+        let mut setups = Vec::new();
+        setup_triangle(&tri, false, 0, Viewport::new(size.0, size.1), &mut Polygon::new(), |t| setups.push(t));
+        for t in setups.iter().filter_map(RasterTri::new) {
+            // A random sub-rectangle of the bounding box, as a tile would clip it.
+            let (w, h) = (f64::from(t.x1 - t.x0), f64::from(t.y1 - t.plane_y));
+            let (xa, xb) = (t.x0 + (corners[0] * w) as i32, t.x0 + (corners[1] * w) as i32);
+            let (ya, yb) = (t.plane_y + (corners[2] * h) as i32, t.plane_y + (corners[3] * h) as i32);
+            let (x0, x1, y0, y1) = (xa.min(xb), xa.max(xb), ya.min(yb), ya.max(yb));
+            let Some(min) = min_depth(&t, x0, x1, y0, y1) else { continue };
+            for y in y0..=y1 {
+                let plane = t.row_plane(y);
+                for x in x0..=x1 {
+                    let z = plane.depth(x - t.x0);
+                    prop_assert!(min <= z, "bound {} above the depth {} at {},{}", min, z, x, y);
+                }
+            }
+        }
+    }
+}
