@@ -240,17 +240,27 @@ impl RasterBackend for SoftRaster {
         };
         self.triangles.clear();
         self.commands.clear();
-        for b in boxes {
-            let first = self.triangles.len() as u32;
-            self.triangles.extend_from_slice(b);
-            self.commands.push(Command { kind, triangles: first..self.triangles.len() as u32, cull_back: true });
-        }
+        let queries = append_boxes(&mut self.triangles, boxes);
+        self.commands.extend(queries.map(|triangles| Command { kind, triangles, cull_back: true }));
         let (pool, rasterizer, depth) = (&self.pool, &mut self.rasterizer, &mut self.depth);
         let (triangles, commands) = (&self.triangles, &self.commands);
         let start = Instant::now();
         pool.install(|| rasterizer.execute(depth, triangles, commands));
         Ok(Some(start.elapsed().as_secs_f64()))
     }
+}
+
+/// Appends the triangles of `boxes` to `triangles`, yielding each box's range of
+/// them: one occlusion query per box.
+fn append_boxes<'a>(
+    triangles: &'a mut Vec<[Vec4; 3]>,
+    boxes: &'a [[[Vec4; 3]; 12]],
+) -> impl Iterator<Item = std::ops::Range<u32>> + 'a {
+    boxes.iter().map(move |b| {
+        let first = triangles.len() as u32;
+        triangles.extend_from_slice(b);
+        first..triangles.len() as u32
+    })
 }
 
 /// The wgpu backend's depth rasterization ([`DepthRaster`]) on a GPU adapter. Its
@@ -292,11 +302,7 @@ impl WgpuRaster {
         self.triangles.clear();
         self.triangles.extend_from_slice(occluder);
         self.groups.clear();
-        for b in boxes {
-            let first = self.triangles.len() as u32;
-            self.triangles.extend_from_slice(b);
-            self.groups.push(first..self.triangles.len() as u32);
-        }
+        self.groups.extend(append_boxes(&mut self.triangles, boxes));
         self.raster.upload(&self.triangles)?;
         self.raster.clear(width, height)?;
         self.raster.draw(0..occluder.len() as u32)?;

@@ -89,9 +89,9 @@ impl ViewConfig {
 /// screenshot, until the screenshot is written). Fails with [`ViewError`]
 /// without a display, with `occlude_wgpu::GpuError::NoAdapter` without a
 /// GPU, and with `occlude_scenes::LoadError` for a model that cannot be
-/// imported.
+/// imported. Check `config` with [`ViewConfig::validate`] first: a bad
+/// method or parameter is otherwise found only once the window is open.
 pub fn run(config: &ViewConfig) -> Result<()> {
-    config.validate()?;
     app::run(config)
 }
 
