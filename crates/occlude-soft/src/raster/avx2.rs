@@ -132,10 +132,11 @@ unsafe fn raster_window<const OP: u8>(
     debug_assert!(
         edges.live > 0 || (x0 == c0 && (last >= whole || x1 == c0 + ((last - first + 1) * GROUP) as i32 - 1))
     );
-    let counts = if edges.live == 0 {
-        rows::<OP, FULL>(tile, t, &window, &edges, rejected, stop_at_pass)
-    } else {
-        rows::<OP, EDGES>(tile, t, &window, &edges, rejected, stop_at_pass)
+    let counts = match (edges.live == 0, stop_at_pass) {
+        (true, false) => rows::<OP, FULL, false>(tile, t, &window, &edges, rejected),
+        (true, true) => rows::<OP, FULL, true>(tile, t, &window, &edges, rejected),
+        (false, false) => rows::<OP, EDGES, false>(tile, t, &window, &edges, rejected),
+        (false, true) => rows::<OP, EDGES, true>(tile, t, &window, &edges, rejected),
     };
     Some(counts)
 }
@@ -157,25 +158,33 @@ const FULL: u8 = 0;
 /// By testing the edge functions of every group of every row.
 const EDGES: u8 = 1;
 
-/// The rows of [`raster_window`], finding the covered lanes as `COVER` says.
+/// Per-lane sums of a window's groups: minus the lanes outside the triangle and
+/// minus the lanes that passed (a lane's mask is -1 where it is set).
+struct Sums {
+    minus_outside: __m256i,
+    minus_passed: __m256i,
+}
+
+/// The rows of [`raster_window`], finding the covered lanes as `COVER` says; with
+/// `STOP` (an any-pass query, which counts no fragments), stops after the first row
+/// with a passing fragment and reports no fragments.
 ///
 /// # Safety
 /// The CPU must support AVX2 and POPCNT.
 #[target_feature(enable = "avx2,popcnt")]
 #[inline]
-unsafe fn rows<const OP: u8, const COVER: u8>(
+unsafe fn rows<const OP: u8, const COVER: u8, const STOP: bool>(
     tile: &mut TileView<'_>,
     t: &RasterTri,
     window: &Window,
     edges: &Edges,
     rejected: u64,
-    stop_at_pass: bool,
 ) -> CommandResult {
     let &Window { first, end, cut, c0, y0, y1 } = window;
     let whole = tile.rows.width() / GROUP;
+    // The groups `first..end` as bits (end <= 8).
+    let groups = ((1u16 << end) - (1u16 << first)) as u8;
     let mut e_row = edges.row;
-    let zero = _mm256_setzero_ps();
-    let eight = _mm256_set1_ps(GROUP as f32);
     let z_dx = _mm256_set1_ps(t.z_dx);
     // The plane's pixel offsets (`dx` of `RowPlane::depth`) of the first group's
     // lanes: integers below 2^24, so exact in f32, and so are their sums with 8s.
@@ -183,66 +192,28 @@ unsafe fn rows<const OP: u8, const COVER: u8>(
         _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     let dx0 = tile.x0 - t.x0;
     let cut_lanes = (1u32 << (tile.rows.width() - whole * GROUP)) - 1;
-    let (mut fragments, mut scalar_passed) = (0u32, 0u32);
-    // Per lane, minus the fragments that passed (a passing lane's mask is -1).
-    let mut minus_passed = _mm256_setzero_si256();
+    let (mut rows_done, mut cut_fragments, mut scalar_passed) = (0u32, 0u32, 0u32);
+    let zero = _mm256_setzero_si256();
+    let mut sums = Sums { minus_outside: zero, minus_passed: zero };
     for ly in (y0 - tile.y0) as usize..=(y1 - tile.y0) as usize {
         let row = tile.rows.row_mut(ly);
         let plane = t.row_plane(tile.y0 + ly as i32);
-        let z_row = _mm256_set1_ps(plane.z_row);
         let skip = (rejected >> (BLOCKS * (ly / GROUP))) as u8;
-        let pixels = row.as_mut_ptr();
-        let mut e = e_row;
-        let mut dx = dx_first;
-        for g in first..end {
-            // Sign bit set: some edge function is negative, the lane is not covered.
-            let outside =
-                if COVER == FULL { _mm256_setzero_si256() } else { _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]) };
-            let outside_bits = _mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32;
-            // An any-pass query counts no fragments, so it has nothing to do in a
-            // rejected block. A group wholly outside the triangle is tested all the
-            // same (nothing passes): cheaper than the mispredicted branches that
-            // skipping it costs.
-            if !(stop_at_pass && skip & (1 << g) != 0) {
-                fragments += (!outside_bits & 0xFF).count_ones();
-                if skip & (1 << g) == 0 {
-                    // max(z, 0) returns its second operand (+0.0) unless z > 0, as
-                    // `depth`.
-                    let z = _mm256_max_ps(_mm256_add_ps(z_row, _mm256_mul_ps(z_dx, dx)), zero);
-                    // SAFETY: g < whole: the group's 8 pixels lie inside `row`.
-                    let p = unsafe { pixels.add(g * GROUP) };
-                    // SAFETY: as above.
-                    let mut d = unsafe { _mm256_loadu_ps(p) };
-                    // An empty statement that hides where `d` came from: LLVM would
-                    // otherwise fuse the load, blend and store below into a masked
-                    // store (vmaskmovps), which is microcoded and many times slower
-                    // on AMD Zen.
-                    // SAFETY: the statement does nothing; `d` keeps its value.
-                    unsafe {
-                        std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags))
-                    };
-                    let test =
-                        if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
-                    let pass = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_srai_epi32::<31>(outside)), test);
-                    if OP == DRAW {
-                        // SAFETY: as above.
-                        unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
-                    }
-                    minus_passed = _mm256_add_epi32(minus_passed, _mm256_castps_si256(pass));
-                }
-            }
-            if COVER != FULL {
-                for (ek, step) in e.iter_mut().zip(&edges.per_group) {
-                    *ek = _mm256_add_epi32(*ek, *step);
-                }
-            }
-            dx = _mm256_add_ps(dx, eight);
-        }
+        let group_row =
+            GroupRow { pixels: row.as_mut_ptr(), z_row: _mm256_set1_ps(plane.z_row), z_dx, dx: dx_first, first, end };
+        // Rows that no rejected block crosses, the usual case for draws, run a loop
+        // without the per-group test of the rejection bits.
+        let e = if skip & groups == 0 {
+            group_row.run::<OP, COVER, false>(e_row, &edges.per_group, 0, &mut sums)
+        } else {
+            group_row.run::<OP, COVER, true>(e_row, &edges.per_group, skip, &mut sums)
+        };
+        rows_done += 1;
         if cut {
             // `e` is now at group `whole`, cut by the end of the row.
             let outside = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
             let mut covered = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & cut_lanes;
-            fragments += covered.count_ones();
+            cut_fragments += covered.count_ones();
             if skip & (1 << whole) == 0 {
                 while covered != 0 {
                     let c = whole * GROUP + covered.trailing_zeros() as usize;
@@ -256,13 +227,108 @@ unsafe fn rows<const OP: u8, const COVER: u8>(
                 *ek = _mm256_add_epi32(*ek, *step);
             }
         }
-        if stop_at_pass && (scalar_passed > 0 || _mm256_testz_si256(minus_passed, minus_passed) == 0) {
+        if STOP && (scalar_passed > 0 || _mm256_testz_si256(sums.minus_passed, sums.minus_passed) == 0) {
             break;
         }
     }
-    let halves = _mm_add_epi32(_mm256_castsi256_si128(minus_passed), _mm256_extracti128_si256::<1>(minus_passed));
-    let pairs = _mm_add_epi32(halves, _mm_unpackhi_epi64(halves, halves));
-    let minus = _mm_cvtsi128_si32(_mm_add_epi32(pairs, _mm_shuffle_epi32::<1>(pairs)));
-    let passed = scalar_passed + minus.wrapping_neg() as u32;
+    let passed = scalar_passed + hsum(sums.minus_passed).wrapping_neg();
+    let fragments = if STOP {
+        0
+    } else {
+        let lanes = rows_done * (end - first) as u32 * GROUP as u32;
+        lanes.wrapping_add(hsum(sums.minus_outside)) + cut_fragments
+    };
     CommandResult { fragments: u64::from(fragments), passed: u64::from(passed) }
+}
+
+/// The sum of the eight `i32` lanes of `v`, as a `u32` (wrapping).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn hsum(v: __m256i) -> u32 {
+    let halves = _mm_add_epi32(_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v));
+    let pairs = _mm_add_epi32(halves, _mm_unpackhi_epi64(halves, halves));
+    _mm_cvtsi128_si32(_mm_add_epi32(pairs, _mm_shuffle_epi32::<1>(pairs))) as u32
+}
+
+/// The whole groups `first..end` of one row of a window.
+struct GroupRow {
+    /// The tile row's first pixel.
+    pixels: *mut f32,
+    /// The depth plane along the row (`RowPlane::z_row`), in every lane.
+    z_row: __m256,
+    /// The plane's slope to the right, in every lane.
+    z_dx: __m256,
+    /// The plane's pixel offsets of the lanes of group `first`.
+    dx: __m256,
+    first: usize,
+    end: usize,
+}
+
+impl GroupRow {
+    /// Tests (and for a draw, writes) the row's groups with operation `OP`, the edge
+    /// functions `e` at group `first` stepping by `per_group`, and adds to `sums`;
+    /// with `SKIPS`, the depth tests of the groups set in `skip` are skipped (their
+    /// lanes are still counted). Returns the edge functions at group `end`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2; the row must hold the groups' pixels.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn run<const OP: u8, const COVER: u8, const SKIPS: bool>(
+        &self,
+        mut e: [__m256i; 3],
+        per_group: &[__m256i; 3],
+        skip: u8,
+        sums: &mut Sums,
+    ) -> [__m256i; 3] {
+        let zero = _mm256_setzero_ps();
+        let eight = _mm256_set1_ps(GROUP as f32);
+        let mut dx = self.dx;
+        for g in self.first..self.end {
+            // Sign bit set: some edge function is negative, the lane is not covered
+            // (-1 after the shift). A group wholly outside the triangle is tested all
+            // the same (nothing passes): cheaper than the mispredicted branches that
+            // skipping it costs.
+            let outside = if COVER == FULL {
+                _mm256_setzero_si256()
+            } else {
+                _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]))
+            };
+            sums.minus_outside = _mm256_add_epi32(sums.minus_outside, outside);
+            if !(SKIPS && skip & (1 << g) != 0) {
+                // max(z, 0) returns its second operand (+0.0) unless z > 0, as
+                // `depth`.
+                let z = _mm256_max_ps(_mm256_add_ps(self.z_row, _mm256_mul_ps(self.z_dx, dx)), zero);
+                // SAFETY: the caller promises the group's 8 pixels lie inside the row.
+                let p = unsafe { self.pixels.add(g * GROUP) };
+                // SAFETY: as above.
+                let mut d = unsafe { _mm256_loadu_ps(p) };
+                // An empty statement that hides where `d` came from: LLVM would
+                // otherwise fuse the load, blend and store below into a masked store
+                // (vmaskmovps), which is microcoded and many times slower on AMD Zen.
+                // SAFETY: the statement does nothing; `d` keeps its value.
+                unsafe {
+                    std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags))
+                };
+                let test =
+                    if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
+                let pass = _mm256_andnot_ps(_mm256_castsi256_ps(outside), test);
+                if OP == DRAW {
+                    // SAFETY: as above.
+                    unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
+                }
+                sums.minus_passed = _mm256_add_epi32(sums.minus_passed, _mm256_castps_si256(pass));
+            }
+            if COVER != FULL {
+                for (ek, step) in e.iter_mut().zip(per_group) {
+                    *ek = _mm256_add_epi32(*ek, *step);
+                }
+            }
+            dx = _mm256_add_ps(dx, eight);
+        }
+        e
+    }
 }
