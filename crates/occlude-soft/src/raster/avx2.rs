@@ -16,6 +16,7 @@
 //! turns NaN and `-0.0` into `+0.0`.
 
 use std::arch::x86_64::*;
+use std::mem::MaybeUninit;
 
 use super::hiz::BLOCKS;
 use super::shade::{test_pixel, DRAW, EQUAL, GROUP};
@@ -53,12 +54,13 @@ impl Avx2 {
 }
 
 /// Edge functions per lane: the value at the window's first row for each lane of its
-/// first group, and the steps per group to the right and per row down.
+/// first group, and the steps per group to the right and per row down. The edges
+/// that do not hold on the whole window come first; the others are zero.
 struct Edges {
     row: [__m256i; 3],
     per_group: [__m256i; 3],
     per_row: [__m256i; 3],
-    /// How many edges do not hold on the whole window (the others are zero here).
+    /// How many edges do not hold on the whole window.
     live: usize,
 }
 
@@ -75,7 +77,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Opt
     let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     let zero = _mm256_setzero_si256();
     let mut out = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
-    for (k, (g, a, b)) in t.edges_at(c0, y0).into_iter().enumerate() {
+    for (g, a, b) in t.edges_at(c0, y0) {
         // The extremes of g + a * i + b * j over the window, at its corners.
         let (ai, bj) = (a * i1, b * j1);
         let (lo, hi) = (g + ai.min(0) + bj.min(0), g + ai.max(0) + bj.max(0));
@@ -91,6 +93,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Opt
         }
         // All values in between fit, and so do the slopes (|a|, |b| are at most 2^24,
         // so 8 * a fits too).
+        let k = out.live;
         out.row[k] =
             _mm256_add_epi32(_mm256_set1_epi32(g as i32), _mm256_mullo_epi32(_mm256_set1_epi32(a as i32), lanes));
         out.per_group[k] = _mm256_set1_epi32(8 * a as i32);
@@ -132,11 +135,16 @@ unsafe fn raster_window<const OP: u8>(
     debug_assert!(
         edges.live > 0 || (x0 == c0 && (last >= whole || x1 == c0 + ((last - first + 1) * GROUP) as i32 - 1))
     );
-    let counts = match (edges.live == 0, stop_at_pass) {
-        (true, false) => rows::<OP, FULL, false>(tile, t, &window, &edges, rejected),
-        (true, true) => rows::<OP, FULL, true>(tile, t, &window, &edges, rejected),
-        (false, false) => rows::<OP, EDGES, false>(tile, t, &window, &edges, rejected),
-        (false, true) => rows::<OP, EDGES, true>(tile, t, &window, &edges, rejected),
+    // One loop per number of live edges, so that each tests only those.
+    let counts = match (edges.live, stop_at_pass) {
+        (0, false) => rows::<OP, 0, false>(tile, t, &window, &edges, rejected),
+        (0, true) => rows::<OP, 0, true>(tile, t, &window, &edges, rejected),
+        (1, false) => rows::<OP, 1, false>(tile, t, &window, &edges, rejected),
+        (1, true) => rows::<OP, 1, true>(tile, t, &window, &edges, rejected),
+        (2, false) => rows::<OP, 2, false>(tile, t, &window, &edges, rejected),
+        (2, true) => rows::<OP, 2, true>(tile, t, &window, &edges, rejected),
+        (_, false) => rows::<OP, 3, false>(tile, t, &window, &edges, rejected),
+        (_, true) => rows::<OP, 3, true>(tile, t, &window, &edges, rejected),
     };
     Some(counts)
 }
@@ -152,12 +160,6 @@ struct Window {
     y1: i32,
 }
 
-/// How [`rows`] finds the covered lanes: none to find, the window lies wholly inside
-/// the triangle.
-const FULL: u8 = 0;
-/// By testing the edge functions of every group of every row.
-const EDGES: u8 = 1;
-
 /// Per-lane sums of a window's groups: minus the lanes outside the triangle and
 /// minus the lanes that passed (a lane's mask is -1 where it is set).
 struct Sums {
@@ -165,7 +167,8 @@ struct Sums {
     minus_passed: __m256i,
 }
 
-/// The rows of [`raster_window`], finding the covered lanes as `COVER` says; with
+/// The rows of [`raster_window`], finding the covered lanes by testing the first
+/// `LIVE` edge functions (none: the window lies wholly inside the triangle); with
 /// `STOP` (an any-pass query, which counts no fragments), stops after the first row
 /// with a passing fragment and reports no fragments.
 ///
@@ -173,7 +176,7 @@ struct Sums {
 /// The CPU must support AVX2 and POPCNT.
 #[target_feature(enable = "avx2,popcnt")]
 #[inline]
-unsafe fn rows<const OP: u8, const COVER: u8, const STOP: bool>(
+unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
     tile: &mut TileView<'_>,
     t: &RasterTri,
     window: &Window,
@@ -185,11 +188,18 @@ unsafe fn rows<const OP: u8, const COVER: u8, const STOP: bool>(
     // The groups `first..end` as bits (end <= 8).
     let groups = ((1u16 << end) - (1u16 << first)) as u8;
     let mut e_row = edges.row;
+    // The product `z_dx * dx` of `RowPlane::depth` is the same in every row: once
+    // per group of the window. The plane's pixel offsets `dx` of the lanes are
+    // integers below 2^24, so exact in f32, and so are their sums with 8s.
     let z_dx = _mm256_set1_ps(t.z_dx);
-    // The plane's pixel offsets (`dx` of `RowPlane::depth`) of the first group's
-    // lanes: integers below 2^24, so exact in f32, and so are their sums with 8s.
-    let dx_first =
+    let mut dx =
         _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    // Only the groups `first..end` are written, and only those are read.
+    let mut products = [const { MaybeUninit::<__m256>::uninit() }; BLOCKS];
+    for p in &mut products[first..end] {
+        p.write(_mm256_mul_ps(z_dx, dx));
+        dx = _mm256_add_ps(dx, _mm256_set1_ps(GROUP as f32));
+    }
     let dx0 = tile.x0 - t.x0;
     let cut_lanes = (1u32 << (tile.rows.width() - whole * GROUP)) - 1;
     let (mut rows_done, mut cut_fragments, mut scalar_passed) = (0u32, 0u32, 0u32);
@@ -200,13 +210,13 @@ unsafe fn rows<const OP: u8, const COVER: u8, const STOP: bool>(
         let plane = t.row_plane(tile.y0 + ly as i32);
         let skip = (rejected >> (BLOCKS * (ly / GROUP))) as u8;
         let group_row =
-            GroupRow { pixels: row.as_mut_ptr(), z_row: _mm256_set1_ps(plane.z_row), z_dx, dx: dx_first, first, end };
+            GroupRow { pixels: row.as_mut_ptr(), z_row: _mm256_set1_ps(plane.z_row), products: &products, first, end };
         // Rows that no rejected block crosses, the usual case for draws, run a loop
         // without the per-group test of the rejection bits.
         let e = if skip & groups == 0 {
-            group_row.run::<OP, COVER, false>(e_row, &edges.per_group, 0, &mut sums)
+            group_row.run::<OP, LIVE, false>(e_row, &edges.per_group, 0, &mut sums)
         } else {
-            group_row.run::<OP, COVER, true>(e_row, &edges.per_group, skip, &mut sums)
+            group_row.run::<OP, LIVE, true>(e_row, &edges.per_group, skip, &mut sums)
         };
         rows_done += 1;
         if cut {
@@ -222,10 +232,8 @@ unsafe fn rows<const OP: u8, const COVER: u8, const STOP: bool>(
                 }
             }
         }
-        if COVER != FULL {
-            for (ek, step) in e_row.iter_mut().zip(&edges.per_row) {
-                *ek = _mm256_add_epi32(*ek, *step);
-            }
+        for (ek, step) in e_row.iter_mut().zip(&edges.per_row).take(LIVE) {
+            *ek = _mm256_add_epi32(*ek, *step);
         }
         if STOP && (scalar_passed > 0 || _mm256_testz_si256(sums.minus_passed, sums.minus_passed) == 0) {
             break;
@@ -254,30 +262,30 @@ unsafe fn hsum(v: __m256i) -> u32 {
 }
 
 /// The whole groups `first..end` of one row of a window.
-struct GroupRow {
+struct GroupRow<'a> {
     /// The tile row's first pixel.
     pixels: *mut f32,
     /// The depth plane along the row (`RowPlane::z_row`), in every lane.
     z_row: __m256,
-    /// The plane's slope to the right, in every lane.
-    z_dx: __m256,
-    /// The plane's pixel offsets of the lanes of group `first`.
-    dx: __m256,
+    /// Per group of the tile row, `z_dx * dx` of its lanes (`RowPlane::depth`):
+    /// written for the groups `first..end`.
+    products: &'a [MaybeUninit<__m256>; BLOCKS],
     first: usize,
     end: usize,
 }
 
-impl GroupRow {
-    /// Tests (and for a draw, writes) the row's groups with operation `OP`, the edge
-    /// functions `e` at group `first` stepping by `per_group`, and adds to `sums`;
-    /// with `SKIPS`, the depth tests of the groups set in `skip` are skipped (their
-    /// lanes are still counted). Returns the edge functions at group `end`.
+impl GroupRow<'_> {
+    /// Tests (and for a draw, writes) the row's groups with operation `OP`, the first
+    /// `LIVE` edge functions `e` at group `first` stepping by `per_group`, and adds
+    /// to `sums`; with `SKIPS`, the depth tests of the groups set in `skip` are
+    /// skipped (their lanes are still counted). Returns the edge functions at group
+    /// `end`.
     ///
     /// # Safety
     /// The CPU must support AVX2; the row must hold the groups' pixels.
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn run<const OP: u8, const COVER: u8, const SKIPS: bool>(
+    unsafe fn run<const OP: u8, const LIVE: usize, const SKIPS: bool>(
         &self,
         mut e: [__m256i; 3],
         per_group: &[__m256i; 3],
@@ -285,23 +293,24 @@ impl GroupRow {
         sums: &mut Sums,
     ) -> [__m256i; 3] {
         let zero = _mm256_setzero_ps();
-        let eight = _mm256_set1_ps(GROUP as f32);
-        let mut dx = self.dx;
         for g in self.first..self.end {
             // Sign bit set: some edge function is negative, the lane is not covered
             // (-1 after the shift). A group wholly outside the triangle is tested all
             // the same (nothing passes): cheaper than the mispredicted branches that
             // skipping it costs.
-            let outside = if COVER == FULL {
-                _mm256_setzero_si256()
-            } else {
-                _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]))
+            let outside = match LIVE {
+                0 => _mm256_setzero_si256(),
+                1 => _mm256_srai_epi32::<31>(e[0]),
+                2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
+                _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),
             };
             sums.minus_outside = _mm256_add_epi32(sums.minus_outside, outside);
             if !(SKIPS && skip & (1 << g) != 0) {
                 // max(z, 0) returns its second operand (+0.0) unless z > 0, as
                 // `depth`.
-                let z = _mm256_max_ps(_mm256_add_ps(self.z_row, _mm256_mul_ps(self.z_dx, dx)), zero);
+                // SAFETY: the products of the groups `first..end` are written.
+                let product = unsafe { self.products[g].assume_init() };
+                let z = _mm256_max_ps(_mm256_add_ps(self.z_row, product), zero);
                 // SAFETY: the caller promises the group's 8 pixels lie inside the row.
                 let p = unsafe { self.pixels.add(g * GROUP) };
                 // SAFETY: as above.
@@ -322,12 +331,9 @@ impl GroupRow {
                 }
                 sums.minus_passed = _mm256_add_epi32(sums.minus_passed, _mm256_castps_si256(pass));
             }
-            if COVER != FULL {
-                for (ek, step) in e.iter_mut().zip(per_group) {
-                    *ek = _mm256_add_epi32(*ek, *step);
-                }
+            for (ek, step) in e.iter_mut().zip(per_group).take(LIVE) {
+                *ek = _mm256_add_epi32(*ek, *step);
             }
-            dx = _mm256_add_ps(dx, eight);
         }
         e
     }
