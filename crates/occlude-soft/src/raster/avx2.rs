@@ -64,19 +64,27 @@ struct Edges {
     live: usize,
 }
 
+/// What [`edges`] found.
+enum EdgeSetup {
+    /// The edges are set up.
+    Ready,
+    /// An edge excludes the whole window.
+    Empty,
+    /// A value might not fit an `i32`.
+    Wide,
+}
+
 /// Sets up `t`'s edges over the columns `c0..=c1` and rows `y0..=y1` (absolute;
-/// `c0..c0 + 8` the first group's lanes): `Err` with empty counts where an edge
-/// excludes all of it, `Ok(None)` where a value might not fit an `i32`.
+/// `c0..c0 + 8` the first group's lanes) in `out`, all zero before (written in
+/// place: the edges are a few hundred bytes, which a returned value would copy).
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Option<Edges>, CommandResult> {
+unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edges) -> EdgeSetup {
     let (i1, j1) = (i64::from(c1 - c0), i64::from(y1 - y0));
     let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    let zero = _mm256_setzero_si256();
-    let mut out = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
     for (g, a, b) in t.edges_at(c0, y0) {
         // The extremes of g + a * i + b * j over the window, at its corners.
         let (ai, bj) = (a * i1, b * j1);
@@ -86,10 +94,10 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Opt
             continue;
         }
         if hi < 0 {
-            return Err(CommandResult::default());
+            return EdgeSetup::Empty;
         }
         if lo < i64::from(i32::MIN) || hi > i64::from(i32::MAX) {
-            return Ok(None);
+            return EdgeSetup::Wide;
         }
         // All values in between fit, and so do the slopes (|a|, |b| are at most 2^24,
         // so 8 * a fits too).
@@ -100,7 +108,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Result<Opt
         out.per_row[k] = _mm256_set1_epi32(b as i32);
         out.live += 1;
     }
-    Ok(Some(out))
+    EdgeSetup::Ready
 }
 
 /// [`Avx2::window`].
@@ -123,11 +131,13 @@ unsafe fn raster_window<const OP: u8>(
     let whole = row_len / GROUP;
     let (first, last) = ((x0 - tile.x0) as usize / GROUP, (x1 - tile.x0) as usize / GROUP);
     let c0 = tile.x0 + (first * GROUP) as i32;
-    let edges = match edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1) {
-        Err(empty) => return Some(empty),
-        Ok(None) => return None,
-        Ok(Some(edges)) => edges,
-    };
+    let zero = _mm256_setzero_si256();
+    let mut edges = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
+    match self::edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1, &mut edges) {
+        EdgeSetup::Empty => return Some(CommandResult::default()),
+        EdgeSetup::Wide => return None,
+        EdgeSetup::Ready => {}
+    }
     let window = Window { first, end: (last + 1).min(whole), cut: last >= whole, c0, y0, y1 };
     // A window wholly inside the triangle needs no coverage test. Its groups lie
     // wholly in the window: the pixels of a group outside the window are outside
