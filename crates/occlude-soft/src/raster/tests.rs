@@ -612,6 +612,47 @@ fn window_rasterizers_agree_on_special_values() {
 }
 
 #[test]
+#[cfg(target_arch = "x86_64")]
+fn window_rasterizers_agree_for_every_number_of_crossing_edges() {
+    // The AVX2 rasterizer has one loop per number of edges crossing the window (none,
+    // one, two, three), with and without rejected blocks: each must match the span
+    // walker bit for bit, in whole groups and in the group cut by the end of the row
+    // (61 columns: seven whole groups and five pixels).
+    let Some(avx2) = avx2::Avx2::detect() else {
+        eprintln!("no AVX2 on this CPU: nothing to compare");
+        return;
+    };
+    let (w, h) = (61u32, 64u32);
+    let v = |x: f32, y: f32, z: f32| Vec4::new(x, y, z, 1.0);
+    let triangles = [
+        // Covers the whole window.
+        [v(-9.0, -9.0, 0.2), v(30.0, -9.0, 0.5), v(-9.0, 30.0, 0.8)],
+        // One edge, the diagonal, crosses the window.
+        [v(-5.0, -5.0, 0.2), v(5.0, -5.0, 0.5), v(-5.0, 5.0, 0.8)],
+        // Two edges meet inside it.
+        [v(0.1, -0.1, 0.3), v(5.0, 5.0, 0.6), v(-5.0, 5.0, 0.9)],
+        // All three edges inside it.
+        [v(-0.5, -0.5, 0.3), v(0.6, -0.4, 0.6), v(0.1, 0.7, 0.9)],
+    ];
+    let rows: Vec<Vec<f32>> =
+        (0..h as usize).map(|y| (0..w as usize).map(|x| ((x * 7 + y * 13) % 10) as f32 / 10.0).collect()).collect();
+    let mut writes = Vec::new();
+    for tri in &triangles {
+        let mut setups = Vec::new();
+        setup::setup_triangle(tri, false, 0, setup::Viewport::new(w, h), &mut clip::Polygon::new(), |t| setups.push(t));
+        let t = span::RasterTri::new(&setups[0]).expect("covers rows");
+        let mut changed = 0;
+        for rejected in [0, 0x0F0F_0000_00FF_0012, !0 >> 1] {
+            changed += check_window_rasterizers::<{ shade::DRAW }>(avx2, &t, &rows, rejected);
+            check_window_rasterizers::<{ shade::LESS }>(avx2, &t, &rows, rejected);
+            check_window_rasterizers::<{ shade::EQUAL }>(avx2, &t, &rows, rejected);
+        }
+        writes.push(changed);
+    }
+    assert!(writes.iter().all(|&n| n > 0), "every triangle must write pixels: {writes:?}");
+}
+
+#[test]
 fn empty_inputs() {
     let mut depth = DepthBuffer::new(0, 10);
     let tris = quad(1.0, 0.5);
