@@ -95,6 +95,8 @@ const QUADS: u32 = 24;
 /// Triangles of the sliver mesh: each smaller than a pixel, covering no
 /// pixel centre, so they cost setup and no fragments.
 const SLIVER_TRIANGLES: u32 = 20_000;
+/// Triangles per strip of the sliver mesh.
+const SLIVER_STRIP: u32 = 20;
 /// Draw calls of the draw and state-change frames.
 const DRAWS: usize = 3000;
 /// Queries of the small-box frame and of the full-screen frame.
@@ -102,6 +104,9 @@ const SMALL_QUERIES: usize = 1000;
 const SCREEN_QUERIES: usize = 50;
 /// Frames of the latency measurement.
 const LATENCY_FRAMES: usize = 30;
+/// Most availability checks of a query in flight per latency frame, to time
+/// the check.
+const LATENCY_CHECKS: u32 = 8;
 
 /// The synthetic scene: two materials on an off-screen triangle, a mesh of
 /// slivers, and full-screen quads at increasing distance.
@@ -121,12 +126,15 @@ fn synthetic_scene() -> Scene {
     scene.add_instance(triangle, off_screen, 1);
     let mut positions = Vec::new();
     let mut indices = Vec::new();
-    for k in 0..SLIVER_TRIANGLES {
-        // Spread over the view at 10 m, 1 mm wide: far below a pixel.
-        let (x, y) = ((k % 200) as f32 * 0.05 - 5.0, (k / 200) as f32 * 0.05 - 2.5);
+    for strip in 0..SLIVER_TRIANGLES / SLIVER_STRIP {
+        // Spread over the view at 10 m: strips of slivers 1 mm wide, far below a
+        // pixel, each triangle sharing two vertices with the previous one, as in
+        // a scene's meshes (about one vertex to shade per triangle, not three).
+        let (x, y) = ((strip % 200) as f32 * 0.05 - 5.0, (strip / 200) as f32 * 0.05 - 2.5);
         let base = positions.len() as u32;
-        positions.extend([Vec3::new(x, y, -10.0), Vec3::new(x + 1e-3, y, -10.0), Vec3::new(x, y + 1e-3, -10.0)]);
-        indices.extend([base, base + 1, base + 2]);
+        positions
+            .extend((0..SLIVER_STRIP + 2).map(|j| Vec3::new(x + j as f32 * 1e-3, y + (j % 2) as f32 * 1e-3, -10.0)));
+        indices.extend((0..SLIVER_STRIP).flat_map(|j| [base + j, base + j + 1, base + j + 2]));
     }
     let slivers = scene.add_mesh(Mesh::new(positions, indices));
     scene.add_instance(slivers, Mat4::IDENTITY, 0);
@@ -249,10 +257,14 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<G
     })
 }
 
-/// Time from a query's submission until its result is readable, minus the
-/// GPU time of its box (the model's latency, which so includes the cost of
-/// a submission and its render pass), and the CPU time of one availability
-/// check of a query in flight; medians over several frames, in µs.
+/// Time from a query's submission until its result is read, waiting for it as
+/// stop-and-wait does (blocking, not spinning: on a CPU "GPU" such as
+/// lavapipe a spinning check takes a core from the rasterizer's threads and
+/// measured latencies six times too long), minus the GPU time of its box (the
+/// model's latency, which so includes the cost of a submission and its render
+/// pass); and the CPU time of one availability check of a query in flight, from
+/// at most [`LATENCY_CHECKS`] checks before the wait. Medians over several
+/// frames, in µs.
 fn measure_latency(backend: &mut WgpuBackend<'_>, camera: &Camera, small_box: Aabb, box_us: f64) -> (f64, f64) {
     let mut latencies = Vec::new();
     let mut polls = Vec::new();
@@ -267,14 +279,15 @@ fn measure_latency(backend: &mut WgpuBackend<'_>, camera: &Camera, small_box: Aa
         let mut available = backend.is_available(query);
         let submitted = Instant::now();
         let mut checks = 0u32;
-        while !available && start.elapsed().as_secs() < 5 {
+        while !available && checks < LATENCY_CHECKS {
             available = backend.is_available(query);
             checks += 1;
         }
-        let until_available = start.elapsed().as_secs_f64() * 1e6;
         let polling_us = submitted.elapsed().as_secs_f64() * 1e6;
+        backend.result(query);
+        let until_read = start.elapsed().as_secs_f64() * 1e6;
         backend.end_frame();
-        latencies.push((until_available - box_us).max(0.0));
+        latencies.push((until_read - box_us).max(0.0));
         if checks > 0 {
             polls.push(polling_us / f64::from(checks));
         }
