@@ -80,6 +80,15 @@ pub(super) fn clip_triangle(tri: &[Vec4; 3], guard: GuardBand, out: &mut Polygon
     }
     let verts = tri.map(|v| v.as_dvec4());
 
+    let mask =
+        |v: DVec4| guard.distances(v).iter().enumerate().fold(0u8, |m, (plane, &d)| m | u8::from(d < 0.0) << plane);
+    let crossed = mask(verts[0]) | mask(verts[1]) | mask(verts[2]);
+    if crossed == 0 {
+        // Inside the guard band, the usual case: one that is off the viewport
+        // covers no pixel, which its set-up finds.
+        return Clipped::Inside(verts);
+    }
+
     // Trivial rejection against the near plane and the viewport sides: if all three
     // vertices are outside one of these planes, so is every point of the triangle.
     let outside = |v: DVec4| {
@@ -91,13 +100,6 @@ pub(super) fn clip_triangle(tri: &[Vec4; 3], guard: GuardBand, out: &mut Polygon
     };
     if outside(verts[0]) & outside(verts[1]) & outside(verts[2]) != 0 {
         return Clipped::Outside;
-    }
-
-    let mask =
-        |v: DVec4| guard.distances(v).iter().enumerate().fold(0u8, |m, (plane, &d)| m | u8::from(d < 0.0) << plane);
-    let crossed = mask(verts[0]) | mask(verts[1]) | mask(verts[2]);
-    if crossed == 0 {
-        return Clipped::Inside(verts);
     }
     out.verts[..3].copy_from_slice(&verts);
     out.len = 3;
