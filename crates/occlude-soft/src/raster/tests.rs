@@ -560,6 +560,15 @@ fn check_window_rasterizers<const OP: u8>(
     bits(&a).iter().zip(bits(&rows.concat())).filter(|(x, y)| *x != y).count()
 }
 
+/// [`check_window_rasterizers`] for a draw and both queries; returns how many
+/// pixels the draw changed.
+#[cfg(target_arch = "x86_64")]
+fn check_window_operations(avx2: avx2::Avx2, t: &span::RasterTri, rows: &[Vec<f32>], rejected: u64) -> usize {
+    check_window_rasterizers::<{ shade::LESS }>(avx2, t, rows, rejected);
+    check_window_rasterizers::<{ shade::EQUAL }>(avx2, t, rows, rejected);
+    check_window_rasterizers::<{ shade::DRAW }>(avx2, t, rows, rejected)
+}
+
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn window_rasterizers_agree_on_special_values() {
@@ -601,9 +610,7 @@ fn window_rasterizers_agree_on_special_values() {
                 let mut t = base;
                 (t.z_origin, t.z_dx, t.z_dy) = (z_origin, z_dx, z_dy);
                 for rejected in [0, 0b010, 0b101] {
-                    writes += check_window_rasterizers::<{ shade::DRAW }>(avx2, &t, &rows, rejected);
-                    check_window_rasterizers::<{ shade::LESS }>(avx2, &t, &rows, rejected);
-                    check_window_rasterizers::<{ shade::EQUAL }>(avx2, &t, &rows, rejected);
+                    writes += check_window_operations(avx2, &t, &rows, rejected);
                 }
             }
         }
@@ -643,9 +650,7 @@ fn window_rasterizers_agree_for_every_number_of_crossing_edges() {
         let t = span::RasterTri::new(&setups[0]).expect("covers rows");
         let mut changed = 0;
         for rejected in [0, 0x0F0F_0000_00FF_0012, !0 >> 1] {
-            changed += check_window_rasterizers::<{ shade::DRAW }>(avx2, &t, &rows, rejected);
-            check_window_rasterizers::<{ shade::LESS }>(avx2, &t, &rows, rejected);
-            check_window_rasterizers::<{ shade::EQUAL }>(avx2, &t, &rows, rejected);
+            changed += check_window_operations(avx2, &t, &rows, rejected);
         }
         writes.push(changed);
     }
