@@ -215,10 +215,19 @@ unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
     let (mut rows_done, mut cut_fragments, mut scalar_passed) = (0u32, 0u32, 0u32);
     let zero = _mm256_setzero_si256();
     let mut sums = Sums { minus_outside: zero, minus_passed: zero };
+    // The row's blocks, the cut one included.
+    let row_blocks = groups | if cut { 1 << whole } else { 0 };
     for ly in (y0 - tile.y0) as usize..=(y1 - tile.y0) as usize {
+        let skip = (rejected >> (BLOCKS * (ly / GROUP))) as u8;
+        if LIVE == 0 && skip & row_blocks == row_blocks {
+            // Every pixel of the row is covered and none can pass (a hidden query
+            // box's usual row): only the count of its lanes is left.
+            rows_done += 1;
+            cut_fragments += if cut { cut_lanes.count_ones() } else { 0 };
+            continue;
+        }
         let row = tile.rows.row_mut(ly);
         let plane = t.row_plane(tile.y0 + ly as i32);
-        let skip = (rejected >> (BLOCKS * (ly / GROUP))) as u8;
         let group_row =
             GroupRow { pixels: row.as_mut_ptr(), z_row: _mm256_set1_ps(plane.z_row), products: &products, first, end };
         // Rows that no rejected block crosses, the usual case for draws, run a loop
