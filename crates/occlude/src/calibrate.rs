@@ -92,8 +92,9 @@ const SLIVERS: u32 = 2;
 const FIRST_QUAD: u32 = 3;
 /// Full-screen quads, drawn back to front so that every fragment passes.
 const QUADS: u32 = 24;
-/// Triangles of the sliver mesh: each smaller than a pixel, covering no
-/// pixel centre, so they cost setup and no fragments.
+/// Triangles of the sliver mesh: each far smaller than a pixel (a strip of
+/// them is 2 cm long, one or two pixels at 10 m), so they cost setup and almost
+/// no fragments.
 const SLIVER_TRIANGLES: u32 = 20_000;
 /// Triangles per strip of the sliver mesh.
 const SLIVER_STRIP: u32 = 20;
