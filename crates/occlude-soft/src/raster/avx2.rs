@@ -9,11 +9,13 @@
 //! fails everywhere, and the window is empty; an edge that crosses the window takes
 //! values within its slopes times the window's size, which the guard band keeps far
 //! inside `i32` (the window is left to the span walker if not). Coverage is then a
-//! sign test of the three edge values or-ed together.
+//! sign test of the crossing edges' values or-ed together, in one loop per number
+//! of crossing edges (none to three).
 //!
 //! Depth is [`RowPlane::depth`] per lane: the same `f32` product and sum (never a
-//! fused multiply-add), and `max(z, 0)` in the operand order that, like `depth`,
-//! turns NaN and `-0.0` into `+0.0`.
+//! fused multiply-add; the product does not depend on the row, so it is computed
+//! once per group of the window), and `max(z, 0)` in the operand order that, like
+//! `depth`, turns NaN and `-0.0` into `+0.0`.
 
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;

@@ -62,11 +62,12 @@ impl GuardBand {
 
 /// What clipping a triangle left of it.
 pub(super) enum Clipped {
-    /// Nothing that can cover a pixel centre: a non-finite coordinate, or the
-    /// triangle lies entirely behind the near plane or outside one side of the
-    /// viewport.
+    /// Nothing that can cover a pixel centre: a non-finite coordinate, or a
+    /// triangle crossing a clipping plane that lies entirely behind the near plane
+    /// or outside one side of the viewport.
     Outside,
-    /// The whole triangle (in `f64`), inside every clipping plane.
+    /// The whole triangle (in `f64`), inside every clipping plane; it may still lie
+    /// off the viewport, which its set-up finds.
     Inside([DVec4; 3]),
     /// The polygon left in the `out` argument of [`clip_triangle`].
     Polygon,
