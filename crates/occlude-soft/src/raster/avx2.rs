@@ -147,6 +147,25 @@ unsafe fn raster_window<const OP: u8>(
     debug_assert!(
         edges.live > 0 || (x0 == c0 && (last >= whole || x1 == c0 + ((last - first + 1) * GROUP) as i32 - 1))
     );
+    // Narrow windows without rejected blocks (a small triangle's usual window)
+    // have their groups unrolled.
+    if rejected == 0 && !stop_at_pass && !window.cut {
+        let narrow: Option<NarrowRows> = match (edges.live, window.end - window.first) {
+            (1, 1) => Some(narrow_rows::<OP, 1, 1>),
+            (1, 2) => Some(narrow_rows::<OP, 1, 2>),
+            (1, 3) => Some(narrow_rows::<OP, 1, 3>),
+            (2, 1) => Some(narrow_rows::<OP, 2, 1>),
+            (2, 2) => Some(narrow_rows::<OP, 2, 2>),
+            (2, 3) => Some(narrow_rows::<OP, 2, 3>),
+            (3, 1) => Some(narrow_rows::<OP, 3, 1>),
+            (3, 2) => Some(narrow_rows::<OP, 3, 2>),
+            (3, 3) => Some(narrow_rows::<OP, 3, 3>),
+            _ => None,
+        };
+        if let Some(narrow) = narrow {
+            return Some(narrow(tile, t, &window, &edges));
+        }
+    }
     // One loop per number of live edges, so that each tests only those.
     let counts = match (edges.live, stop_at_pass) {
         (0, false) => rows::<OP, 0, false>(tile, t, &window, &edges, rejected),
@@ -268,6 +287,92 @@ unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
         lanes.wrapping_add(hsum(sums.minus_outside)) + cut_fragments
     };
     CommandResult { fragments: u64::from(fragments), passed: u64::from(passed) }
+}
+
+/// A [`narrow_rows`] instance.
+type NarrowRows = unsafe fn(&mut TileView<'_>, &RasterTri, &Window, &Edges) -> CommandResult;
+
+/// The rows of [`raster_window`] for a window of `G` whole groups with no rejected
+/// block, no cut group and not stopping at a pass, testing the first `LIVE` edge
+/// functions: [`rows`] with the groups unrolled and no per-row bookkeeping (the
+/// depth plane's row value is stepped in a register, by the same `f32` operations
+/// as [`RowPlane::of`](super::setup::RowPlane::of)).
+///
+/// # Safety
+/// The CPU must support AVX2 and POPCNT.
+#[target_feature(enable = "avx2,popcnt")]
+#[inline]
+unsafe fn narrow_rows<const OP: u8, const LIVE: usize, const G: usize>(
+    tile: &mut TileView<'_>,
+    t: &RasterTri,
+    window: &Window,
+    edges: &Edges,
+) -> CommandResult {
+    let &Window { first, c0, y0, y1, .. } = window;
+    let (ly0, ly1) = ((y0 - tile.y0) as usize, (y1 - tile.y0) as usize);
+    // Checks that the window's last row lies in the tile; the groups lie in its rows.
+    tile.rows.row_mut(ly1);
+    debug_assert!(first + G <= tile.rows.width() / GROUP);
+    let stride = tile.rows.stride();
+    let mut pixels = tile.rows.row_mut(ly0).as_mut_ptr().add(first * GROUP);
+    let z_dx = _mm256_set1_ps(t.z_dx);
+    let mut dx =
+        _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    let mut products = [_mm256_setzero_ps(); G];
+    for p in &mut products {
+        *p = _mm256_mul_ps(z_dx, dx);
+        dx = _mm256_add_ps(dx, _mm256_set1_ps(GROUP as f32));
+    }
+    let (z_origin, z_dy) = (_mm256_set1_ps(t.z_origin), _mm256_set1_ps(t.z_dy));
+    // The row's offset from the plane's origin row: an integer below 2^24, exact.
+    let mut dy = _mm256_set1_ps((y0 - t.plane_y) as f32);
+    let zero_ps = _mm256_setzero_ps();
+    let zero = _mm256_setzero_si256();
+    let (mut minus_outside, mut minus_passed) = (zero, zero);
+    let mut e_row = edges.row;
+    for _ in ly0..=ly1 {
+        let z_row = _mm256_add_ps(z_origin, _mm256_mul_ps(z_dy, dy));
+        let mut e = e_row;
+        for (g, &product) in products.iter().enumerate() {
+            let outside = match LIVE {
+                1 => _mm256_srai_epi32::<31>(e[0]),
+                2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
+                _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),
+            };
+            minus_outside = _mm256_add_epi32(minus_outside, outside);
+            let z = _mm256_max_ps(_mm256_add_ps(z_row, product), zero_ps);
+            // SAFETY: the group's 8 pixels lie inside the row (checked above).
+            let p = unsafe { pixels.add(g * GROUP) };
+            // SAFETY: as above.
+            let mut d = unsafe { _mm256_loadu_ps(p) };
+            // SAFETY: as in `GroupRow::run`: keeps the blend and store apart.
+            unsafe { std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags)) };
+            let test = if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
+            let pass = _mm256_andnot_ps(_mm256_castsi256_ps(outside), test);
+            if OP == DRAW {
+                // SAFETY: as above.
+                unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
+            }
+            minus_passed = _mm256_add_epi32(minus_passed, _mm256_castps_si256(pass));
+            if g + 1 < G {
+                for (ek, step) in e.iter_mut().zip(&edges.per_group).take(LIVE) {
+                    *ek = _mm256_add_epi32(*ek, *step);
+                }
+            }
+        }
+        for (ek, step) in e_row.iter_mut().zip(&edges.per_row).take(LIVE) {
+            *ek = _mm256_add_epi32(*ek, *step);
+        }
+        dy = _mm256_add_ps(dy, _mm256_set1_ps(1.0));
+        // SAFETY: stays inside the tile's rows until the last row is done (the
+        // pointer is not read after it).
+        pixels = pixels.wrapping_add(stride);
+    }
+    let lanes = (ly1 - ly0 + 1) as u32 * (G * GROUP) as u32;
+    CommandResult {
+        fragments: u64::from(lanes.wrapping_add(hsum(minus_outside))),
+        passed: u64::from(hsum(minus_passed).wrapping_neg()),
+    }
 }
 
 /// The sum of the eight `i32` lanes of `v`, as a `u32` (wrapping).

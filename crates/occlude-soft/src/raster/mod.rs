@@ -372,32 +372,64 @@ impl Rasterizer {
         self.chunks.resize_with(n_chunks, Chunk::default);
         self.chunks.truncate(n_chunks);
         let starts = &self.starts[..];
+        let kernel = self.kernel;
         self.chunks.par_iter_mut().enumerate().for_each(|(ci, chunk)| {
             chunk.clear(grid);
-            let mut emit = |t: SetupTri| {
-                if let Some(r) = RasterTri::new(&t) {
-                    chunk.push(grid, r);
-                }
-            };
-            let mut poly = clip::Polygon::new();
             let lo = ci * chunk_len;
-            let hi = (lo + chunk_len).min(total);
-            // The last command starting at or before `lo` (skipping empty ones).
-            let mut cmd = starts.partition_point(|&s| s <= lo) - 1;
-            let mut g = lo;
-            while g < hi {
-                let c = &commands[cmd];
-                let end = hi.min(starts[cmd + 1]);
-                let first = c.triangles.start as usize + (g - starts[cmd]);
-                for tri in &triangles[first..first + (end - g)] {
-                    setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit);
-                }
-                g = end;
-                cmd += 1;
+            let span = SetupSpan { triangles, commands, starts, range: lo..(lo + chunk_len).min(total) };
+            match kernel {
+                Kernel::Scalar => setup_span(chunk, grid, viewport, &span),
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+                Kernel::Avx2(_) => unsafe { setup_span_avx2(chunk, grid, viewport, &span) },
             }
             chunk.bin(grid);
         });
     }
+}
+
+/// A range of the concatenation of all commands' triangles, to set up.
+struct SetupSpan<'a> {
+    triangles: &'a [[Vec4; 3]],
+    commands: &'a [Command],
+    /// Start of each command in the concatenation (and its end).
+    starts: &'a [usize],
+    range: Range<usize>,
+}
+
+/// Clips and sets up the triangles of `span` into `chunk`, in order.
+#[inline(always)]
+fn setup_span(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+    let mut emit = |t: SetupTri| {
+        if let Some(r) = RasterTri::new(&t) {
+            chunk.push(grid, r);
+        }
+    };
+    let mut poly = clip::Polygon::new();
+    let (lo, hi) = (span.range.start, span.range.end);
+    // The last command starting at or before `lo` (skipping empty ones).
+    let mut cmd = span.starts.partition_point(|&s| s <= lo) - 1;
+    let mut g = lo;
+    while g < hi {
+        let c = &span.commands[cmd];
+        let end = hi.min(span.starts[cmd + 1]);
+        let first = c.triangles.start as usize + (g - span.starts[cmd]);
+        for tri in &span.triangles[first..first + (end - g)] {
+            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit);
+        }
+        g = end;
+        cmd += 1;
+    }
+}
+
+/// [`setup_span`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn setup_span_avx2(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+    setup_span(chunk, grid, viewport, span);
 }
 
 /// Executes `commands` with a fresh [`Rasterizer`]; see [`Rasterizer::execute`].

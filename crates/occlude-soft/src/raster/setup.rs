@@ -157,6 +157,7 @@ struct ScreenVertex {
 /// Clips `tri` (clip space) and passes its rasterizable pieces (0 to 6 triangles)
 /// to `emit`. Degenerate, non-finite, back-facing (when `cull_back`) and off-screen
 /// pieces are dropped.
+#[inline(always)]
 pub(super) fn setup_triangle(
     tri: &[Vec4; 3],
     cull_back: bool,

@@ -42,6 +42,11 @@ impl<'a> TileRows<'a> {
         self.height
     }
 
+    /// Pixels from the start of one row to the start of the next.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
     /// Row `y`.
     #[inline(always)]
     pub fn row(&self, y: usize) -> &[f32] {

@@ -594,28 +594,34 @@ fn window_rasterizers_agree_on_special_values() {
         -1e-40,
         f32::MIN_POSITIVE,
     ];
-    // 21 pixels wide: two whole groups and a cut one; a triangle covering it all.
-    let (w, h) = (21u32, 3u32);
-    let v = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
-    let mut setups = Vec::new();
-    let big = [v(-1.0, -1.0), v(3.0, -1.0), v(-1.0, 3.0)];
-    setup::setup_triangle(&big, false, 0, setup::Viewport::new(w, h), &mut clip::Polygon::new(), |t| setups.push(t));
-    let base = span::RasterTri::new(&setups[0]).expect("covers rows");
-    let rows: Vec<Vec<f32>> =
-        (0..h as usize).map(|y| (0..w as usize).map(|x| specials[(x + 5 * y) % 13]).collect()).collect();
-    let mut writes = 0;
-    for &z_origin in &specials {
-        for &z_dx in &specials {
-            for z_dy in [0.0, -0.0, 1.0, f32::NAN, f32::INFINITY] {
-                let mut t = base;
-                (t.z_origin, t.z_dx, t.z_dy) = (z_origin, z_dx, z_dy);
-                for rejected in [0, 0b010, 0b101] {
-                    writes += check_window_operations(avx2, &t, &rows, rejected);
+    // 21 pixels wide: two whole groups and a cut one; 16 wide: two whole groups (the
+    // unrolled loop of narrow windows). A triangle covering it all, and one covering
+    // all but a corner (one edge crosses the window).
+    for (w, corner) in [(21u32, 3.0), (21, 1.8), (16, 3.0), (16, 1.8)] {
+        let h = 3u32;
+        let v = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
+        let mut setups = Vec::new();
+        let big = [v(-1.0, -1.0), v(corner, -1.0), v(-1.0, corner)];
+        setup::setup_triangle(&big, false, 0, setup::Viewport::new(w, h), &mut clip::Polygon::new(), |t| {
+            setups.push(t)
+        });
+        let base = span::RasterTri::new(&setups[0]).expect("covers rows");
+        let rows: Vec<Vec<f32>> =
+            (0..h as usize).map(|y| (0..w as usize).map(|x| specials[(x + 5 * y) % 13]).collect()).collect();
+        let mut writes = 0;
+        for &z_origin in &specials {
+            for &z_dx in &specials {
+                for z_dy in [0.0, -0.0, 1.0, f32::NAN, f32::INFINITY] {
+                    let mut t = base;
+                    (t.z_origin, t.z_dx, t.z_dy) = (z_origin, z_dx, z_dy);
+                    for rejected in [0, 0b010, 0b101] {
+                        writes += check_window_operations(avx2, &t, &rows, rejected);
+                    }
                 }
             }
         }
+        assert!(writes > 1000, "the special values must exercise the writes ({w} wide): {writes}");
     }
-    assert!(writes > 1000, "the special values must exercise the writes: {writes}");
 }
 
 #[test]
@@ -624,12 +630,22 @@ fn window_rasterizers_agree_for_every_number_of_crossing_edges() {
     // The AVX2 rasterizer has one loop per number of edges crossing the window (none,
     // one, two, three), with and without rejected blocks: each must match the span
     // walker bit for bit, in whole groups and in the group cut by the end of the row
-    // (61 columns: seven whole groups and five pixels).
+    // (61 columns: seven whole groups and five pixels), and in windows of one, two
+    // and three whole groups without rejected blocks (the unrolled loops).
     let Some(avx2) = avx2::Avx2::detect() else {
         eprintln!("no AVX2 on this CPU: nothing to compare");
         return;
     };
-    let (w, h) = (61u32, 64u32);
+    for w in [61, 24, 16, 8] {
+        check_windows_crossed_by_every_number_of_edges(avx2, w);
+    }
+}
+
+/// [`window_rasterizers_agree_for_every_number_of_crossing_edges`] in a tile `w`
+/// pixels wide.
+#[cfg(target_arch = "x86_64")]
+fn check_windows_crossed_by_every_number_of_edges(avx2: avx2::Avx2, w: u32) {
+    let h = 64u32;
     let v = |x: f32, y: f32, z: f32| Vec4::new(x, y, z, 1.0);
     let triangles = [
         // Covers the whole window.
