@@ -32,6 +32,8 @@ mod bin;
 mod clip;
 mod hiz;
 mod setup;
+#[cfg(target_arch = "x86_64")]
+mod setup_avx2;
 mod shade;
 mod span;
 mod split;
@@ -46,6 +48,8 @@ use std::sync::atomic::AtomicBool;
 use glam::Vec4;
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+use avx2::Avx2;
 use bin::{Chunk, TileGrid};
 use hiz::TileHiZ;
 use setup::{setup_triangle, SetupTri, Viewport};
@@ -378,10 +382,10 @@ impl Rasterizer {
             let lo = ci * chunk_len;
             let span = SetupSpan { triangles, commands, starts, range: lo..(lo + chunk_len).min(total) };
             match kernel {
-                Kernel::Scalar => setup_span(chunk, grid, viewport, &span),
+                Kernel::Scalar => setup_span(kernel, chunk, grid, viewport, &span),
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-                Kernel::Avx2(_) => unsafe { setup_span_avx2(chunk, grid, viewport, &span) },
+                Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, chunk, grid, viewport, &span) },
             }
             chunk.bin(grid);
         });
@@ -397,9 +401,10 @@ struct SetupSpan<'a> {
     range: Range<usize>,
 }
 
-/// Clips and sets up the triangles of `span` into `chunk`, in order.
+/// Clips and sets up the triangles of `span` into `chunk`, in order; with an AVX2
+/// kernel, four at a time where they need no clipping (`setup_avx2`).
 #[inline(always)]
-fn setup_span(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
     let mut emit = |t: SetupTri| {
         if let Some(r) = RasterTri::new(&t) {
             chunk.push(grid, r);
@@ -414,7 +419,27 @@ fn setup_span(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &Setu
         let c = &span.commands[cmd];
         let end = hi.min(span.starts[cmd + 1]);
         let first = c.triangles.start as usize + (g - span.starts[cmd]);
-        for tri in &span.triangles[first..first + (end - g)] {
+        let mut rest = &span.triangles[first..first + (end - g)];
+        #[cfg(target_arch = "x86_64")]
+        if let Kernel::Avx2(_) = kernel {
+            let groups = rest.chunks_exact(4);
+            rest = groups.remainder();
+            for group in groups {
+                let group: &[[Vec4; 3]; 4] = group.try_into().expect("four triangles");
+                // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+                let lanes = unsafe { setup_avx2::setup4(group, c.cull_back, cmd as u32, viewport) };
+                for (tri, lane) in group.iter().zip(lanes) {
+                    match lane {
+                        setup_avx2::Lane::Ready(t) => emit(t),
+                        setup_avx2::Lane::Dropped => {}
+                        setup_avx2::Lane::Scalar => {
+                            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit)
+                        }
+                    }
+                }
+            }
+        }
+        for tri in rest {
             setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit);
         }
         g = end;
@@ -428,8 +453,8 @@ fn setup_span(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &Setu
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn setup_span_avx2(chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
-    setup_span(chunk, grid, viewport, span);
+unsafe fn setup_span_avx2(avx2: Avx2, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+    setup_span(Kernel::Avx2(avx2), chunk, grid, viewport, span);
 }
 
 /// Executes `commands` with a fresh [`Rasterizer`]; see [`Rasterizer::execute`].

@@ -8,13 +8,13 @@ use super::clip::{clip_triangle, Clipped, GuardBand, Polygon};
 /// Sub-pixel bits of the fixed-point screen coordinates.
 pub const SUBPIXEL_BITS: u32 = 8;
 /// One pixel in fixed-point units.
-const ONE: i64 = 1 << SUBPIXEL_BITS;
+pub(super) const ONE: i64 = 1 << SUBPIXEL_BITS;
 /// Half a pixel in fixed-point units: the offset of a pixel centre.
-const HALF: i64 = ONE / 2;
+pub(super) const HALF: i64 = ONE / 2;
 /// Largest absolute screen coordinate (pixels) a vertex may have. The guard band
 /// keeps vertices well inside it; it bounds the edge-function products far below
 /// `i64` overflow (coordinates < 2^24 fixed-point units, products < 2^50).
-const COORD_LIMIT: f64 = 32768.0;
+pub(super) const COORD_LIMIT: f64 = 32768.0;
 
 /// The viewport a triangle is set up for.
 #[derive(Clone, Copy, Debug)]

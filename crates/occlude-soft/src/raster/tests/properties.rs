@@ -60,6 +60,41 @@ fn command(n: u32) -> impl Strategy<Value = Command> {
     })
 }
 
+/// The four-at-a-time set-up of `tris` against the scalar one, lane by lane: a set-up
+/// triangle must be the scalar set-up's only one, field for field and bit for bit;
+/// a dropped one must have none; a triangle inside the viewport (`w` = 1) must not
+/// be handed back to the scalar set-up.
+#[cfg(target_arch = "x86_64")]
+fn check_four_at_a_time_setup(tris: &[[Vec4; 3]; 4], size: (u32, u32), cull_back: bool) -> Result<(), TestCaseError> {
+    use super::super::setup::SetupTri;
+    use super::super::setup_avx2::{setup4, Lane};
+    if !is_x86_feature_detected!("avx2") {
+        return Ok(());
+    }
+    let fields =
+        |t: &SetupTri| (t.cmd, [t.x0, t.y0, t.x1, t.y1], t.verts, [t.z_origin, t.z_dx, t.z_dy].map(f32::to_bits));
+    let viewport = Viewport::new(size.0, size.1);
+    // SAFETY: the CPU supports AVX2 (checked above).
+    let lanes = unsafe { setup4(tris, cull_back, 7, viewport) };
+    for (tri, lane) in tris.iter().zip(lanes) {
+        let mut scalar = Vec::new();
+        setup_triangle(tri, cull_back, 7, viewport, &mut Polygon::new(), |t| scalar.push(t));
+        match lane {
+            Lane::Ready(t) => {
+                prop_assert_eq!(scalar.len(), 1, "{:?}", tri);
+                prop_assert_eq!(fields(&t), fields(&scalar[0]), "{:?}", tri);
+            }
+            Lane::Dropped => prop_assert!(scalar.is_empty(), "{:?} dropped, the scalar set-up kept it", tri),
+            Lane::Scalar => {
+                let on_screen =
+                    tri.iter().all(|v| v.is_finite() && v.w == 1.0 && v.truncate().abs().max_element() <= 1.0);
+                prop_assert!(!on_screen, "{:?} is inside the viewport, handed to the scalar set-up", tri);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A buffer size, triangles, and the commands of a few `execute` calls.
 type Scene = ((u32, u32), Vec<[Vec4; 3]>, Vec<Vec<Command>>);
 
@@ -104,6 +139,20 @@ proptest! {
             depth.set(i as u32 % size.0, i as u32 / size.0, value);
             expected[i] = value;
         }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn four_at_a_time_setup_matches_the_scalar_setup(
+        tris in prop::array::uniform4(prop_oneof![
+            8 => triangle(),
+            1 => (triangle(), 0..12usize, prop_oneof![Just(f32::NAN), Just(f32::INFINITY), Just(-0.0), Just(0.0)])
+                .prop_map(|(mut t, at, v)| { t[at / 4][at % 4] = v; t }),
+        ]),
+        size in (1u32..300, 1u32..300),
+        cull_back in any::<bool>(),
+    ) {
+        check_four_at_a_time_setup(&tris, size, cull_back)?;
     }
 
     #[test]
