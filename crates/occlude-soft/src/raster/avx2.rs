@@ -7,8 +7,9 @@
 //! Per window, an edge that holds at the four corners of the window (widened to whole
 //! 8-pixel groups) holds everywhere in it and is dropped; one that fails at all four
 //! fails everywhere, and the window is empty; an edge that crosses the window takes
-//! values within its slopes times the window's size, which the guard band keeps far
-//! inside `i32` (the window is left to the span walker if not). Coverage is then a
+//! values within its slopes times the window's size, which the coordinate limit of
+//! the set-up keeps inside `i32` (slopes of at most 2^24, windows of at most 64
+//! pixels a side: below 2^24 * 126 < 2^31). Coverage is then a
 //! sign test of the crossing edges' values or-ed together, in one loop per number
 //! of crossing edges (none to three).
 //!
@@ -21,6 +22,7 @@ use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
 
 use super::hiz::BLOCKS;
+use super::setup::{HALF, ONE, SUBPIXEL_BITS};
 use super::shade::{test_pixel, DRAW, EQUAL, GROUP};
 use super::span::RasterTri;
 use super::split::TileView;
@@ -40,8 +42,7 @@ impl Avx2 {
     /// Rasterizes `t` with operation `OP` over `window` (its columns `x0..=x1` and rows
     /// `y0..=y1` in `tile`, absolute, not empty), skipping the depth tests of the
     /// hierarchical-depth blocks set in `rejected`; with `stop_at_pass`, stops after
-    /// the first row with a passing fragment. `None` where an edge function might
-    /// not fit an `i32` lane (the caller then walks spans).
+    /// the first row with a passing fragment.
     pub fn window<const OP: u8>(
         self,
         tile: &mut TileView<'_>,
@@ -49,7 +50,7 @@ impl Avx2 {
         window: [i32; 4],
         rejected: u64,
         stop_at_pass: bool,
-    ) -> Option<CommandResult> {
+    ) -> CommandResult {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2 and POPCNT.
         unsafe { raster_window::<OP>(tile, t, window, rejected, stop_at_pass) }
     }
@@ -66,51 +67,102 @@ struct Edges {
     live: usize,
 }
 
-/// What [`edges`] found.
-enum EdgeSetup {
-    /// The edges are set up.
-    Ready,
-    /// An edge excludes the whole window.
-    Empty,
-    /// A value might not fit an `i32`.
-    Wide,
-}
-
 /// Sets up `t`'s edges over the columns `c0..=c1` and rows `y0..=y1` (absolute;
-/// `c0..c0 + 8` the first group's lanes) in `out`, all zero before (written in
-/// place: the edges are a few hundred bytes, which a returned value would copy).
+/// `c0..c0 + 8` the first group's lanes) in `out` (written in place: the edges are a
+/// few hundred bytes, which a returned value would copy); `false` when an edge
+/// excludes the whole window.
+///
+/// The three edges are computed side by side in `i64` lanes, as
+/// [`setup::edges_at`](super::setup::edges_at) and the reduction of
+/// [`RasterTri::edges_at`] compute each (the products of `i32` differences are
+/// exact in `i64`), without a branch on their values but for an empty window. The
+/// vertices lie within the set-up's coordinate limit (2^23 fixed-point units), so
+/// their differences fit `i32` lanes.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edges) -> EdgeSetup {
-    let (i1, j1) = (i64::from(c1 - c0), i64::from(y1 - y0));
-    let lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    for (g, a, b) in t.edges_at(c0, y0) {
-        // The extremes of g + a * i + b * j over the window, at its corners.
-        let (ai, bj) = (a * i1, b * j1);
-        let (lo, hi) = (g + ai.min(0) + bj.min(0), g + ai.max(0) + bj.max(0));
-        if lo >= 0 {
-            // Holds everywhere: a zero edge function that never changes.
-            continue;
-        }
-        if hi < 0 {
-            return EdgeSetup::Empty;
-        }
-        if lo < i64::from(i32::MIN) || hi > i64::from(i32::MAX) {
-            return EdgeSetup::Wide;
-        }
-        // All values in between fit, and so do the slopes (|a|, |b| are at most 2^24,
-        // so 8 * a fits too).
-        let k = out.live;
-        out.row[k] =
-            _mm256_add_epi32(_mm256_set1_epi32(g as i32), _mm256_mullo_epi32(_mm256_set1_epi32(a as i32), lanes));
-        out.per_group[k] = _mm256_set1_epi32(8 * a as i32);
-        out.per_row[k] = _mm256_set1_epi32(b as i32);
-        out.live += 1;
+unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edges) -> bool {
+    // The vertices as i32 lanes x0 y0 x1 y1 x2 y2 (then `cmd` and `x0`, unused):
+    // `verts` is the first field of the 64-byte `RasterTri`.
+    // SAFETY: the 32 bytes lie inside `*t`.
+    let v = unsafe { _mm256_loadu_si256(std::ptr::from_ref(t).cast()) };
+    // Edge k runs from vertex k to vertex k + 1 (mod 3); lane 3 repeats edge 0.
+    let from = _mm256_permutevar8x32_epi32(v, _mm256_setr_epi32(0, 2, 4, 0, 1, 3, 5, 1));
+    let to = _mm256_permutevar8x32_epi32(v, _mm256_setr_epi32(2, 4, 0, 2, 3, 5, 1, 3));
+    // The edge vectors (dx | dy) and the set-up pixel's centre relative to each
+    // edge's first vertex (x | y), all within 2^25 in magnitude.
+    let d = _mm256_sub_epi32(to, from);
+    let (cx, cy) = (c0 * ONE as i32 + HALF as i32, y0 * ONE as i32 + HALF as i32);
+    let centre = _mm256_setr_epi32(cx, cx, cx, cx, cy, cy, cy, cy);
+    let r = _mm256_sub_epi32(centre, from);
+    let wide = |v: __m256i, high: bool| {
+        _mm256_cvtepi32_epi64(if high { _mm256_extracti128_si256::<1>(v) } else { _mm256_castsi256_si128(v) })
+    };
+    let (dx, dy, rx, ry) = (wide(d, false), wide(d, true), wide(r, false), wide(r, true));
+    let zero = _mm256_setzero_si256();
+    // Top-left rule (`edges_at`): a top or left edge has no bias, others 1.
+    let top_left = _mm256_or_si256(
+        _mm256_cmpgt_epi64(zero, dy),
+        _mm256_and_si256(_mm256_cmpeq_epi64(dy, zero), _mm256_cmpgt_epi64(dx, zero)),
+    );
+    let origin = _mm256_sub_epi64(
+        _mm256_sub_epi64(_mm256_sub_epi64(_mm256_mul_epi32(dx, ry), _mm256_mul_epi32(dy, rx)), top_left),
+        _mm256_set1_epi64x(1),
+    );
+    // Reduced: g = origin >> 8 (arithmetic: the logical shift, sign bits filled in),
+    // a = -dy, b = dx.
+    let negative = _mm256_cmpgt_epi64(zero, origin);
+    let g = _mm256_or_si256(
+        _mm256_srli_epi64::<{ SUBPIXEL_BITS as i32 }>(origin),
+        _mm256_slli_epi64::<{ 64 - SUBPIXEL_BITS as i32 }>(negative),
+    );
+    let (a, b) = (_mm256_sub_epi64(zero, dy), dx);
+    // The extremes of g + a * i + b * j over the window, at its corners.
+    let (ai, bj) = (
+        _mm256_mul_epi32(a, _mm256_set1_epi64x(i64::from(c1 - c0))),
+        _mm256_mul_epi32(b, _mm256_set1_epi64x(i64::from(y1 - y0))),
+    );
+    let below = |v: __m256i| _mm256_and_si256(v, _mm256_cmpgt_epi64(zero, v));
+    let above = |v: __m256i| _mm256_andnot_si256(_mm256_cmpgt_epi64(zero, v), v);
+    let lo = _mm256_add_epi64(_mm256_add_epi64(g, below(ai)), below(bj));
+    let hi = _mm256_add_epi64(_mm256_add_epi64(g, above(ai)), above(bj));
+    let lanes = |m: __m256i| (_mm256_movemask_pd(_mm256_castsi256_pd(m)) & 0b111) as usize;
+    if lanes(_mm256_cmpgt_epi64(zero, hi)) != 0 {
+        return false;
     }
-    EdgeSetup::Ready
+    // Edges that hold everywhere (lo >= 0) are left out.
+    let live = lanes(_mm256_cmpgt_epi64(zero, lo));
+    debug_assert!(
+        lanes(_mm256_or_si256(
+            _mm256_cmpgt_epi64(_mm256_set1_epi64x(i64::from(i32::MIN)), lo),
+            _mm256_cmpgt_epi64(hi, _mm256_set1_epi64x(i64::from(i32::MAX))),
+        )) & live
+            == 0,
+        "a crossing edge's values fit i32 lanes"
+    );
+    // All values of a live edge fit an i32, and so do its slopes (|a|, |b| are at
+    // most 2^24, so 8 * a fits too): the low halves of the i64 lanes.
+    let low = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+    let (g, a, b) =
+        (_mm256_permutevar8x32_epi32(g, low), _mm256_permutevar8x32_epi32(a, low), _mm256_permutevar8x32_epi32(b, low));
+    // The live edges first, in order: slot s takes edge ORDER[live][s].
+    const ORDER: [[i32; 3]; 8] =
+        [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [0, 2, 0], [1, 2, 0], [0, 1, 2]];
+    let count = live.count_ones() as usize;
+    let steps = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (s, &k) in ORDER[live].iter().enumerate() {
+        // Slots past the live edges stay zero: an edge function that never changes.
+        let keep = _mm256_set1_epi32(-i32::from(s < count));
+        let pick = |v: __m256i| _mm256_and_si256(_mm256_permutevar8x32_epi32(v, _mm256_set1_epi32(k)), keep);
+        let (gs, as_, bs) = (pick(g), pick(a), pick(b));
+        out.row[s] = _mm256_add_epi32(gs, _mm256_mullo_epi32(as_, steps));
+        out.per_group[s] = _mm256_slli_epi32::<3>(as_);
+        out.per_row[s] = bs;
+    }
+    out.live = count;
+    true
 }
 
 /// [`Avx2::window`].
@@ -125,7 +177,7 @@ unsafe fn raster_window<const OP: u8>(
     window: [i32; 4],
     rejected: u64,
     stop_at_pass: bool,
-) -> Option<CommandResult> {
+) -> CommandResult {
     let [x0, x1, y0, y1] = window;
     let row_len = tile.rows.width();
     // Groups before `whole` lie wholly inside the tile's rows; a last group cut by
@@ -135,10 +187,8 @@ unsafe fn raster_window<const OP: u8>(
     let c0 = tile.x0 + (first * GROUP) as i32;
     let zero = _mm256_setzero_si256();
     let mut edges = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
-    match self::edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1, &mut edges) {
-        EdgeSetup::Empty => return Some(CommandResult::default()),
-        EdgeSetup::Wide => return None,
-        EdgeSetup::Ready => {}
+    if !self::edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1, &mut edges) {
+        return CommandResult::default();
     }
     let window = Window { first, end: (last + 1).min(whole), cut: last >= whole, c0, y0, y1 };
     // A window wholly inside the triangle needs no coverage test. Its groups lie
@@ -163,11 +213,11 @@ unsafe fn raster_window<const OP: u8>(
             _ => None,
         };
         if let Some(narrow) = narrow {
-            return Some(narrow(tile, t, &window, &edges));
+            return narrow(tile, t, &window, &edges);
         }
     }
     // One loop per number of live edges, so that each tests only those.
-    let counts = match (edges.live, stop_at_pass) {
+    match (edges.live, stop_at_pass) {
         (0, false) => rows::<OP, 0, false>(tile, t, &window, &edges, rejected),
         (0, true) => rows::<OP, 0, true>(tile, t, &window, &edges, rejected),
         (1, false) => rows::<OP, 1, false>(tile, t, &window, &edges, rejected),
@@ -176,8 +226,7 @@ unsafe fn raster_window<const OP: u8>(
         (2, true) => rows::<OP, 2, true>(tile, t, &window, &edges, rejected),
         (_, false) => rows::<OP, 3, false>(tile, t, &window, &edges, rejected),
         (_, true) => rows::<OP, 3, true>(tile, t, &window, &edges, rejected),
-    };
-    Some(counts)
+    }
 }
 
 /// The whole groups `first..end` (and group `end` if `cut`) of the rows `y0..=y1`

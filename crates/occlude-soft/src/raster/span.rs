@@ -20,9 +20,10 @@ use super::setup::{edges_at, Fixed, RowPlane, SetupTri, SUBPIXEL_BITS};
 
 /// A set-up triangle in the form the tiles read: the rows it may cover, its vertices
 /// (the edge functions are set up from them where a window starts) and depth plane.
-/// One cache line.
+/// One cache line, the vertices first (the AVX2 rasterizer loads them as one
+/// vector).
 #[derive(Clone, Copy, Debug)]
-#[repr(align(64))]
+#[repr(C, align(64))]
 pub(super) struct RasterTri {
     /// The vertices, in the order of positive area.
     pub verts: [Fixed; 3],
@@ -48,7 +49,7 @@ pub(super) struct RasterTri {
     pub z_dy: f32,
 }
 
-const _: () = assert!(std::mem::size_of::<RasterTri>() == 64);
+const _: () = assert!(std::mem::size_of::<RasterTri>() == 64 && std::mem::offset_of!(RasterTri, verts) == 0);
 
 impl RasterTri {
     /// A value to fill memory with before the triangles are copied in.

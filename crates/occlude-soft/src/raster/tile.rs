@@ -89,7 +89,7 @@ impl WindowRaster for Avx2 {
         rejected: u64,
         stop_at_pass: bool,
     ) -> Option<CommandResult> {
-        Avx2::window::<OP>(self, tile, t, window, rejected, stop_at_pass)
+        Some(Avx2::window::<OP>(self, tile, t, window, rejected, stop_at_pass))
     }
 }
 
