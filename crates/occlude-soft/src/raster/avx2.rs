@@ -197,24 +197,20 @@ unsafe fn raster_window<const OP: u8>(
     debug_assert!(
         edges.live > 0 || (x0 == c0 && (last >= whole || x1 == c0 + ((last - first + 1) * GROUP) as i32 - 1))
     );
-    // Narrow windows without rejected blocks (a small triangle's usual window)
-    // have their groups unrolled.
+    // Windows without rejected blocks or a cut group (a draw's usual window) have
+    // their groups unrolled.
     if rejected == 0 && !stop_at_pass && !window.cut {
-        let narrow: Option<NarrowRows> = match (edges.live, window.end - window.first) {
-            (1, 1) => Some(narrow_rows::<OP, 1, 1>),
-            (1, 2) => Some(narrow_rows::<OP, 1, 2>),
-            (1, 3) => Some(narrow_rows::<OP, 1, 3>),
-            (2, 1) => Some(narrow_rows::<OP, 2, 1>),
-            (2, 2) => Some(narrow_rows::<OP, 2, 2>),
-            (2, 3) => Some(narrow_rows::<OP, 2, 3>),
-            (3, 1) => Some(narrow_rows::<OP, 3, 1>),
-            (3, 2) => Some(narrow_rows::<OP, 3, 2>),
-            (3, 3) => Some(narrow_rows::<OP, 3, 3>),
-            _ => None,
+        let plain = match window.end - window.first {
+            1 => plain_rows_for::<OP, 1>(edges.live),
+            2 => plain_rows_for::<OP, 2>(edges.live),
+            3 => plain_rows_for::<OP, 3>(edges.live),
+            4 => plain_rows_for::<OP, 4>(edges.live),
+            5 => plain_rows_for::<OP, 5>(edges.live),
+            6 => plain_rows_for::<OP, 6>(edges.live),
+            7 => plain_rows_for::<OP, 7>(edges.live),
+            _ => plain_rows_for::<OP, 8>(edges.live),
         };
-        if let Some(narrow) = narrow {
-            return narrow(tile, t, &window, &edges);
-        }
+        return plain(tile, t, &window, &edges);
     }
     // One loop per number of live edges, so that each tests only those.
     match (edges.live, stop_at_pass) {
@@ -338,20 +334,30 @@ unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
     CommandResult { fragments: u64::from(fragments), passed: u64::from(passed) }
 }
 
-/// A [`narrow_rows`] instance.
-type NarrowRows = unsafe fn(&mut TileView<'_>, &RasterTri, &Window, &Edges) -> CommandResult;
+/// A [`plain_rows`] instance.
+type PlainRows = unsafe fn(&mut TileView<'_>, &RasterTri, &Window, &Edges) -> CommandResult;
 
-/// The rows of [`raster_window`] for a window of `G` whole groups with no rejected
-/// block, no cut group and not stopping at a pass, testing the first `LIVE` edge
-/// functions: [`rows`] with the groups unrolled and no per-row bookkeeping (the
-/// depth plane's row value is stepped in a register, by the same `f32` operations
-/// as [`RowPlane::of`](super::setup::RowPlane::of)).
+/// The [`plain_rows`] of `G` groups for `live` live edges.
+fn plain_rows_for<const OP: u8, const G: usize>(live: usize) -> PlainRows {
+    match live {
+        0 => plain_rows::<OP, 0, G>,
+        1 => plain_rows::<OP, 1, G>,
+        2 => plain_rows::<OP, 2, G>,
+        _ => plain_rows::<OP, 3, G>,
+    }
+}
+
+/// The rows of [`raster_window`] for a window of `G` (1 to 8) whole groups with no
+/// rejected block, no cut group and not stopping at a pass, testing the first
+/// `LIVE` edge functions: [`rows`] with the groups unrolled and no per-row
+/// bookkeeping (the depth plane's row value is stepped in a register, by the same
+/// `f32` operations as [`RowPlane::of`](super::setup::RowPlane::of)).
 ///
 /// # Safety
 /// The CPU must support AVX2 and POPCNT.
 #[target_feature(enable = "avx2,popcnt")]
 #[inline]
-unsafe fn narrow_rows<const OP: u8, const LIVE: usize, const G: usize>(
+unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
     tile: &mut TileView<'_>,
     t: &RasterTri,
     window: &Window,
@@ -384,6 +390,7 @@ unsafe fn narrow_rows<const OP: u8, const LIVE: usize, const G: usize>(
         let mut e = e_row;
         for (g, &product) in products.iter().enumerate() {
             let outside = match LIVE {
+                0 => _mm256_setzero_si256(),
                 1 => _mm256_srai_epi32::<31>(e[0]),
                 2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
                 _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),

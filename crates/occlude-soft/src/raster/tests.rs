@@ -595,7 +595,7 @@ fn window_rasterizers_agree_on_special_values() {
         f32::MIN_POSITIVE,
     ];
     // 21 pixels wide: two whole groups and a cut one; 16 wide: two whole groups (the
-    // unrolled loop of narrow windows). A triangle covering it all, and one covering
+    // unrolled loop of windows without a cut group). A triangle covering it all, and one covering
     // all but a corner (one edge crosses the window).
     for (w, corner) in [(21u32, 3.0), (21, 1.8), (16, 3.0), (16, 1.8)] {
         let h = 3u32;
@@ -630,13 +630,13 @@ fn window_rasterizers_agree_for_every_number_of_crossing_edges() {
     // The AVX2 rasterizer has one loop per number of edges crossing the window (none,
     // one, two, three), with and without rejected blocks: each must match the span
     // walker bit for bit, in whole groups and in the group cut by the end of the row
-    // (61 columns: seven whole groups and five pixels), and in windows of one, two
-    // and three whole groups without rejected blocks (the unrolled loops).
+    // (61 columns: seven whole groups and five pixels), and in windows of one to
+    // eight whole groups without rejected blocks (the unrolled loops).
     let Some(avx2) = avx2::Avx2::detect() else {
         eprintln!("no AVX2 on this CPU: nothing to compare");
         return;
     };
-    for w in [61, 24, 16, 8] {
+    for w in [61, 8, 16, 24, 32, 40, 48, 56, 64] {
         check_windows_crossed_by_every_number_of_edges(avx2, w);
     }
 }
