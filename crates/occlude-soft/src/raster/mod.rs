@@ -405,7 +405,7 @@ struct SetupSpan<'a> {
 /// kernel, four at a time where they need no clipping (`setup_avx2`).
 #[inline(always)]
 fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
-    let mut emit = |t: SetupTri| {
+    let emit = |chunk: &mut Chunk, t: SetupTri| {
         if let Some(r) = RasterTri::new(&t) {
             chunk.push(grid, r);
         }
@@ -424,23 +424,24 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
         if let Kernel::Avx2(_) = kernel {
             let groups = rest.chunks_exact(4);
             rest = groups.remainder();
+            let mut four = [RasterTri::PLACEHOLDER; 4];
             for group in groups {
                 let group: &[[Vec4; 3]; 4] = group.try_into().expect("four triangles");
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-                let lanes = unsafe { setup_avx2::setup4(group, c.cull_back, cmd as u32, viewport) };
-                for (tri, lane) in group.iter().zip(lanes) {
-                    match lane {
-                        setup_avx2::Lane::Ready(t) => emit(t),
-                        setup_avx2::Lane::Dropped => {}
-                        setup_avx2::Lane::Scalar => {
-                            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit)
+                let lanes = unsafe { setup_avx2::setup4(group, c.cull_back, cmd as u32, viewport, &mut four) };
+                for (i, (tri, r)) in group.iter().zip(&four).enumerate() {
+                    if lanes.ready & (1 << i) != 0 {
+                        if let Some(r) = r.covered_rows() {
+                            chunk.push(grid, r);
                         }
+                    } else if lanes.scalar & (1 << i) != 0 {
+                        setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(chunk, t));
                     }
                 }
             }
         }
         for tri in rest {
-            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, &mut emit);
+            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(chunk, t));
         }
         g = end;
         cmd += 1;

@@ -101,6 +101,7 @@ pub(super) struct SetupTri {
 
 impl SetupTri {
     /// The edge functions, set up at the bounding box's top-left pixel.
+    #[cfg(test)]
     pub fn edges(&self) -> [Edge; 3] {
         edges_at(&self.verts, self.x0, self.y0)
     }

@@ -4,26 +4,39 @@
 //! a triangle, bit for bit: the same `f64` operations in the same order (IEEE
 //! arithmetic is exact per lane, and no multiply-add is fused), the fixed-point
 //! coordinates as `f64` integers (below 2^23 in magnitude, so their differences,
-//! products and the doubled area are exact in `f64` as they are in `i64`). Any other
-//! triangle is handed back to the scalar set-up.
+//! products and the doubled area are exact in `f64` as they are in `i64`), and
+//! writes their raster forms ([`RasterTri`]) with one 4x4 transpose per four
+//! fields. Any other triangle is handed back to the scalar set-up.
 
 use std::arch::x86_64::*;
 
 use glam::Vec4;
 
-use super::setup::{SetupTri, Viewport, COORD_LIMIT, HALF, ONE};
+use super::setup::{Viewport, COORD_LIMIT, HALF, ONE};
+use super::span::RasterTri;
 
-/// What the set-up of a group of four triangles made of each.
+// The field order `setup4` writes the raster forms in.
+const _: () = {
+    use std::mem::offset_of;
+    assert!(offset_of!(RasterTri, verts) == 0 && offset_of!(RasterTri, cmd) == 24);
+    assert!(offset_of!(RasterTri, x0) == 28 && offset_of!(RasterTri, x1) == 32);
+    assert!(offset_of!(RasterTri, y0) == 36 && offset_of!(RasterTri, y1) == 40);
+    assert!(offset_of!(RasterTri, plane_y) == 44 && offset_of!(RasterTri, z_origin) == 48);
+    assert!(offset_of!(RasterTri, z_dx) == 52 && offset_of!(RasterTri, z_dy) == 56);
+    assert!(std::mem::size_of::<RasterTri>() == 64);
+};
+
+/// What the set-up of a group of four triangles made of each: bit `i` for the
+/// triangle `i`.
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Lane {
-    /// Set up.
-    Ready(SetupTri),
-    /// Covers no pixel centre (degenerate, culled, off the viewport, or a
-    /// non-finite depth plane): nothing to rasterize.
-    Dropped,
+pub(super) struct Lanes {
+    /// Set up: the raster form is written, its rows still its bounding box's
+    /// ([`RasterTri::covered_rows`] is left to do).
+    pub ready: u8,
     /// Not the usual case (clipped, non-finite, out of range): for the scalar
-    /// set-up.
-    Scalar,
+    /// set-up. The others cover no pixel centre (degenerate, culled, off the
+    /// viewport, or a non-finite depth plane): nothing to rasterize.
+    pub scalar: u8,
 }
 
 /// The vertex `k` of four triangles, one per lane: clip-space `x, y, z, w`.
@@ -148,20 +161,25 @@ unsafe fn bits(mask: __m256d) -> u32 {
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn ints(v: __m256d) -> [i32; 4] {
-    let mut out = [0i32; 4];
-    _mm_storeu_si128(out.as_mut_ptr().cast(), _mm256_cvtpd_epi32(v));
-    out
+unsafe fn ints(v: __m256d) -> __m128i {
+    _mm256_cvtpd_epi32(v)
 }
 
 /// Sets up the four triangles `tris` of command `cmd` as `setup::setup_triangle`
-/// would, for the triangles of the usual case; the others come back as
-/// [`Lane::Scalar`].
+/// and [`RasterTri::new`] would, for the triangles of the usual case, writing the
+/// raster forms of the [`Lanes::ready`] ones to `out`; the others come back as
+/// [`Lanes::scalar`] or are dropped.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn setup4(tris: &[[Vec4; 3]; 4], cull_back: bool, cmd: u32, viewport: Viewport) -> [Lane; 4] {
+pub(super) unsafe fn setup4(
+    tris: &[[Vec4; 3]; 4],
+    cull_back: bool,
+    cmd: u32,
+    viewport: Viewport,
+    out: &mut [RasterTri; 4],
+) -> Lanes {
     let verts = [load(tris, 0), load(tris, 1), load(tris, 2)];
     let zero = _mm256_setzero_pd();
     // Finite inputs (all four coordinates, as `clip_triangle` checks), inside the
@@ -244,31 +262,30 @@ pub(super) unsafe fn setup4(tris: &[[Vec4; 3]; 4], cull_back: bool, cmd: u32, vi
     }
 
     let (usual, keep) = (bits(usual), bits(keep));
-    let [z_origin, z_dx, z_dy] = plane.map(|p| {
-        let mut out = [0f32; 4];
-        _mm_storeu_ps(out.as_mut_ptr(), p);
-        out
-    });
-    let (x0, y0, x1, y1) = (ints(x0), ints(y0), ints(x1), ints(y1));
-    let vx = [ints(p0.x), ints(p1.x), ints(p2.x)];
-    let vy = [ints(p0.y), ints(p1.y), ints(p2.y)];
-    std::array::from_fn(|i| {
-        if usual & (1 << i) == 0 {
-            Lane::Scalar
-        } else if keep & (1 << i) == 0 {
-            Lane::Dropped
-        } else {
-            Lane::Ready(SetupTri {
-                cmd,
-                x0: x0[i],
-                y0: y0[i],
-                x1: x1[i],
-                y1: y1[i],
-                verts: [[vx[0][i], vy[0][i]], [vx[1][i], vy[1][i]], [vx[2][i], vy[2][i]]],
-                z_origin: z_origin[i],
-                z_dx: z_dx[i],
-                z_dy: z_dy[i],
-            })
+    // The raster forms, field by field in memory order (a 4x4 transpose per four
+    // fields): the vertices, the command, the bounding box (columns, then rows,
+    // then the plane's row origin, its top), the depth plane, and padding.
+    let plane = [_mm_castps_si128(plane[0]), _mm_castps_si128(plane[1]), _mm_castps_si128(plane[2])];
+    let fields = [
+        [ints(p0.x), ints(p0.y), ints(p1.x), ints(p1.y)],
+        [ints(p2.x), ints(p2.y), _mm_set1_epi32(cmd as i32), ints(x0)],
+        [ints(x1), ints(y0), ints(y1), ints(y0)],
+        [plane[0], plane[1], plane[2], _mm_setzero_si128()],
+    ];
+    for (k, [a, b, c, d]) in fields.into_iter().enumerate() {
+        let (ab_lo, ab_hi) = (_mm_unpacklo_epi32(a, b), _mm_unpackhi_epi32(a, b));
+        let (cd_lo, cd_hi) = (_mm_unpacklo_epi32(c, d), _mm_unpackhi_epi32(c, d));
+        let rows = [
+            _mm_unpacklo_epi64(ab_lo, cd_lo),
+            _mm_unpackhi_epi64(ab_lo, cd_lo),
+            _mm_unpacklo_epi64(ab_hi, cd_hi),
+            _mm_unpackhi_epi64(ab_hi, cd_hi),
+        ];
+        for (t, row) in out.iter_mut().zip(rows) {
+            // SAFETY: bytes 16k..16k + 16 of the 64-byte `RasterTri` (the layout is
+            // checked at the top of the module); every bit pattern is a valid value of its fields.
+            unsafe { _mm_storeu_si128(std::ptr::from_mut(t).cast::<__m128i>().add(k), row) };
         }
-    })
+    }
+    Lanes { ready: (usual & keep) as u8, scalar: (!usual & 0b1111) as u8 }
 }

@@ -68,32 +68,41 @@ impl RasterTri {
 
     /// The raster form of `t`, or `None` when a horizontal edge excludes every row.
     pub fn new(t: &SetupTri) -> Option<Self> {
-        let (mut y0, mut y1) = (i64::from(t.y0), i64::from(t.y1));
+        Self {
+            verts: t.verts,
+            cmd: t.cmd,
+            x0: t.x0,
+            x1: t.x1,
+            y0: t.y0,
+            y1: t.y1,
+            plane_y: t.y0,
+            z_origin: t.z_origin,
+            z_dx: t.z_dx,
+            z_dy: t.z_dy,
+        }
+        .covered_rows()
+    }
+
+    /// `self`, whose rows are its bounding box's (`y0 == plane_y`), with the rows
+    /// that a horizontal edge excludes removed; `None` when it excludes every row.
+    #[inline(always)]
+    pub fn covered_rows(mut self) -> Option<Self> {
+        let (mut y0, mut y1) = (i64::from(self.y0), i64::from(self.y1));
         // A horizontal edge (two vertices on one row) covers the rows k (from the
         // box's top) where g + dx * k >= 0.
-        let [[_, ya], [_, yb], [_, yc]] = t.verts;
+        let [[_, ya], [_, yb], [_, yc]] = self.verts;
         if ya == yb || yb == yc || yc == ya {
-            for (g, _, dx) in reduce(t.edges()).into_iter().filter(|e| e.1 == 0) {
+            for (g, _, dx) in self.edges_at(self.x0, self.plane_y).into_iter().filter(|e| e.1 == 0) {
                 match dx.signum() {
-                    1 => y0 = y0.max(i64::from(t.y0) - g.div_euclid(dx)),
-                    -1 => y1 = y1.min(i64::from(t.y0) + g.div_euclid(-dx)),
+                    1 => y0 = y0.max(i64::from(self.plane_y) - g.div_euclid(dx)),
+                    -1 => y1 = y1.min(i64::from(self.plane_y) + g.div_euclid(-dx)),
                     _ if g < 0 => return None,
                     _ => {}
                 }
             }
         }
-        (y0 <= y1).then_some(Self {
-            verts: t.verts,
-            cmd: t.cmd,
-            x0: t.x0,
-            x1: t.x1,
-            y0: y0 as i32,
-            y1: y1 as i32,
-            plane_y: t.y0,
-            z_origin: t.z_origin,
-            z_dx: t.z_dx,
-            z_dy: t.z_dy,
-        })
+        (self.y0, self.y1) = (y0 as i32, y1 as i32);
+        (y0 <= y1).then_some(self)
     }
 
     /// The reduced edge functions `(g, a, b)` set up at pixel `(x, y)`: the pixel `i`

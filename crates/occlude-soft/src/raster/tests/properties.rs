@@ -61,35 +61,34 @@ fn command(n: u32) -> impl Strategy<Value = Command> {
 }
 
 /// The four-at-a-time set-up of `tris` against the scalar one, lane by lane: a set-up
-/// triangle must be the scalar set-up's only one, field for field and bit for bit;
-/// a dropped one must have none; a triangle inside the viewport (`w` = 1) must not
-/// be handed back to the scalar set-up.
+/// triangle's raster form must be the scalar set-up's only one, field for field and
+/// bit for bit; a dropped one must have none; a triangle inside the viewport (`w` =
+/// 1) must not be handed back to the scalar set-up.
 #[cfg(target_arch = "x86_64")]
 fn check_four_at_a_time_setup(tris: &[[Vec4; 3]; 4], size: (u32, u32), cull_back: bool) -> Result<(), TestCaseError> {
-    use super::super::setup::SetupTri;
-    use super::super::setup_avx2::{setup4, Lane};
+    use super::super::setup_avx2::setup4;
     if !is_x86_feature_detected!("avx2") {
         return Ok(());
     }
-    let fields =
-        |t: &SetupTri| (t.cmd, [t.x0, t.y0, t.x1, t.y1], t.verts, [t.z_origin, t.z_dx, t.z_dy].map(f32::to_bits));
+    let fields = |t: &RasterTri| {
+        (t.cmd, [t.x0, t.x1, t.y0, t.y1, t.plane_y], t.verts, [t.z_origin, t.z_dx, t.z_dy].map(f32::to_bits))
+    };
     let viewport = Viewport::new(size.0, size.1);
+    let mut four = [RasterTri::PLACEHOLDER; 4];
     // SAFETY: the CPU supports AVX2 (checked above).
-    let lanes = unsafe { setup4(tris, cull_back, 7, viewport) };
-    for (tri, lane) in tris.iter().zip(lanes) {
+    let lanes = unsafe { setup4(tris, cull_back, 7, viewport, &mut four) };
+    for (i, (tri, fast)) in tris.iter().zip(&four).enumerate() {
         let mut scalar = Vec::new();
         setup_triangle(tri, cull_back, 7, viewport, &mut Polygon::new(), |t| scalar.push(t));
-        match lane {
-            Lane::Ready(t) => {
-                prop_assert_eq!(scalar.len(), 1, "{:?}", tri);
-                prop_assert_eq!(fields(&t), fields(&scalar[0]), "{:?}", tri);
-            }
-            Lane::Dropped => prop_assert!(scalar.is_empty(), "{:?} dropped, the scalar set-up kept it", tri),
-            Lane::Scalar => {
-                let on_screen =
-                    tri.iter().all(|v| v.is_finite() && v.w == 1.0 && v.truncate().abs().max_element() <= 1.0);
-                prop_assert!(!on_screen, "{:?} is inside the viewport, handed to the scalar set-up", tri);
-            }
+        if lanes.ready & (1 << i) != 0 {
+            prop_assert_eq!(scalar.len(), 1, "{:?}", tri);
+            let expected = RasterTri::new(&scalar[0]);
+            prop_assert_eq!(fast.covered_rows().map(|t| fields(&t)), expected.map(|t| fields(&t)), "{:?}", tri);
+        } else if lanes.scalar & (1 << i) != 0 {
+            let on_screen = tri.iter().all(|v| v.is_finite() && v.w == 1.0 && v.truncate().abs().max_element() <= 1.0);
+            prop_assert!(!on_screen, "{:?} is inside the viewport, handed to the scalar set-up", tri);
+        } else {
+            prop_assert!(scalar.is_empty(), "{:?} dropped, the scalar set-up kept it", tri);
         }
     }
     Ok(())
