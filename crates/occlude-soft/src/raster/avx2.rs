@@ -13,10 +13,10 @@
 //! sign test of the crossing edges' values or-ed together, in one loop per number
 //! of crossing edges (none to three).
 //!
-//! Depth is [`RowPlane::depth`] per lane: the same `f32` product and sum (never a
-//! fused multiply-add; the product does not depend on the row, so it is computed
-//! once per group of the window), and `max(z, 0)` in the operand order that, like
-//! `depth`, turns NaN and `-0.0` into `+0.0`.
+//! Depth is [`RowPlane::depth`](super::setup::RowPlane::depth) per lane: the same
+//! `f32` product and sum (never a fused multiply-add; the product does not depend
+//! on the row, so it is computed once per group of the window), and `max(z, 0)` in
+//! the operand order that, like `depth`, turns NaN and `-0.0` into `+0.0`.
 
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
@@ -381,7 +381,6 @@ unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
     let (z_origin, z_dy) = (_mm256_set1_ps(t.z_origin), _mm256_set1_ps(t.z_dy));
     // The row's offset from the plane's origin row: an integer below 2^24, exact.
     let mut dy = _mm256_set1_ps((y0 - t.plane_y) as f32);
-    let zero_ps = _mm256_setzero_ps();
     let zero = _mm256_setzero_si256();
     let (mut minus_outside, mut minus_passed) = (zero, zero);
     let mut e_row = edges.row;
@@ -389,27 +388,11 @@ unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
         let z_row = _mm256_add_ps(z_origin, _mm256_mul_ps(z_dy, dy));
         let mut e = e_row;
         for (g, &product) in products.iter().enumerate() {
-            let outside = match LIVE {
-                0 => _mm256_setzero_si256(),
-                1 => _mm256_srai_epi32::<31>(e[0]),
-                2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
-                _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),
-            };
+            let outside = outside::<LIVE>(&e);
             minus_outside = _mm256_add_epi32(minus_outside, outside);
-            let z = _mm256_max_ps(_mm256_add_ps(z_row, product), zero_ps);
             // SAFETY: the group's 8 pixels lie inside the row (checked above).
-            let p = unsafe { pixels.add(g * GROUP) };
-            // SAFETY: as above.
-            let mut d = unsafe { _mm256_loadu_ps(p) };
-            // SAFETY: as in `GroupRow::run`: keeps the blend and store apart.
-            unsafe { std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags)) };
-            let test = if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
-            let pass = _mm256_andnot_ps(_mm256_castsi256_ps(outside), test);
-            if OP == DRAW {
-                // SAFETY: as above.
-                unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
-            }
-            minus_passed = _mm256_add_epi32(minus_passed, _mm256_castps_si256(pass));
+            let pass = unsafe { depth_group::<OP>(pixels.add(g * GROUP), z_row, product, outside) };
+            minus_passed = _mm256_add_epi32(minus_passed, pass);
             if g + 1 < G {
                 for (ek, step) in e.iter_mut().zip(&edges.per_group).take(LIVE) {
                     *ek = _mm256_add_epi32(*ek, *step);
@@ -429,6 +412,52 @@ unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
         fragments: u64::from(lanes.wrapping_add(hsum(minus_outside))),
         passed: u64::from(hsum(minus_passed).wrapping_neg()),
     }
+}
+
+/// The lanes of a group outside the triangle by the first `LIVE` edge functions
+/// `e`: -1 where one of them is negative (its sign bit set), else 0. A group wholly
+/// outside the triangle is tested all the same (nothing passes): cheaper than the
+/// mispredicted branches that skipping it costs.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn outside<const LIVE: usize>(e: &[__m256i; 3]) -> __m256i {
+    match LIVE {
+        0 => _mm256_setzero_si256(),
+        1 => _mm256_srai_epi32::<31>(e[0]),
+        2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
+        _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),
+    }
+}
+
+/// Depth-tests with operation `OP` (and for a draw, writes) the 8 pixels at `p`,
+/// whose fragment depths are `max(z_row + product, 0)`, skipping the lanes set in
+/// `outside`; returns the passing lanes as -1. The depth is
+/// [`RowPlane::depth`](super::setup::RowPlane::depth)'s: `max` returns its second
+/// operand, +0.0, unless the sum is > 0.
+///
+/// # Safety
+/// The CPU must support AVX2; the 8 pixels at `p` must be the caller's to write.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn depth_group<const OP: u8>(p: *mut f32, z_row: __m256, product: __m256, outside: __m256i) -> __m256i {
+    let z = _mm256_max_ps(_mm256_add_ps(z_row, product), _mm256_setzero_ps());
+    // SAFETY: the caller promises the pixels.
+    let mut d = unsafe { _mm256_loadu_ps(p) };
+    // An empty statement that hides where `d` came from: LLVM would otherwise fuse
+    // the load, blend and store below into a masked store (vmaskmovps), which is
+    // microcoded and many times slower on AMD Zen.
+    // SAFETY: the statement does nothing; `d` keeps its value.
+    unsafe { std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags)) };
+    let test = if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
+    let pass = _mm256_andnot_ps(_mm256_castsi256_ps(outside), test);
+    if OP == DRAW {
+        // SAFETY: as above.
+        unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
+    }
+    _mm256_castps_si256(pass)
 }
 
 /// The sum of the eight `i32` lanes of `v`, as a `u32` (wrapping).
@@ -474,44 +503,15 @@ impl GroupRow<'_> {
         skip: u8,
         sums: &mut Sums,
     ) -> [__m256i; 3] {
-        let zero = _mm256_setzero_ps();
         for g in self.first..self.end {
-            // Sign bit set: some edge function is negative, the lane is not covered
-            // (-1 after the shift). A group wholly outside the triangle is tested all
-            // the same (nothing passes): cheaper than the mispredicted branches that
-            // skipping it costs.
-            let outside = match LIVE {
-                0 => _mm256_setzero_si256(),
-                1 => _mm256_srai_epi32::<31>(e[0]),
-                2 => _mm256_srai_epi32::<31>(_mm256_or_si256(e[0], e[1])),
-                _ => _mm256_srai_epi32::<31>(_mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2])),
-            };
+            let outside = outside::<LIVE>(&e);
             sums.minus_outside = _mm256_add_epi32(sums.minus_outside, outside);
             if !(SKIPS && skip & (1 << g) != 0) {
-                // max(z, 0) returns its second operand (+0.0) unless z > 0, as
-                // `depth`.
                 // SAFETY: the products of the groups `first..end` are written.
                 let product = unsafe { self.products[g].assume_init() };
-                let z = _mm256_max_ps(_mm256_add_ps(self.z_row, product), zero);
                 // SAFETY: the caller promises the group's 8 pixels lie inside the row.
-                let p = unsafe { self.pixels.add(g * GROUP) };
-                // SAFETY: as above.
-                let mut d = unsafe { _mm256_loadu_ps(p) };
-                // An empty statement that hides where `d` came from: LLVM would
-                // otherwise fuse the load, blend and store below into a masked store
-                // (vmaskmovps), which is microcoded and many times slower on AMD Zen.
-                // SAFETY: the statement does nothing; `d` keeps its value.
-                unsafe {
-                    std::arch::asm!("/* {0} */", inout(ymm_reg) d, options(pure, nomem, nostack, preserves_flags))
-                };
-                let test =
-                    if OP == EQUAL { _mm256_cmp_ps::<_CMP_EQ_OQ>(z, d) } else { _mm256_cmp_ps::<_CMP_LT_OQ>(z, d) };
-                let pass = _mm256_andnot_ps(_mm256_castsi256_ps(outside), test);
-                if OP == DRAW {
-                    // SAFETY: as above.
-                    unsafe { _mm256_storeu_ps(p, _mm256_blendv_ps(d, z, pass)) };
-                }
-                sums.minus_passed = _mm256_add_epi32(sums.minus_passed, _mm256_castps_si256(pass));
+                let pass = unsafe { depth_group::<OP>(self.pixels.add(g * GROUP), self.z_row, product, outside) };
+                sums.minus_passed = _mm256_add_epi32(sums.minus_passed, pass);
             }
             for (ek, step) in e.iter_mut().zip(per_group).take(LIVE) {
                 *ek = _mm256_add_epi32(*ek, *step);
