@@ -68,9 +68,8 @@ struct Edges {
 }
 
 /// Sets up `t`'s edges over the columns `c0..=c1` and rows `y0..=y1` (absolute;
-/// `c0..c0 + 8` the first group's lanes) in `out` (written in place: the edges are a
-/// few hundred bytes, which a returned value would copy); `false` when an edge
-/// excludes the whole window.
+/// `c0..c0 + 8` the first group's lanes); `None` when an edge excludes the whole
+/// window.
 ///
 /// The three edges are computed side by side in `i64` lanes, as
 /// [`setup::edges_at`](super::setup::edges_at) and the reduction of
@@ -83,7 +82,7 @@ struct Edges {
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edges) -> bool {
+unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32) -> Option<Edges> {
     // The vertices as i32 lanes x0 y0 x1 y1 x2 y2 (then `cmd` and `x0`, unused):
     // `verts` is the first field of the 64-byte `RasterTri`.
     // SAFETY: the 32 bytes lie inside `*t`.
@@ -130,7 +129,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edg
     let hi = _mm256_add_epi64(_mm256_add_epi64(g, above(ai)), above(bj));
     let lanes = |m: __m256i| (_mm256_movemask_pd(_mm256_castsi256_pd(m)) & 0b111) as usize;
     if lanes(_mm256_cmpgt_epi64(zero, hi)) != 0 {
-        return false;
+        return None;
     }
     // Edges that hold everywhere (lo >= 0) are left out.
     let live = lanes(_mm256_cmpgt_epi64(zero, lo));
@@ -152,6 +151,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edg
         [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [0, 2, 0], [1, 2, 0], [0, 1, 2]];
     let count = live.count_ones() as usize;
     let steps = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    let mut out = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: count };
     for (s, &k) in ORDER[live].iter().enumerate() {
         // Slots past the live edges stay zero: an edge function that never changes.
         let keep = _mm256_set1_epi32(-i32::from(s < count));
@@ -161,8 +161,7 @@ unsafe fn edges(t: &RasterTri, c0: i32, c1: i32, y0: i32, y1: i32, out: &mut Edg
         out.per_group[s] = _mm256_slli_epi32::<3>(as_);
         out.per_row[s] = bs;
     }
-    out.live = count;
-    true
+    Some(out)
 }
 
 /// [`Avx2::window`].
@@ -185,11 +184,9 @@ unsafe fn raster_window<const OP: u8>(
     let whole = row_len / GROUP;
     let (first, last) = ((x0 - tile.x0) as usize / GROUP, (x1 - tile.x0) as usize / GROUP);
     let c0 = tile.x0 + (first * GROUP) as i32;
-    let zero = _mm256_setzero_si256();
-    let mut edges = Edges { row: [zero; 3], per_group: [zero; 3], per_row: [zero; 3], live: 0 };
-    if !self::edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1, &mut edges) {
+    let Some(edges) = self::edges(t, c0, tile.x0 + (last * GROUP + GROUP - 1) as i32, y0, y1) else {
         return CommandResult::default();
-    }
+    };
     let window = Window { first, end: (last + 1).min(whole), cut: last >= whole, c0, y0, y1 };
     // A window wholly inside the triangle needs no coverage test. Its groups lie
     // wholly in the window: the pixels of a group outside the window are outside
