@@ -191,7 +191,7 @@ pub(super) unsafe fn setup4(
         }
         usual = _mm256_and_pd(usual, inside(v, viewport));
     }
-    let [p0, p1, mut p2] = verts.map(|v| project(&v, viewport));
+    let [p0, p1, mut p2] = [project(&verts[0], viewport), project(&verts[1], viewport), project(&verts[2], viewport)];
     let mut p1 = p1;
     for p in [&p0, &p1, &p2] {
         usual = _mm256_and_pd(usual, p.ok);
