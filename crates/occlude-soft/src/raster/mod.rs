@@ -405,6 +405,9 @@ struct SetupSpan<'a> {
 /// kernel, four at a time where they need no clipping (`setup_avx2`).
 #[inline(always)]
 fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+    // Only the x86-64 kernels have a four-at-a-time set-up.
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = kernel;
     let emit = |chunk: &mut Chunk, t: SetupTri| {
         if let Some(r) = RasterTri::new(&t) {
             chunk.push(grid, r);
