@@ -594,9 +594,9 @@ fn window_rasterizers_agree_on_special_values() {
         -1e-40,
         f32::MIN_POSITIVE,
     ];
-    // 21 pixels wide: two whole groups and a cut one; 16 wide: two whole groups (the
-    // unrolled loop of windows without a cut group). A triangle covering it all, and one covering
-    // all but a corner (one edge crosses the window).
+    // 21 pixels wide: two whole groups and a cut one; 16 wide: two whole groups
+    // (the unrolled loop of windows without a cut group). A triangle covering it
+    // all, and one covering all but a corner (one edge crosses the window).
     for (w, corner) in [(21u32, 3.0), (21, 1.8), (16, 3.0), (16, 1.8)] {
         let h = 3u32;
         let v = |x: f32, y: f32| Vec4::new(x, y, 0.5, 1.0);
