@@ -261,17 +261,10 @@ unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
     // The groups `first..end` as bits (end <= 8).
     let groups = ((1u16 << end) - (1u16 << first)) as u8;
     let mut e_row = edges.row;
-    // The product `z_dx * dx` of `RowPlane::depth` is the same in every row: once
-    // per group of the window. The plane's pixel offsets `dx` of the lanes are
-    // integers below 2^24, so exact in f32, and so are their sums with 8s.
-    let z_dx = _mm256_set1_ps(t.z_dx);
-    let mut dx =
-        _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     // Only the groups `first..end` are written, and only those are read.
     let mut products = [const { MaybeUninit::<__m256>::uninit() }; BLOCKS];
-    for p in &mut products[first..end] {
-        p.write(_mm256_mul_ps(z_dx, dx));
-        dx = _mm256_add_ps(dx, _mm256_set1_ps(GROUP as f32));
+    for (k, p) in products[first..end].iter_mut().enumerate() {
+        p.write(depth_product(t, c0, k));
     }
     let dx0 = tile.x0 - t.x0;
     let cut_lanes = (1u32 << (tile.rows.width() - whole * GROUP)) - 1;
@@ -303,7 +296,7 @@ unsafe fn rows<const OP: u8, const LIVE: usize, const STOP: bool>(
         rows_done += 1;
         if cut {
             // `e` is now at group `whole`, cut by the end of the row.
-            let outside = _mm256_or_si256(_mm256_or_si256(e[0], e[1]), e[2]);
+            let outside = outside::<LIVE>(&e);
             let mut covered = !(_mm256_movemask_ps(_mm256_castsi256_ps(outside)) as u32) & cut_lanes;
             cut_fragments += covered.count_ones();
             if skip & (1 << whole) == 0 {
@@ -367,13 +360,9 @@ unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
     debug_assert!(first + G <= tile.rows.width() / GROUP);
     let stride = tile.rows.stride();
     let mut pixels = tile.rows.row_mut(ly0).as_mut_ptr().add(first * GROUP);
-    let z_dx = _mm256_set1_ps(t.z_dx);
-    let mut dx =
-        _mm256_add_ps(_mm256_set1_ps((c0 - t.x0) as f32), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     let mut products = [_mm256_setzero_ps(); G];
-    for p in &mut products {
-        *p = _mm256_mul_ps(z_dx, dx);
-        dx = _mm256_add_ps(dx, _mm256_set1_ps(GROUP as f32));
+    for (k, p) in products.iter_mut().enumerate() {
+        *p = depth_product(t, c0, k);
     }
     let (z_origin, z_dy) = (_mm256_set1_ps(t.z_origin), _mm256_set1_ps(t.z_dy));
     // The row's offset from the plane's origin row: an integer below 2^24, exact.
@@ -409,6 +398,21 @@ unsafe fn plain_rows<const OP: u8, const LIVE: usize, const G: usize>(
         fragments: u64::from(lanes.wrapping_add(hsum(minus_outside))),
         passed: u64::from(hsum(minus_passed).wrapping_neg()),
     }
+}
+
+/// The product `z_dx * dx` of [`RowPlane::depth`](super::setup::RowPlane::depth)
+/// for the lanes of the group `k` groups right of the column `c0`: the same in
+/// every row, so computed once per group of a window. The plane's pixel offsets
+/// `dx` of the lanes are integers below 2^24, so exact in `f32`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn depth_product(t: &RasterTri, c0: i32, k: usize) -> __m256 {
+    let first = _mm256_set1_ps((c0 - t.x0 + (k * GROUP) as i32) as f32);
+    let dx = _mm256_add_ps(first, _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    _mm256_mul_ps(_mm256_set1_ps(t.z_dx), dx)
 }
 
 /// The lanes of a group outside the triangle by the first `LIVE` edge functions
