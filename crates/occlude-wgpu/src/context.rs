@@ -21,6 +21,15 @@ pub enum GpuError {
         /// The driver's reason.
         reason: String,
     },
+    /// Adapters exist, but none can run the backend (a GL driver without depth
+    /// copies, say).
+    #[error(
+        "no GPU adapter can run the wgpu backend: {0}. Install a Vulkan driver (on Debian, \
+         `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan) or pick another \
+         adapter with WGPU_BACKEND / WGPU_ADAPTER_NAME, or benchmark without a GPU: \
+         `occlude bench --backend soft` (the default)"
+    )]
+    Unsuitable(String),
     /// The scene does not fit the adapter's limits.
     #[error("the scene does not fit GPU adapter '{adapter}': {reason}")]
     TooLarge {
@@ -45,17 +54,12 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// Opens the first high-performance adapter wgpu finds (the `WGPU_BACKEND`
-    /// and `WGPU_ADAPTER_NAME` environment variables narrow the choice).
+    /// Opens the most capable adapter that can run the backend (see
+    /// [`choose`]); the `WGPU_BACKEND` environment variable narrows the
+    /// graphics APIs searched and `WGPU_ADAPTER_NAME` the adapters' names.
     pub fn new() -> Result<Self, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let options = wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        };
-        let adapter =
-            pollster::block_on(instance.request_adapter(&options)).map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        Self::open(&adapter)
+        Self::open(&best_adapter(&instance, None)?)
     }
 
     /// The GPU a test named `test` runs on. Without one the test is skipped,
@@ -78,7 +82,13 @@ impl GpuContext {
     /// Opens a device on `adapter`, asking for timestamp queries when it has
     /// them, and routes device loss and uncaptured errors to
     /// [`GpuContext::failure`] instead of wgpu's default panic.
+    /// An adapter lacking one of [`REQUIRED_DOWNLEVEL`] is refused
+    /// ([`GpuError::Unsuitable`]).
     pub fn open(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
+        let candidate = Candidate::of(adapter);
+        if !candidate.missing.is_empty() {
+            return Err(GpuError::Unsuitable(candidate.describe()));
+        }
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let descriptor = wgpu::DeviceDescriptor {
@@ -126,8 +136,144 @@ impl GpuContext {
     }
 }
 
+/// What the backend needs beyond WebGL 2 level: storage buffers read by
+/// vertex shaders (instance transforms and query boxes), indexed draws with a
+/// base vertex (one vertex pool for every mesh), and depth textures copied to
+/// buffers (the depth image the correctness rule compares). Vulkan, Metal and
+/// D3D12 adapters have them all; some GL drivers lack the depth copies.
+pub const REQUIRED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::VERTEX_STORAGE
+    .union(wgpu::DownlevelFlags::BASE_VERTEX)
+    .union(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+
+/// The adapter of `instance` to open, as [`choose`] picks it (of those that
+/// can draw to `surface`, when given); `WGPU_ADAPTER_NAME` narrows the names.
+pub fn best_adapter(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<wgpu::Adapter, GpuError> {
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    if let Some(surface) = surface {
+        adapters.retain(|a| a.is_surface_supported(surface));
+    }
+    let candidates: Vec<Candidate> = adapters.iter().map(Candidate::of).collect();
+    let wanted = std::env::var("WGPU_ADAPTER_NAME").ok();
+    let chosen = choose(&candidates, wanted.as_deref())?;
+    Ok(adapters.swap_remove(chosen))
+}
+
+/// An adapter as [`choose`] sees it.
+#[derive(Clone, Debug)]
+struct Candidate {
+    /// Name, driver API in brackets.
+    name: String,
+    device_type: wgpu::DeviceType,
+    /// Which of [`REQUIRED_DOWNLEVEL`] it lacks.
+    missing: wgpu::DownlevelFlags,
+}
+
+impl Candidate {
+    fn of(adapter: &wgpu::Adapter) -> Self {
+        let info = adapter.get_info();
+        Self {
+            name: format!("{} ({:?})", info.name, info.backend),
+            device_type: info.device_type,
+            missing: REQUIRED_DOWNLEVEL.difference(adapter.get_downlevel_capabilities().flags),
+        }
+    }
+
+    /// The adapter's name and, if it lacks some, what it lacks, in words.
+    fn describe(&self) -> String {
+        let words = [
+            (wgpu::DownlevelFlags::VERTEX_STORAGE, "storage buffers in vertex shaders"),
+            (wgpu::DownlevelFlags::BASE_VERTEX, "a base vertex in indexed draws"),
+            (wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES, "copies of depth textures to buffers"),
+        ];
+        let lacks: Vec<&str> = words.iter().filter(|(f, _)| self.missing.contains(*f)).map(|&(_, w)| w).collect();
+        if lacks.is_empty() {
+            self.name.clone()
+        } else {
+            format!("{} lacks {}", self.name, lacks.join(", "))
+        }
+    }
+}
+
+/// Index of the adapter to open: of those whose name contains `wanted` (any
+/// case) and that lack nothing in [`REQUIRED_DOWNLEVEL`], the first of the
+/// most capable kind (a discrete GPU, then integrated, virtual, a CPU
+/// rasterizer such as lavapipe, other).
+fn choose(candidates: &[Candidate], wanted: Option<&str>) -> Result<usize, GpuError> {
+    if candidates.is_empty() {
+        return Err(GpuError::NoAdapter("wgpu found none on this machine's graphics APIs".into()));
+    }
+    let named: Vec<usize> = (0..candidates.len())
+        .filter(|&i| wanted.is_none_or(|w| candidates[i].name.to_lowercase().contains(&w.to_lowercase())))
+        .collect();
+    let list = |which: &[usize]| which.iter().map(|&i| candidates[i].describe()).collect::<Vec<_>>().join("; ");
+    if named.is_empty() {
+        let all: Vec<usize> = (0..candidates.len()).collect();
+        return Err(GpuError::NoAdapter(format!(
+            "none is named like WGPU_ADAPTER_NAME={}; there are: {}",
+            wanted.unwrap_or_default(),
+            list(&all)
+        )));
+    }
+    let rank = |t: wgpu::DeviceType| match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    };
+    named
+        .iter()
+        .copied()
+        .filter(|&i| candidates[i].missing.is_empty())
+        .min_by_key(|&i| (rank(candidates[i].device_type), i))
+        .ok_or_else(|| GpuError::Unsuitable(list(&named)))
+}
+
 /// Keeps the first failure: later ones are usually its consequences.
 fn record_failure(slot: &Mutex<Option<String>>, message: String) {
     let mut slot = slot.lock().unwrap_or_else(|p| p.into_inner());
     slot.get_or_insert(message);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::{DeviceType, DownlevelFlags};
+
+    fn candidate(name: &str, device_type: DeviceType, missing: DownlevelFlags) -> Candidate {
+        Candidate { name: name.into(), device_type, missing }
+    }
+
+    #[test]
+    fn the_most_capable_suitable_adapter_is_chosen() {
+        let none = DownlevelFlags::empty();
+        let adapters = [
+            candidate("llvmpipe (Gl)", DeviceType::Cpu, DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES),
+            candidate("llvmpipe (Vulkan)", DeviceType::Cpu, none),
+            candidate("NVIDIA H200 (Gl)", DeviceType::DiscreteGpu, DownlevelFlags::VERTEX_STORAGE),
+            candidate("NVIDIA H200 (Vulkan)", DeviceType::DiscreteGpu, none),
+            candidate("Intel UHD (Vulkan)", DeviceType::IntegratedGpu, none),
+        ];
+        assert_eq!(choose(&adapters, None).unwrap(), 3);
+        assert_eq!(choose(&adapters, Some("LLVMPIPE")).unwrap(), 1);
+        assert_eq!(choose(&adapters[..3], None).unwrap(), 1, "a suitable CPU adapter beats an unsuitable GPU");
+    }
+
+    #[test]
+    fn refusals_say_what_each_adapter_lacks() {
+        let gl = candidate("llvmpipe (Gl)", DeviceType::Cpu, DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+        match choose(std::slice::from_ref(&gl), None) {
+            Err(e @ GpuError::Unsuitable(_)) => {
+                let message = e.to_string();
+                assert!(message.contains("llvmpipe (Gl) lacks copies of depth textures to buffers"), "{message}");
+                assert!(message.contains("--backend soft"), "{message}");
+            }
+            other => panic!("expected Unsuitable, got {other:?}"),
+        }
+        match choose(&[gl], Some("nvidia")) {
+            Err(GpuError::NoAdapter(why)) => assert!(why.contains("WGPU_ADAPTER_NAME=nvidia"), "{why}"),
+            other => panic!("expected NoAdapter, got {other:?}"),
+        }
+        assert!(matches!(choose(&[], None), Err(GpuError::NoAdapter(_))));
+    }
 }

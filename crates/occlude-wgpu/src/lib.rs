@@ -22,6 +22,6 @@ mod scene_buffers;
 mod target;
 
 pub use backend::WgpuBackend;
-pub use context::{GpuContext, GpuError};
+pub use context::{best_adapter, GpuContext, GpuError, REQUIRED_DOWNLEVEL};
 pub use depth_raster::DepthRaster;
 pub use scene_buffers::{GpuScene, COLOR_FORMAT};

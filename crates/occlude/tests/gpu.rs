@@ -120,6 +120,19 @@ fn no_adapter_is_a_clear_error_with_exit_code_2() {
 }
 
 #[test]
+fn without_a_vulkan_driver_other_apis_are_refused_or_absent_with_exit_code_2() {
+    // No Vulkan driver: what is left is a GL driver where the machine has one
+    // (Mesa's llvmpipe here, which cannot copy depth textures, so cannot run
+    // the correctness rule) or nothing. Either way the run must not start.
+    let no_vulkan = [("VK_DRIVER_FILES", "/nonexistent/icd.json"), ("VK_ICD_FILENAMES", "/nonexistent/icd.json")];
+    let out = occlude(&["bench", "--backend", "wgpu", "--frames", "2"], &no_vulkan);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("no GPU adapter") && stderr.contains("--backend soft"), "{stderr}");
+    assert!(!stderr.contains("Validation Error"), "{stderr}");
+}
+
+#[test]
 fn wgpu_bench_writes_measured_times_and_the_adapter() {
     if GpuContext::for_test("wgpu_bench_writes_measured_times_and_the_adapter").is_none() {
         return;

@@ -16,7 +16,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
 use occlude_core::methods::{create, BuiltMethod, DrawnSet, METHOD_NAMES};
 use occlude_core::{Backend, Camera, Hierarchy, HierarchyKind, Keyframe, Scene};
-use occlude_wgpu::{GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
+use occlude_wgpu::{best_adapter, GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
 use std::sync::Arc;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
@@ -109,13 +109,7 @@ impl<'s> Gpu<'s> {
         let surface = instance
             .create_surface(Arc::clone(&window))
             .map_err(|e| GpuError::NoAdapter(format!("no graphics backend can draw to the window: {e}")))?;
-        let options = wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            compatible_surface: Some(&surface),
-            ..Default::default()
-        };
-        let adapter =
-            pollster::block_on(instance.request_adapter(&options)).map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let adapter = best_adapter(&instance, Some(&surface))?;
         let ctx = Arc::new(GpuContext::open(&adapter)?);
         let gpu_scene = Arc::new(GpuScene::new(Arc::clone(&ctx), scene)?);
         let device = &ctx.device;
