@@ -43,9 +43,11 @@ pub trait Backend {
     /// Ends the frame and returns its statistics.
     fn end_frame(&mut self) -> FrameStats;
 
-    /// The depth image of the last finished frame, row by row, for the
-    /// correctness rule (DESIGN.md). Costs nothing on the frame's clock.
-    fn depth_image(&mut self) -> Vec<f32>;
+    /// Writes the depth image of the last finished frame, row by row, into
+    /// `out` (replacing what it held), for the correctness rule (DESIGN.md).
+    /// Costs nothing on the frame's clock; `out`'s memory is reused, so that a
+    /// run comparing every frame's image allocates none.
+    fn depth_image(&mut self, out: &mut Vec<f32>);
 
     /// Oracle pass, outside any frame's clock: draws all `candidates` from
     /// `camera` and reports which of them have at least one pixel in the

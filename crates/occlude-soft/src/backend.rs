@@ -250,9 +250,9 @@ impl Backend for SoftBackend<'_> {
         s
     }
 
-    fn depth_image(&mut self) -> Vec<f32> {
+    fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.flush();
-        self.depth.to_vec()
+        self.depth.copy_to(out);
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {

@@ -482,13 +482,14 @@ impl Backend for WgpuBackend<'_> {
         s
     }
 
-    fn depth_image(&mut self) -> Vec<f32> {
+    fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.settle();
         let gpu = Arc::clone(&self.gpu);
-        self.target.read_depth(&gpu.ctx).unwrap_or_else(|e| {
+        if let Err(e) = self.target.read_depth(&gpu.ctx, out) {
             gpu.ctx.fail(e);
-            vec![f32::NAN; self.all_pixels() as usize]
-        })
+            out.clear();
+            out.resize(self.all_pixels() as usize, f32::NAN);
+        }
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
@@ -497,7 +498,8 @@ impl Backend for WgpuBackend<'_> {
         let handles: Vec<QueryHandle> =
             candidates.iter().map(|&instance| self.record_query(|slot| Op::EqualQuery { slot, instance })).collect();
         let pixels = handles.into_iter().map(|h| self.result(h)).collect();
-        let depth = self.depth_image();
+        let mut depth = Vec::new();
+        self.depth_image(&mut depth);
         self.camera = None;
         OracleView::new(candidates, pixels, depth, self.target.width, self.target.height)
     }

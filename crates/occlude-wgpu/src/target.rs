@@ -53,11 +53,14 @@ impl RenderTarget {
         self.read_texture(ctx, &self.color, wgpu::TextureAspect::All)
     }
 
-    /// The depth image, row 0 at the top, read back after all submitted
-    /// work (blocking; used outside the frame's clock).
-    pub fn read_depth(&self, ctx: &GpuContext) -> Result<Vec<f32>, String> {
+    /// The depth image, row 0 at the top, read back into `out` (replacing
+    /// what it held) after all submitted work (blocking; used outside the
+    /// frame's clock).
+    pub fn read_depth(&self, ctx: &GpuContext, out: &mut Vec<f32>) -> Result<(), String> {
         let bytes = self.read_texture(ctx, &self.depth, wgpu::TextureAspect::DepthOnly)?;
-        Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+        out.clear();
+        out.extend(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])));
+        Ok(())
     }
 
     /// The pixels of `texture` (4 bytes each, as both formats have), rows

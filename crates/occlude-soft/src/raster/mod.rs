@@ -167,16 +167,24 @@ impl DepthBuffer {
 
     /// The `width * height` depth values, row by row from the top.
     pub fn to_vec(&self) -> Vec<f32> {
+        let mut out = Vec::new();
+        self.copy_to(&mut out);
+        out
+    }
+
+    /// Writes [`Self::to_vec`]'s values into `out`, replacing what it held and
+    /// reusing its memory.
+    pub fn copy_to(&self, out: &mut Vec<f32>) {
         let grid = TileGrid::new(self.width, self.height);
         let (width, tile) = (self.width as usize, TILE as usize);
-        let mut out = Vec::with_capacity(width * self.height as usize);
+        out.clear();
+        out.reserve(width * self.height as usize);
         for y in 0..self.height as usize {
             for tx in 0..grid.tiles_x {
                 let start = ((y / tile) * grid.tiles_x + tx) * TILE_PIXELS + (y % tile) * tile;
                 out.extend_from_slice(&self.pixels()[start..start + tile.min(width - tx * tile)]);
             }
         }
-        out
     }
 
     /// Resets every pixel to the far plane (1.0), for the next frame.

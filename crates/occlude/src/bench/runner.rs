@@ -196,10 +196,13 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
     progress.set_position(0);
     let mut dumps = Vec::new();
     let mut aborted = None;
+    // The frame's depth images, VFC's and a method's, in memory reused frame
+    // after frame.
+    let (mut expected, mut image) = (Vec::new(), Vec::new());
     'frames: for (k, camera) in cameras.iter().enumerate() {
         let stats = reference.frame(scene, &hierarchy, camera);
         reference.frames.push(stats);
-        let expected = reference.backend.depth_image();
+        reference.backend.depth_image(&mut expected);
         if let Some(e) = reference.backend.failure() {
             aborted = Some(format!("frame {k}, method vfc: {e}"));
             break;
@@ -208,7 +211,7 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
         for lane in &mut lanes {
             lane.built.method.set_debug(dump);
             let mut stats = lane.frame(scene, &hierarchy, camera);
-            let image = lane.backend.depth_image();
+            lane.backend.depth_image(&mut image);
             if let Some(e) = lane.backend.failure() {
                 aborted = Some(format!("frame {k}, method {}: {e}", lane.built.method.name()));
                 break 'frames;
@@ -217,7 +220,8 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
             lane.frames.push(stats);
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
                 let name = lane.built.method.name().to_string();
-                dumps.push(FrameDump { method: name, frame: k, resolution: config.resolution, depth: image, view });
+                let depth = image.clone();
+                dumps.push(FrameDump { method: name, frame: k, resolution: config.resolution, depth, view });
             }
         }
         progress.inc(1);

@@ -119,8 +119,8 @@ impl<B: Backend> Backend for RecordingBackend<B> {
         self.inner.end_frame()
     }
 
-    fn depth_image(&mut self) -> Vec<f32> {
-        self.inner.depth_image()
+    fn depth_image(&mut self, out: &mut Vec<f32>) {
+        self.inner.depth_image(out);
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
