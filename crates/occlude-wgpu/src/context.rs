@@ -82,6 +82,7 @@ impl GpuContext {
     /// Opens a device on `adapter`, asking for timestamp queries when it has
     /// them, and routes device loss and uncaptured errors to
     /// [`GpuContext::failure`] instead of wgpu's default panic.
+    ///
     /// An adapter lacking one of [`REQUIRED_DOWNLEVEL`] is refused
     /// ([`GpuError::Unsuitable`]).
     pub fn open(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
