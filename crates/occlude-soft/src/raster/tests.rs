@@ -45,6 +45,27 @@ fn screen_quad_covers_every_pixel_once() {
     assert!(depth.to_vec().iter().all(|&d| d == 0.5));
 }
 
+#[test]
+fn copy_to_replaces_what_the_buffer_held_with_the_rows() {
+    // 130x70: tiles cut on both sides, so the tile layout differs from the rows.
+    let mut depth = DepthBuffer::new(130, 70);
+    for (x, y) in [(0, 0), (129, 0), (64, 1), (0, 69), (129, 69), (70, 64)] {
+        depth.set(x, y, (x * 100 + y) as f32 * 1e-5);
+    }
+    let mut out = vec![7.0; 3];
+    depth.copy_to(&mut out);
+    assert_eq!(out.len(), 130 * 70);
+    for (i, &d) in out.iter().enumerate() {
+        let (x, y) = ((i % 130) as u32, (i / 130) as u32);
+        assert_eq!(d.to_bits(), depth.get(x, y).to_bits(), "pixel {x},{y}");
+    }
+    // A second copy into the same, now full, buffer replaces it rather than appending.
+    depth.set(5, 5, 0.25);
+    depth.copy_to(&mut out);
+    assert_eq!(out, depth.to_vec());
+    assert_eq!(out[5 * 130 + 5], 0.25);
+}
+
 /// A jittered-grid triangulation of the screen rectangle `[x0, x1) x [y0, y1)`
 /// (pixels), every triangle's winding randomly flipped when `flip` is set.
 fn triangulated_rect(
