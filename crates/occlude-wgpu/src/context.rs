@@ -142,9 +142,22 @@ impl GpuContext {
 /// base vertex (one vertex pool for every mesh), and depth textures copied to
 /// buffers (the depth image the correctness rule compares). Vulkan, Metal and
 /// D3D12 adapters have them all; some GL drivers lack the depth copies.
-pub const REQUIRED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::VERTEX_STORAGE
-    .union(wgpu::DownlevelFlags::BASE_VERTEX)
-    .union(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+pub const REQUIRED_DOWNLEVEL: wgpu::DownlevelFlags = {
+    let mut flags = wgpu::DownlevelFlags::empty();
+    let mut i = 0;
+    while i < NEEDS.len() {
+        flags = flags.union(NEEDS[i].0);
+        i += 1;
+    }
+    flags
+};
+
+/// [`REQUIRED_DOWNLEVEL`] flag by flag, each with the words a refusal uses.
+const NEEDS: [(wgpu::DownlevelFlags, &str); 3] = [
+    (wgpu::DownlevelFlags::VERTEX_STORAGE, "storage buffers in vertex shaders"),
+    (wgpu::DownlevelFlags::BASE_VERTEX, "a base vertex in indexed draws"),
+    (wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES, "copies of depth textures to buffers"),
+];
 
 /// The adapter of `instance` to open, as [`choose`] picks it (of those that
 /// can draw to `surface`, when given); `WGPU_ADAPTER_NAME` narrows the names.
@@ -181,12 +194,7 @@ impl Candidate {
 
     /// The adapter's name and, if it lacks some, what it lacks, in words.
     fn describe(&self) -> String {
-        let words = [
-            (wgpu::DownlevelFlags::VERTEX_STORAGE, "storage buffers in vertex shaders"),
-            (wgpu::DownlevelFlags::BASE_VERTEX, "a base vertex in indexed draws"),
-            (wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES, "copies of depth textures to buffers"),
-        ];
-        let lacks: Vec<&str> = words.iter().filter(|(f, _)| self.missing.contains(*f)).map(|&(_, w)| w).collect();
+        let lacks: Vec<&str> = NEEDS.iter().filter(|(f, _)| self.missing.contains(*f)).map(|&(_, w)| w).collect();
         if lacks.is_empty() {
             self.name.clone()
         } else {
