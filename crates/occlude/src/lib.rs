@@ -5,6 +5,7 @@
 
 pub mod bench;
 pub mod calibrate;
+pub mod output_path;
 pub mod raster_bench;
 pub mod report;
 pub mod scenes;

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use occlude::bench::config::{load_camera_path, parse_resolution, BackendKind, DEFAULT_METHODS};
 use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, BenchConfig};
+use occlude::output_path::parse_output_path;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::HierarchyKind;
@@ -130,16 +131,16 @@ struct BenchArgs {
     #[arg(long, default_value = "modern")]
     gpu_model: String,
     /// Write the full report as JSON.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_output_path)]
     json: Option<PathBuf>,
     /// Write one CSV row per method and frame.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_output_path)]
     csv: Option<PathBuf>,
     /// Plot frame time over the walkthrough, one line per method (.svg or .png).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_output_path)]
     plot: Option<PathBuf>,
     /// Plot queries and state changes per frame (.svg or .png).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_output_path)]
     plot_queries: Option<PathBuf>,
     /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
     /// model as in the paper; size, frames, resolution and seed from the
@@ -177,14 +178,14 @@ struct ViewArgs {
     figure4: bool,
     /// Render --frames frames (along the walkthrough with --play, else of the
     /// first view), save the last as this PNG and exit.
-    #[arg(long, value_name = "FILE.png")]
+    #[arg(long, value_name = "FILE.png", value_parser = parse_output_path)]
     screenshot: Option<PathBuf>,
     /// Frames rendered before --screenshot.
     #[arg(long, default_value_t = 60)]
     frames: usize,
     /// Where key R writes the recorded camera path (JSON for
     /// `bench --camera-path`).
-    #[arg(long, value_name = "FILE", default_value = occlude::view::DEFAULT_RECORD_FILE)]
+    #[arg(long, value_name = "FILE", default_value = occlude::view::DEFAULT_RECORD_FILE, value_parser = parse_output_path)]
     record: PathBuf,
 }
 
@@ -194,7 +195,7 @@ struct CalibrateArgs {
     #[arg(long, default_value = "wgpu")]
     backend: BackendKind,
     /// The GPU model file to write (load it with `bench --gpu-model FILE`).
-    #[arg(long, default_value = "calibrated.toml")]
+    #[arg(long, default_value = "calibrated.toml", value_parser = parse_output_path)]
     out: PathBuf,
     /// Image size of the measurements and of the check.
     #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
@@ -227,10 +228,10 @@ struct ReportArgs {
     #[arg(required = true, value_name = "FILE.json")]
     files: Vec<PathBuf>,
     /// The HTML file to write.
-    #[arg(long, value_name = "FILE.html")]
+    #[arg(long, value_name = "FILE.html", value_parser = parse_output_path)]
     out: PathBuf,
     /// Also write the report as Markdown, its plots as SVG files beside it.
-    #[arg(long, value_name = "FILE.md")]
+    #[arg(long, value_name = "FILE.md", value_parser = parse_output_path)]
     markdown: Option<PathBuf>,
 }
 

@@ -54,7 +54,7 @@ pub struct RasterBenchArgs {
     #[arg(long, value_enum, default_value_t = GpuChoice::Auto)]
     pub gpu: GpuChoice,
     /// Write the results as JSON.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::output_path::parse_output_path)]
     pub json: Option<PathBuf>,
 }
 

@@ -47,6 +47,29 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--gpu-model", bad.to_str().unwrap()], "bad.toml");
 }
 
+/// A file that cannot be written is refused before the run, not after it.
+#[test]
+fn an_output_file_in_a_missing_folder_is_refused_before_anything_runs() {
+    let missing = std::env::temp_dir().join(format!("occlude-cli-missing-{}", std::process::id())).join("out.json");
+    let missing = missing.to_str().unwrap();
+    for args in [
+        &["bench", "--json", missing][..],
+        &["bench", "--csv", missing],
+        &["bench", "--plot", missing],
+        &["bench", "--paper", "chc", "--json", missing],
+        &["report", "any.json", "--out", missing],
+        &["report", "any.json", "--out", "r.html", "--markdown", missing],
+        &["calibrate", "--backend", "wgpu", "--out", missing],
+        &["raster-bench", "--json", missing],
+        &["view", "--screenshot", missing],
+    ] {
+        let out = occlude(args);
+        assert!(out.stdout.is_empty(), "{args:?}: nothing should run: {}", String::from_utf8_lossy(&out.stdout));
+        assert_usage_error(args, "does not exist");
+    }
+    assert_usage_error(&["bench", "--json", std::env::temp_dir().to_str().unwrap()], "is a folder");
+}
+
 #[test]
 fn short_run_prints_table_and_writes_json_and_csv() {
     let dir = std::env::temp_dir().join(format!("occlude-cli-run-{}", std::process::id()));
