@@ -177,7 +177,27 @@ pub fn load_scene(config: &BenchConfig) -> Result<Scene> {
 }
 
 /// Runs every method of `config` on an existing scene.
+///
+/// The run goes on a thread of a rayon pool (a new one of
+/// `rayon::current_num_threads()` threads, unless the caller is on one): the
+/// soft rasterizer's parallel calls then start and end on the thread that
+/// makes them, where from outside a pool each call is handed to the pool's
+/// threads and the caller woken when they finish, and between calls their
+/// spinning competes with the traversal for the cores. Measured on 2 cores:
+/// the default `occlude bench` 10-16 % faster in wall time, `sw` 28 %.
 pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+    if rayon::current_thread_index().is_some() {
+        return run_scene_here(scene, config, progress);
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(rayon::current_num_threads())
+        .build()
+        .context("cannot start the thread pool")?;
+    pool.install(|| run_scene_here(scene, config, progress))
+}
+
+/// [`run_scene`] on the calling thread.
+fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     config.validate()?;
     let hierarchy = Hierarchy::build(scene, config.hierarchy, config.build);
     let cameras = cameras(scene, config);
