@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod calibrate;
 pub mod output_path;
+pub mod progress;
 pub mod raster_bench;
 pub mod report;
 pub mod scenes;

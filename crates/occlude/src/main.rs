@@ -5,7 +5,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use occlude::bench::config::{load_camera_path, parse_resolution, BackendKind, DEFAULT_METHODS};
 use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, BenchConfig};
@@ -302,11 +302,7 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     if let Some(threads) = args.threads {
         rayon::ThreadPoolBuilder::new().num_threads(threads).build_global().context("cannot start the thread pool")?;
     }
-    let progress = ProgressBar::new(config.frames as u64).with_style(
-        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames, {elapsed} (eta {eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
+    let progress = occlude::progress::bar(config.frames as u64, "frames");
     if let Some(paper) = &args.paper {
         let result = bench::paper::run(paper, config, &progress)?;
         progress.finish_and_clear();

@@ -20,6 +20,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use glam::Vec4;
+use indicatif::ProgressBar;
 use occlude_soft::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
 use occlude_soft::workload;
 use occlude_wgpu::{DepthRaster, GpuContext};
@@ -391,27 +392,33 @@ pub const QUERY_COVERAGES: [u32; 3] = [1, 10, 50];
 
 /// The query rows of `backend`: every coverage, visible and hidden, in both modes
 /// (those the backend supports).
-pub fn query_rows(backend: &mut dyn RasterBackend, size: (u32, u32), budget: f64) -> Result<Vec<QueryRow>> {
+pub fn query_rows(
+    backend: &mut dyn RasterBackend,
+    size: (u32, u32),
+    budget: f64,
+    progress: &ProgressBar,
+) -> Result<Vec<QueryRow>> {
     let occluder = workload::screen_quad(workload::OCCLUDER_DEPTH);
     let mut rows = Vec::new();
     for percent in QUERY_COVERAGES {
         for visible in [true, false] {
             let boxes = workload::query_boxes(percent as f32 / 100.0, visible);
             for mode in [QueryMode::Count, QueryMode::Any] {
-                if backend.queries(size.0, size.1, &occluder, &boxes, mode)?.is_none() {
-                    continue;
+                progress.set_message(format!("queries, {percent}% boxes, {}", label(backend)));
+                if backend.queries(size.0, size.1, &occluder, &boxes, mode)?.is_some() {
+                    let seconds = median_seconds(budget, || {
+                        Ok(backend.queries(size.0, size.1, &occluder, &boxes, mode)?.unwrap_or(f64::NAN))
+                    })?;
+                    rows.push(QueryRow {
+                        coverage_percent: percent,
+                        visible,
+                        mode,
+                        backend: backend.name(),
+                        threads: backend.threads(),
+                        queries_per_s: boxes.len() as f64 / seconds,
+                    });
                 }
-                let seconds = median_seconds(budget, || {
-                    Ok(backend.queries(size.0, size.1, &occluder, &boxes, mode)?.unwrap_or(f64::NAN))
-                })?;
-                rows.push(QueryRow {
-                    coverage_percent: percent,
-                    visible,
-                    mode,
-                    backend: backend.name(),
-                    threads: backend.threads(),
-                    queries_per_s: boxes.len() as f64 / seconds,
-                });
+                progress.inc(1);
             }
         }
     }
@@ -431,10 +438,25 @@ pub fn cpu_model() -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
+/// "soft, 2 threads" or "wgpu": a backend as the progress bar names it.
+fn label(backend: &dyn RasterBackend) -> String {
+    match backend.threads() {
+        0 => backend.name(),
+        1 => format!("{}, 1 thread", backend.name()),
+        t => format!("{}, {t} threads", backend.name()),
+    }
+}
+
 /// Measures every row of `args` on `backends`, or fails with the first backend that
-/// does.
-pub fn measure(args: &RasterBenchArgs, backends: &mut [Box<dyn RasterBackend>]) -> Result<RasterBenchReport> {
+/// does; `progress` advances once per fill-rate row and per query workload.
+pub fn measure(
+    args: &RasterBenchArgs,
+    backends: &mut [Box<dyn RasterBackend>],
+    progress: &ProgressBar,
+) -> Result<RasterBenchReport> {
     let (width, height) = args.resolution;
+    let per_backend = args.sizes.len() + QUERY_COVERAGES.len() * 2 * 2;
+    progress.set_length((per_backend * backends.len()) as u64);
     let mut rows = Vec::new();
     for &n in &args.sizes {
         let count = args
@@ -442,12 +464,14 @@ pub fn measure(args: &RasterBenchArgs, backends: &mut [Box<dyn RasterBackend>]) 
             .map_or_else(|| workload::triangles_for_screens(width, height, n, 2.0), |c| c as usize);
         let triangles = workload::right_triangles(width, height, n as f32, count);
         for backend in backends.iter_mut() {
+            progress.set_message(format!("fill rate, N = {n}, {}", label(backend.as_ref())));
             rows.push(fill_row(backend.as_mut(), args.resolution, n, &triangles, args.seconds_per_row)?);
+            progress.inc(1);
         }
     }
     let mut queries = Vec::new();
     for backend in backends.iter_mut() {
-        queries.extend(query_rows(backend.as_mut(), args.resolution, args.seconds_per_row / 3.0)?);
+        queries.extend(query_rows(backend.as_mut(), args.resolution, args.seconds_per_row / 3.0, progress)?);
     }
     let adapter = backends.iter().find_map(|b| b.adapter());
     Ok(RasterBenchReport { rows, queries, cpu: cpu_model(), adapter })
@@ -504,7 +528,9 @@ pub fn run(args: &RasterBenchArgs) -> Result<()> {
             Err(e) => return Err(e.into()),
         }
     }
-    let report = measure(args, &mut backends)?;
+    let progress = crate::progress::bar(0, "rows");
+    let report = measure(args, &mut backends, &progress)?;
+    progress.finish_and_clear();
     print!("{}", render(&report, args));
     if let Some(path) = &args.json {
         let json = serde_json::to_string_pretty(&report)?;
@@ -559,7 +585,7 @@ mod tests {
         };
         let mut backends: Vec<Box<dyn RasterBackend>> =
             args.threads.iter().map(|&t| Box::new(SoftRaster::new(t).unwrap()) as Box<dyn RasterBackend>).collect();
-        let report = measure(&args, &mut backends).unwrap();
+        let report = measure(&args, &mut backends, &ProgressBar::hidden()).unwrap();
         assert_eq!(report.rows.len(), 4);
         assert_eq!(report.queries.len(), 2 * QUERY_COVERAGES.len() * 2 * 2);
         assert!(report.rows.iter().all(|r| r.mtris_per_s > 0.0 && r.gpixels_per_s > 0.0));
