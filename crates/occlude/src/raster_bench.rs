@@ -391,7 +391,8 @@ pub fn fill_row(
 pub const QUERY_COVERAGES: [u32; 3] = [1, 10, 50];
 
 /// The query rows of `backend`: every coverage, visible and hidden, in both modes
-/// (those the backend supports).
+/// (those the backend supports); `progress` advances once per combination, run
+/// or not.
 pub fn query_rows(
     backend: &mut dyn RasterBackend,
     size: (u32, u32),
@@ -455,6 +456,8 @@ pub fn measure(
     progress: &ProgressBar,
 ) -> Result<RasterBenchReport> {
     let (width, height) = args.resolution;
+    // Per backend: its fill-rate rows, and the query workloads of `query_rows`
+    // (each coverage, visible or hidden, counted or any).
     let per_backend = args.sizes.len() + QUERY_COVERAGES.len() * 2 * 2;
     progress.set_length((per_backend * backends.len()) as u64);
     let mut rows = Vec::new();
