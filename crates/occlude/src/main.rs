@@ -298,10 +298,17 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     Ok(config)
 }
 
+/// `occlude bench`, on a pool of `--threads` threads (default: rayon's), whose
+/// threads run the frames and the rasterizer (`bench::runner::run_scene`).
 fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
-    if let Some(threads) = args.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(threads).build_global().context("cannot start the thread pool")?;
-    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the thread pool")?;
+    pool.install(|| bench_on_pool(args, config))
+}
+
+fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     let progress = occlude::progress::bar(config.frames as u64, "frames");
     if let Some(paper) = &args.paper {
         let result = bench::paper::run(paper, config, &progress)?;

@@ -178,8 +178,8 @@ pub fn load_scene(config: &BenchConfig) -> Result<Scene> {
 
 /// Runs every method of `config` on an existing scene.
 ///
-/// The run goes on a thread of a rayon pool (a new one of
-/// `rayon::current_num_threads()` threads, unless the caller is on one): the
+/// The run goes on a thread of a rayon pool (the caller's, or a new one of
+/// rayon's default size when the caller is on none): the
 /// soft rasterizer's parallel calls then start and end on the thread that
 /// makes them, where from outside a pool each call is handed to the pool's
 /// threads and the caller woken when they finish, and between calls their
@@ -189,10 +189,7 @@ pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) ->
     if rayon::current_thread_index().is_some() {
         return run_scene_here(scene, config, progress);
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(rayon::current_num_threads())
-        .build()
-        .context("cannot start the thread pool")?;
+    let pool = rayon::ThreadPoolBuilder::new().build().context("cannot start the thread pool")?;
     pool.install(|| run_scene_here(scene, config, progress))
 }
 
