@@ -8,6 +8,7 @@
 
 use crate::camera::Camera;
 use crate::geometry::Aabb;
+use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
 use crate::stats::FrameStats;
 
 /// Handle of an issued occlusion query, valid until the frame ends.
@@ -62,6 +63,16 @@ pub trait Backend {
     fn failure(&self) -> Option<String> {
         None
     }
+
+    /// The backend's GPU-resident culling pipeline ([`GpuCulling`]), or why
+    /// it has none (a device lacking a feature it needs, named). Methods
+    /// that need it say so ([`CullingMethod::needs_gpu_culling`]), and the
+    /// runner asks before the first frame.
+    ///
+    /// [`CullingMethod::needs_gpu_culling`]: crate::CullingMethod::needs_gpu_culling
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        Err(GpuCullingUnsupported("this backend has no GPU-resident culling".into()))
+    }
 }
 
 /// The render state a command needs: a material for draws, the query state
@@ -71,8 +82,11 @@ pub trait Backend {
 pub enum RenderState {
     /// Drawing with this material.
     Material(u32),
-    /// Rasterizing query proxies.
+    /// Rasterizing query proxies (occlusion queries or batched box tests).
     Query,
+    /// Drawing an id list with one indirect multi-draw, materials read per
+    /// instance ([`GpuCulling::draw_list`]).
+    Indirect,
 }
 
 /// Follows the render state across a frame's commands, so that every backend

@@ -9,6 +9,7 @@
 pub mod backend;
 pub mod camera;
 pub mod geometry;
+pub mod gpu_culling;
 pub mod hierarchy;
 pub mod methods;
 pub mod path;
@@ -20,6 +21,7 @@ pub mod stats;
 pub use backend::{Backend, OracleView, QueryHandle, RenderState, StateTracker};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
+pub use gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, RangeTable};
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
 pub use methods::{CullingMethod, FrameContext};
 

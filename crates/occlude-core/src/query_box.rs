@@ -32,17 +32,19 @@ pub const BOX_TRIANGLES: [[u8; 3]; 12] = {
     out
 };
 
-/// The boxes a query over `boxes` rasterizes, grown by [`QUERY_BOX_PAD`]
-/// (relative, plus the same fraction of the coordinates' magnitude so that
-/// boxes far from the origin are grown by more than a float step), or `None`
+/// `b` grown by [`QUERY_BOX_PAD`] of its size plus the same fraction of its
+/// coordinates' magnitude, so that a box far from the origin grows by more
+/// than a float step: the proxy every occlusion test rasterizes.
+pub fn padded(b: &Aabb) -> Aabb {
+    b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element())
+}
+
+/// The boxes a query over `boxes` rasterizes, each [`padded`], or `None`
 /// when one of them touches the camera's near region
 /// ([`Camera::box_touches_near_region`]): such a query cannot be rasterized
 /// soundly and counts as visible.
 pub fn query_boxes(camera: &Camera, boxes: &[Aabb]) -> Option<Vec<Aabb>> {
-    let padded: Vec<Aabb> = boxes
-        .iter()
-        .map(|b| b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element()))
-        .collect();
+    let padded: Vec<Aabb> = boxes.iter().map(padded).collect();
     (!padded.iter().any(|b| camera.box_touches_near_region(b))).then_some(padded)
 }
 

@@ -38,4 +38,27 @@ pub struct FrameStats {
     pub missing_pixels: u64,
     /// Real time the frame took on this machine (not deterministic).
     pub wall_ms: f64,
+    /// GPU time of the occlusion tests: query boxes, batched box tests and
+    /// the compute passes that compact their results (simulated on the soft
+    /// backend; from pass timestamps on wgpu, where only passes that do
+    /// nothing else count).
+    #[serde(default)]
+    pub cull_ms: f64,
+    /// GPU time of drawing the scene's instances (as `cull_ms`).
+    #[serde(default)]
+    pub render_ms: f64,
+    /// Compute dispatches.
+    #[serde(default)]
+    pub dispatches: u64,
+    /// Indirect multi-draw commands; the draws they contain are counted in
+    /// `draw_calls` too.
+    #[serde(default)]
+    pub indirect_draws: u64,
+    /// Draws contained in indirect multi-draws (part of `draw_calls`).
+    #[serde(default)]
+    pub indirect_draw_calls: u64,
+    /// Buffers read back from the GPU during the frame (query results are
+    /// counted in `queries`, not here).
+    #[serde(default)]
+    pub readbacks: u64,
 }

@@ -39,6 +39,28 @@ pub struct GpuModel {
     /// Time from the GPU finishing a query until the CPU can read its
     /// result, µs.
     pub query_latency_us: f64,
+    /// CPU time to record one compute dispatch or indirect multi-draw
+    /// (GPU-driven culling), µs.
+    pub cpu_dispatch_us: f64,
+    /// GPU time of one compute dispatch (launch and the barrier after it), µs.
+    pub gpu_dispatch_us: f64,
+    /// GPU time per element a dispatch processes (a flag, a box, a list
+    /// entry), ns.
+    pub gpu_compute_item_ns: f64,
+    /// GPU time per box of a batched box test (its 8 corners and 12
+    /// triangles through the vertex stage of one instanced draw; no query
+    /// around it), µs.
+    pub gpu_box_us: f64,
+    /// GPU time per pixel of a batched box test that passes the depth test
+    /// (the fragment shader writing the visibility flag), on top of
+    /// `gpu_query_fragment_ns` per covered pixel (the depth test), ns.
+    pub gpu_box_fragment_ns: f64,
+    /// GPU time per draw inside an indirect multi-draw (in place of
+    /// `gpu_draw_call_us`), µs.
+    pub gpu_indirect_draw_us: f64,
+    /// Time from the GPU finishing the commands before a read-back until
+    /// the CPU can read the buffer, µs.
+    pub readback_us: f64,
 }
 
 /// Errors loading a GPU model.
@@ -86,6 +108,13 @@ impl GpuModel {
             gpu_query_box_us: 2.0,
             gpu_query_fragment_ns: 0.3,
             query_latency_us: 12.0,
+            cpu_dispatch_us: 4.0,
+            gpu_dispatch_us: 10.0,
+            gpu_compute_item_ns: 2.0,
+            gpu_box_us: 0.3,
+            gpu_box_fragment_ns: 0.6,
+            gpu_indirect_draw_us: 1.5,
+            readback_us: 12.0,
         }
     }
 
@@ -106,6 +135,13 @@ impl GpuModel {
             gpu_query_box_us: 0.3,
             gpu_query_fragment_ns: 0.005,
             query_latency_us: 30.0,
+            cpu_dispatch_us: 1.0,
+            gpu_dispatch_us: 3.0,
+            gpu_compute_item_ns: 0.05,
+            gpu_box_us: 0.005,
+            gpu_box_fragment_ns: 0.02,
+            gpu_indirect_draw_us: 0.1,
+            readback_us: 30.0,
         }
     }
 
@@ -164,6 +200,13 @@ impl GpuModel {
             ("gpu_query_box_us", self.gpu_query_box_us),
             ("gpu_query_fragment_ns", self.gpu_query_fragment_ns),
             ("query_latency_us", self.query_latency_us),
+            ("cpu_dispatch_us", self.cpu_dispatch_us),
+            ("gpu_dispatch_us", self.gpu_dispatch_us),
+            ("gpu_compute_item_ns", self.gpu_compute_item_ns),
+            ("gpu_box_us", self.gpu_box_us),
+            ("gpu_box_fragment_ns", self.gpu_box_fragment_ns),
+            ("gpu_indirect_draw_us", self.gpu_indirect_draw_us),
+            ("readback_us", self.readback_us),
         ];
         match costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
             Some((name, v)) => Err(format!("{name} = {v}: costs must be finite and >= 0")),

@@ -255,6 +255,7 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<G
             SCREEN_QUERIES as f64 * pixels,
         ) * 1e6,
         query_latency_us: latency_us,
+        ..GpuModel::modern()
     })
 }
 

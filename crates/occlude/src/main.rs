@@ -245,8 +245,9 @@ enum Failure {
 /// A failed run is the user's input when a model file could not be imported
 /// (the scene is loaded in the run, not in `configure`, so as to read a large
 /// model once), `--backend wgpu`, `view` or `raster-bench --gpu required`
-/// found no GPU adapter that can run the backend, or `view` found no
-/// display: exit code 2 like any bad argument; anything else exit code 1.
+/// found no GPU adapter that can run the backend (or none with what a
+/// GPU-driven method needs), or `view` found no display: exit code 2 like
+/// any bad argument; anything else exit code 1.
 fn run_failure(e: anyhow::Error) -> Failure {
     let no_adapter = |c: &(dyn std::error::Error + 'static)| {
         matches!(
@@ -257,6 +258,7 @@ fn run_failure(e: anyhow::Error) -> Failure {
     let input = |c: &(dyn std::error::Error + 'static)| {
         c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)
             || no_adapter(c)
+            || c.is::<occlude_core::GpuCullingUnsupported>()
             || c.is::<occlude::view::ViewError>()
     };
     if e.chain().any(input) {

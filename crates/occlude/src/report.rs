@@ -331,6 +331,7 @@ mod tests {
             wall_ms: 2.0,
             counters_per_frame: BTreeMap::new(),
             per_frame,
+            ..Default::default()
         }
     }
 

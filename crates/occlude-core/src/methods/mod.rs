@@ -9,9 +9,11 @@ pub mod chc;
 pub mod chcpp;
 pub mod debug;
 mod front_to_back;
+pub mod ioc;
 pub mod om;
 pub mod opt;
 pub mod options;
+pub mod roc;
 pub mod sw;
 pub mod vfc;
 
@@ -26,7 +28,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 6] = ["vfc", "sw", "chc", "chcpp", "om", "opt"];
+pub const METHOD_NAMES: [&str; 8] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -59,6 +61,8 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
         "chcpp" => Box::new(chcpp::Chcpp::new(chcpp::ChcppParams::read(&mut reader)?)),
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
+        "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
+        "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -74,8 +78,23 @@ pub trait CullingMethod {
     /// methods need none.
     fn prepare(&mut self, _ctx: &mut FrameContext<'_>, _backend: &mut dyn Backend) {}
 
-    /// Draws the frame: everything visible must reach `backend.draw`.
+    /// Draws the frame: everything visible must reach `backend.draw` or
+    /// [`GpuCulling::draw_list`](crate::GpuCulling::draw_list).
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend);
+
+    /// Whether the method runs on the backend's GPU-resident culling
+    /// ([`Backend::gpu_culling`]); the runner refuses a backend without it
+    /// before the first frame.
+    fn needs_gpu_culling(&self) -> bool {
+        false
+    }
+
+    /// Warnings about the method's parameters that only the scene could
+    /// reveal (a hierarchy depth past the tree's, clamped), each given once;
+    /// the runner prints them.
+    fn take_warnings(&mut self) -> Vec<String> {
+        Vec::new()
+    }
 
     /// Turns recording of a [`DebugView`] during the following frames on or
     /// off. Recording must change neither the method's decisions nor its

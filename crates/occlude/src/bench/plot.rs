@@ -308,6 +308,7 @@ mod tests {
             wall_ms: 0.0,
             counters_per_frame: BTreeMap::new(),
             per_frame,
+            ..Default::default()
         }
     }
 

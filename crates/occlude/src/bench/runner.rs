@@ -29,6 +29,9 @@ pub struct BenchRun {
     /// Why the run stopped before the walkthrough's end (a lost GPU device):
     /// the frames kept are those every method finished.
     pub aborted: Option<String>,
+    /// Warnings the methods gave about their parameters on this scene
+    /// (printed above the progress bar as they come).
+    pub warnings: Vec<String>,
 }
 
 /// Makes each method's backend: the soft rasterizer, or the wgpu backend
@@ -208,6 +211,14 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
         .filter(|m| m.as_str() != "vfc")
         .map(|m| Ok(Lane::new(create(m, &config.options)?, renderer.backend(scene, config), config)))
         .collect::<Result<Vec<_>>>()?;
+    for lane in &mut lanes {
+        if lane.built.method.needs_gpu_culling() {
+            if let Err(e) = lane.backend.gpu_culling() {
+                return Err(anyhow::Error::new(e).context(format!("method {} cannot run", lane.built.method.name())));
+            }
+        }
+    }
+    let mut warnings = Vec::new();
 
     progress.set_length(cameras.len() as u64);
     progress.set_position(0);
@@ -235,6 +246,11 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
             }
             stats.missing_pixels = differing_pixels(&expected, &image);
             lane.frames.push(stats);
+            for w in lane.built.method.take_warnings() {
+                let w = format!("{}: {w}", lane.built.method.name());
+                progress.println(format!("warning: {w}"));
+                warnings.push(w);
+            }
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
                 let name = lane.built.method.name().to_string();
                 let depth = image.clone();
@@ -266,6 +282,7 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
         dumps,
         adapter: renderer.adapter(),
         aborted,
+        warnings,
     })
 }
 

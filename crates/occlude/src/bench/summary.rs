@@ -47,7 +47,7 @@ impl SceneStats {
 }
 
 /// One method's averages (per frame) over the walkthrough.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MethodSummary {
     /// Method name (`vfc`, `sw`, `opt`, ...).
     pub name: String,
@@ -81,6 +81,26 @@ pub struct MethodSummary {
     pub gpu_ms_per_frame: f64,
     /// Real time per frame on this machine (rasterizing included; varies).
     pub wall_ms: f64,
+    /// GPU time per frame of the occlusion tests (queries, box tests and
+    /// their compute passes), ms; see `FrameStats::cull_ms`.
+    #[serde(default)]
+    pub cull_ms_per_frame: f64,
+    /// GPU time per frame of drawing the scene, ms.
+    #[serde(default)]
+    pub render_ms_per_frame: f64,
+    /// Compute dispatches per frame.
+    #[serde(default)]
+    pub dispatches_per_frame: f64,
+    /// Indirect multi-draws per frame (the draws inside them are in
+    /// `draw_calls_per_frame` and `indirect_draw_calls_per_frame`).
+    #[serde(default)]
+    pub indirect_draws_per_frame: f64,
+    /// Draws inside indirect multi-draws per frame.
+    #[serde(default)]
+    pub indirect_draw_calls_per_frame: f64,
+    /// GPU-to-CPU read-backs per frame (besides query results).
+    #[serde(default)]
+    pub readbacks_per_frame: f64,
     /// Means per frame of the method's own counters (e.g. `om`'s stage-1
     /// nodes decided without a query and its stage-2 rounds).
     pub counters_per_frame: BTreeMap<String, f64>,
@@ -163,6 +183,12 @@ impl BenchReport {
                     cpu_ms_per_frame: mean(frames, |f| f.cpu_ms),
                     gpu_ms_per_frame: mean(frames, |f| f.gpu_ms),
                     wall_ms: mean(frames, |f| f.wall_ms),
+                    cull_ms_per_frame: mean(frames, |f| f.cull_ms),
+                    render_ms_per_frame: mean(frames, |f| f.render_ms),
+                    dispatches_per_frame: mean(frames, |f| f.dispatches as f64),
+                    indirect_draws_per_frame: mean(frames, |f| f.indirect_draws as f64),
+                    indirect_draw_calls_per_frame: mean(frames, |f| f.indirect_draw_calls as f64),
+                    readbacks_per_frame: mean(frames, |f| f.readbacks as f64),
                     counters_per_frame: m
                         .counters
                         .iter()

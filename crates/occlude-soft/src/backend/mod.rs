@@ -5,14 +5,22 @@
 //! lazily, in order, when a result is needed (a query check, the end of the
 //! frame). The GPU time line is then replayed: each command starts at
 //! max(issued, GPU free) and costs its fixed part plus its fragments. Pixel
-//! counts are always exact; only the times are modelled.
+//! counts are always exact; only the times are modelled. The GPU-resident
+//! culling commands ([`occlude_core::GpuCulling`], in `culling.rs`) run the
+//! same way: their compute steps on the CPU, their box tests and draws on
+//! the rasterizer, their costs on the GPU time line.
+
+mod culling;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
-use crate::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
+use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest, Rasterizer};
 use glam::{Mat4, Vec4};
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
-use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, RenderState, Scene, StateTracker};
+use occlude_core::{
+    Aabb, Backend, Camera, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView, QueryHandle, RenderState, Scene,
+    StateTracker,
+};
 use std::time::Instant;
 
 /// A recorded command's place on the simulated GPU time line.
@@ -21,7 +29,13 @@ struct GpuOp {
     issued_us: f64,
     fixed_us: f64,
     fragment_ns: f64,
+    /// Cost of each fragment that passes the depth test, on top of
+    /// `fragment_ns` (a batched box test's fragment shader).
+    passed_ns: f64,
     query: Option<u32>,
+    /// Occlusion-test work (`FrameStats::cull_ms`) rather than drawing
+    /// (`render_ms`).
+    cull: bool,
 }
 
 /// What is known about an issued query.
@@ -33,6 +47,15 @@ struct QueryState {
     forced_visible: bool,
     available_at_us: f64,
     pixels: u64,
+}
+
+/// Adds `us` of GPU time to the frame's occlusion-test or drawing time.
+fn charge_gpu_time(stats: &mut FrameStats, cull: bool, us: f64) {
+    if cull {
+        stats.cull_ms += us * 1e-3;
+    } else {
+        stats.render_ms += us * 1e-3;
+    }
 }
 
 /// Software backend over one scene.
@@ -54,6 +77,7 @@ pub struct SoftBackend<'s> {
     queries: Vec<QueryState>,
     drawn: Vec<bool>,
     frame_start: Instant,
+    device: culling::Device,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -78,6 +102,7 @@ impl<'s> SoftBackend<'s> {
             queries: Vec::new(),
             drawn: vec![false; scene.instances.len()],
             frame_start: Instant::now(),
+            device: culling::Device::default(),
         }
     }
 
@@ -127,12 +152,19 @@ impl<'s> SoftBackend<'s> {
 
     /// Rasterizes everything recorded and replays the GPU time line.
     fn flush(&mut self) {
+        self.run_recorded();
+    }
+
+    /// [`Self::flush`], returning each command's counts.
+    fn run_recorded(&mut self) -> Vec<CommandResult> {
         if self.commands.is_empty() {
-            return;
+            return Vec::new();
         }
         let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &self.commands);
         for (op, r) in self.ops.iter().zip(&results) {
-            let end = self.clock.gpu_command(op.issued_us, op.fixed_us + r.fragments as f64 * op.fragment_ns * 1e-3);
+            let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
+            let end = self.clock.gpu_command(op.issued_us, cost_us);
+            charge_gpu_time(&mut self.stats, op.cull, cost_us);
             match op.query {
                 Some(q) => {
                     let q = &mut self.queries[q as usize];
@@ -144,12 +176,37 @@ impl<'s> SoftBackend<'s> {
                         r.passed
                     };
                 }
-                None => self.stats.fragments += r.fragments,
+                None if !op.cull => self.stats.fragments += r.fragments,
+                // A batched box test: its caller reads the counts.
+                None => {}
             }
         }
         self.triangles.clear();
         self.commands.clear();
         self.ops.clear();
+        results
+    }
+
+    /// Draws instance `i` as one draw costing `fixed_us` of GPU time before
+    /// its triangles and fragments; counts it.
+    fn draw_instance(&mut self, i: u32, fixed_us: f64) {
+        let triangles = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].triangle_count() as u64;
+        self.stats.draw_calls += 1;
+        self.stats.triangles += triangles;
+        if !std::mem::replace(&mut self.drawn[i as usize], true) {
+            self.stats.visible_objects += 1;
+        }
+        let first = self.triangles.len();
+        self.push_instance_triangles(i);
+        let op = GpuOp {
+            issued_us: self.clock.cpu,
+            fixed_us: fixed_us + triangles as f64 * self.model.gpu_triangle_ns * 1e-3,
+            fragment_ns: self.model.gpu_fragment_ns,
+            passed_ns: 0.0,
+            query: None,
+            cull: false,
+        };
+        self.record(CommandKind::Draw, first, false, op);
     }
 
     fn query_state(&mut self, query: QueryHandle) -> QueryState {
@@ -176,24 +233,9 @@ impl Backend for SoftBackend<'_> {
 
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
-            let inst = &self.scene.instances[i as usize];
-            let triangles = self.scene.meshes[inst.mesh as usize].triangle_count() as u64;
-            self.set_state(RenderState::Material(inst.material));
+            self.set_state(RenderState::Material(self.scene.instances[i as usize].material));
             self.clock.cpu_work(self.model.cpu_draw_call_us);
-            self.stats.draw_calls += 1;
-            self.stats.triangles += triangles;
-            if !std::mem::replace(&mut self.drawn[i as usize], true) {
-                self.stats.visible_objects += 1;
-            }
-            let first = self.triangles.len();
-            self.push_instance_triangles(i);
-            let op = GpuOp {
-                issued_us: self.clock.cpu,
-                fixed_us: self.model.gpu_draw_call_us + triangles as f64 * self.model.gpu_triangle_ns * 1e-3,
-                fragment_ns: self.model.gpu_fragment_ns,
-                query: None,
-            };
-            self.record(CommandKind::Draw, first, false, op);
+            self.draw_instance(i, self.model.gpu_draw_call_us);
         }
     }
 
@@ -215,7 +257,9 @@ impl Backend for SoftBackend<'_> {
             issued_us: self.clock.cpu,
             fixed_us: self.model.gpu_query_box_us * boxes.len() as f64,
             fragment_ns: self.model.gpu_query_fragment_ns,
+            passed_ns: 0.0,
             query: Some(handle),
+            cull: true,
         };
         self.record(CommandKind::Query(DepthTest::Less), first, true, op);
         QueryHandle(handle)
@@ -277,5 +321,9 @@ impl Backend for SoftBackend<'_> {
         self.triangles.clear();
         let pixels = results[candidates.len()..].iter().map(|r| r.passed).collect();
         OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
+    }
+
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        Ok(self)
     }
 }

@@ -1,0 +1,311 @@
+//! Iterative hierarchical raster occlusion culling (IOC poster, section 2,
+//! Figure 2): raster occlusion culling (`roc`) applied to the nodes of the
+//! hierarchy level by level instead of to every object.
+//!
+//! Per frame, on [`GpuCulling`]: last frame's potentially visible objects are
+//! drawn (the occluders). Then, from the start depth to the bottom depth, one
+//! batch tests the boxes of the level's nodes against that depth. A culled
+//! node ends the descent: nothing below it is marked, so its whole subtree
+//! stays occluded. A visible leaf marks its objects potentially visible; a
+//! visible interior node puts its children into the next level's list. At
+//! the bottom depth every object below a visible node is potentially
+//! visible. The potentially visible objects not drawn as occluders are then
+//! drawn, and all of them are the next frame's occluders. The start list
+//! holds the nodes at the start depth and the leaves above it.
+//!
+//! The poster reads each level's list length back to the CPU to size the next
+//! level's draw; here the length stays on the device and the next level's
+//! dispatch and indirect draw read it there, so a frame reads nothing back.
+//!
+//! Exact for the same reason as `roc`: a node's box holds everything its
+//! subtree draws inside it, so the box of every node above a visible pixel
+//! passes the test at that pixel, and the object owning it is reached.
+
+use super::roc::TemporalSet;
+use super::vfc::ViewFrustumCulling;
+use super::{CullingMethod, FrameContext, OptionError, OptionReader};
+use crate::backend::Backend;
+use crate::gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable};
+use crate::hierarchy::{Hierarchy, NodeId};
+use std::fmt;
+use std::str::FromStr;
+
+/// A level of the hierarchy (depth 0 is the root), counted from the root or
+/// up from the deepest level, so that one setting fits trees of any depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Level {
+    /// `N`: depth N.
+    FromRoot(u32),
+    /// `deepest` or `deepest-K`: K levels above the deepest leaf.
+    AboveDeepest(u32),
+}
+
+impl Level {
+    /// The depth this level names in a tree whose deepest node has depth
+    /// `deepest`, and whether a depth past the tree's had to be clamped.
+    pub fn resolve(self, deepest: u32) -> (u32, bool) {
+        match self {
+            Level::FromRoot(d) => (d.min(deepest), d > deepest),
+            Level::AboveDeepest(k) => (deepest.saturating_sub(k), k > deepest),
+        }
+    }
+}
+
+impl fmt::Display for Level {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Level::FromRoot(d) => write!(f, "{d}"),
+            Level::AboveDeepest(0) => f.write_str("deepest"),
+            Level::AboveDeepest(k) => write!(f, "deepest-{k}"),
+        }
+    }
+}
+
+impl FromStr for Level {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        match s.strip_prefix("deepest") {
+            Some("") => Ok(Level::AboveDeepest(0)),
+            Some(rest) => rest.strip_prefix('-').and_then(|k| k.parse().ok()).map(Level::AboveDeepest).ok_or(()),
+            None => s.parse().map(Level::FromRoot).map_err(|_| ()),
+        }
+    }
+}
+
+/// Parameters of `ioc`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IocParams {
+    /// `ioc.start`: the first level tested (default 4).
+    pub start: Level,
+    /// `ioc.bottom`: the last level tested; below it nothing is tested
+    /// (default `deepest-2`).
+    pub bottom: Level,
+}
+
+const LEVEL: &str = "a depth N >= 0, 'deepest' or 'deepest-K'";
+
+impl IocParams {
+    /// Reads `ioc.start` and `ioc.bottom`; a start below the bottom, when
+    /// both count from the same end, is an error naming both.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
+        let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
+        let inverted = match (start, bottom) {
+            (Level::FromRoot(s), Level::FromRoot(b)) => s > b,
+            (Level::AboveDeepest(s), Level::AboveDeepest(b)) => s < b,
+            _ => false,
+        };
+        if inverted {
+            return Err(OptionError::BadValue {
+                method: "ioc".into(),
+                key: "start".into(),
+                value: start.to_string(),
+                expected: format!("a level no deeper than ioc.bottom = {bottom}"),
+            });
+        }
+        Ok(Self { start, bottom })
+    }
+}
+
+/// The device resources of `ioc`, made on its first frame.
+#[derive(Clone, Copy, Debug)]
+struct Resources {
+    /// Every node's box.
+    boxes: BoxSet,
+    /// Per node, whether its box passed this frame's test.
+    node_visible: Flags,
+    /// The nodes at the start depth and the leaves above it.
+    start: IdList,
+    /// The lists of the levels below, used in turn.
+    levels: [IdList; 2],
+    /// Per node, its children (none for a leaf).
+    children: RangeTable,
+    /// Per node, the instances of a leaf (none for an interior node).
+    leaf_instances: RangeTable,
+    /// Per node, every instance in its subtree.
+    subtree_instances: RangeTable,
+    temporal: TemporalSet,
+    /// The start and bottom depths in this hierarchy.
+    depths: (u32, u32),
+}
+
+/// `ioc`: iterative hierarchical raster occlusion culling (module
+/// documentation).
+#[derive(Clone, Debug)]
+pub struct IterativeOcclusion {
+    params: IocParams,
+    resources: Option<Resources>,
+    warnings: Vec<String>,
+}
+
+impl IterativeOcclusion {
+    /// A fresh `ioc` (nothing visible yet).
+    pub fn new(params: IocParams) -> Self {
+        Self { params, resources: None, warnings: Vec::new() }
+    }
+
+    /// The start and bottom depths of the parameters in `h`, clamped to its
+    /// depth with a warning.
+    fn depths(&mut self, h: &Hierarchy) -> (u32, u32) {
+        let deepest = h.max_depth();
+        let (mut start, start_clamped) = self.params.start.resolve(deepest);
+        let (bottom, bottom_clamped) = self.params.bottom.resolve(deepest);
+        for (key, level, clamped) in
+            [("start", self.params.start, start_clamped), ("bottom", self.params.bottom, bottom_clamped)]
+        {
+            if clamped {
+                self.warnings.push(format!(
+                    "ioc.{key} = {level} is past the hierarchy's depth {deepest}: using {}",
+                    if key == "start" { start } else { bottom }
+                ));
+            }
+        }
+        if start > bottom {
+            self.warnings.push(format!(
+                "ioc.start = {} (depth {start}) lies below ioc.bottom = {} (depth {bottom}) in this hierarchy: starting at {bottom}",
+                self.params.start, self.params.bottom
+            ));
+            start = bottom;
+        }
+        (start, bottom)
+    }
+}
+
+impl CullingMethod for IterativeOcclusion {
+    fn name(&self) -> &'static str {
+        "ioc"
+    }
+
+    fn needs_gpu_culling(&self) -> bool {
+        true
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
+    }
+
+    fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        if self.resources.is_some() {
+            return;
+        }
+        let h = ctx.hierarchy;
+        let depths = self.depths(h);
+        let Ok(gpu) = backend.gpu_culling() else { return };
+        let nodes = h.node_count() as u32;
+        let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
+        let start: Vec<NodeId> = (0..nodes)
+            .filter(|&n| h.node(n).depth == depths.0 || (h.is_leaf(n) && h.node(n).depth < depths.0))
+            .collect();
+        let (children, leaf_instances, subtree_instances) = tables(gpu, h);
+        self.resources = Some(Resources {
+            boxes: gpu.create_boxes(&boxes),
+            node_visible: gpu.create_flags(nodes),
+            start: gpu.create_list(nodes, &start),
+            levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
+            children,
+            leaf_instances,
+            subtree_instances,
+            temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
+            depths,
+        });
+    }
+
+    /// A backend without [`GpuCulling`] (which the runner refuses first)
+    /// gets view-frustum culling.
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
+            return ViewFrustumCulling.render(ctx, backend);
+        };
+        let visible = r.temporal.begin(gpu);
+        gpu.clear_flags(r.node_visible);
+        let (start, bottom) = r.depths;
+        let mut level = r.start;
+        for depth in start..=bottom {
+            gpu.test_boxes(r.boxes, level, r.node_visible);
+            if depth == bottom {
+                gpu.expand(level, r.node_visible, r.subtree_instances, ExpandInto::Flags(visible));
+            } else {
+                gpu.expand(level, r.node_visible, r.leaf_instances, ExpandInto::Flags(visible));
+                let next = r.levels[(depth - start) as usize % 2];
+                gpu.expand(level, r.node_visible, r.children, ExpandInto::List(next));
+                level = next;
+            }
+        }
+        r.temporal.finish(gpu, true);
+    }
+}
+
+/// The three tables `ioc` walks: children, a leaf's instances and a
+/// subtree's instances (from the leaves' instances in depth-first order, in
+/// which every subtree's instances are one range).
+fn tables(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> (RangeTable, RangeTable, RangeTable) {
+    let n = h.node_count();
+    let mut child_ranges = vec![ItemRange::default(); n];
+    let mut child_items = Vec::with_capacity(n);
+    let mut leaf_ranges = vec![ItemRange::default(); n];
+    for id in 0..n as NodeId {
+        let node = h.node(id);
+        if node.is_leaf() {
+            leaf_ranges[id as usize] = ItemRange { first: node.first, count: node.count };
+        } else {
+            child_ranges[id as usize] = ItemRange { first: child_items.len() as u32, count: 2 };
+            child_items.extend_from_slice(h.children(id));
+        }
+    }
+    let mut subtree_ranges = vec![ItemRange::default(); n];
+    let mut in_order = Vec::with_capacity(h.items.len());
+    // Depth first; a node is seen on the way down (`false`) and again once
+    // its subtree is done (`true`).
+    let mut stack = vec![(h.root(), false)];
+    while let Some((id, done)) = stack.pop() {
+        let range = &mut subtree_ranges[id as usize];
+        if done {
+            range.count = in_order.len() as u32 - range.first;
+            continue;
+        }
+        range.first = in_order.len() as u32;
+        in_order.extend_from_slice(h.instances(id));
+        stack.push((id, true));
+        stack.extend(h.children(id).iter().rev().map(|&c| (c, false)));
+    }
+    (
+        gpu.create_table(&child_ranges, &child_items),
+        gpu.create_table(&leaf_ranges, &h.items),
+        gpu.create_table(&subtree_ranges, &in_order),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::MethodOptions;
+
+    fn read(opts: &[&str]) -> Result<IocParams, OptionError> {
+        IocParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("ioc"))
+    }
+
+    #[test]
+    fn levels_parse_from_either_end_and_resolve_with_clamping() {
+        assert_eq!(read(&[]), Ok(IocParams { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2) }));
+        let p = read(&["ioc.start=deepest-5", "ioc.bottom=deepest"]).unwrap();
+        assert_eq!((p.start, p.bottom), (Level::AboveDeepest(5), Level::AboveDeepest(0)));
+        assert_eq!(Level::FromRoot(3).resolve(10), (3, false));
+        assert_eq!(Level::FromRoot(12).resolve(10), (10, true));
+        assert_eq!(Level::AboveDeepest(2).resolve(10), (8, false));
+        assert_eq!(Level::AboveDeepest(12).resolve(10), (0, true));
+        for text in ["3", "deepest", "deepest-2"] {
+            assert_eq!(text.parse::<Level>().unwrap().to_string(), text);
+        }
+        for bad in ["ioc.start=-1", "ioc.bottom=deep", "ioc.bottom=deepest-", "ioc.start=deepest+1"] {
+            assert!(read(&[bad]).is_err(), "{bad} accepted");
+        }
+    }
+
+    #[test]
+    fn a_start_below_the_bottom_names_both() {
+        let err = read(&["ioc.start=7", "ioc.bottom=5"]).unwrap_err().to_string();
+        assert!(err.contains("ioc.start = 7") && err.contains("ioc.bottom = 5"), "{err}");
+        let err = read(&["ioc.start=deepest-1", "ioc.bottom=deepest-3"]).unwrap_err().to_string();
+        assert!(err.contains("ioc.start = deepest-1") && err.contains("ioc.bottom = deepest-3"), "{err}");
+    }
+}

@@ -1,0 +1,196 @@
+//! Raster occlusion culling (ROC), the baseline of the IOC poster (section 1,
+//! its references [1, 2]: nvpro's `gl_occlusion_culling`, "raster" technique,
+//! temporal mode): every object's box is tested against the depth of last
+//! frame's visible objects in one batch on the GPU, a fragment that passes
+//! the depth test marks its object visible in a buffer on the device, and
+//! the visible objects are drawn by an indirect multi-draw. No result comes
+//! back to the CPU.
+//!
+//! Per frame, on [`GpuCulling`]:
+//!
+//! 1. draw last frame's visible objects (the occluders);
+//! 2. clear this frame's flags and test every object's box against that
+//!    depth (objects outside the frustum set nothing, boxes at the eye are
+//!    visible untested);
+//! 3. draw the objects visible now that were not drawn in step 1 (`exact`
+//!    mode; `roc.mode=last` leaves this out, so an object that comes into
+//!    view appears a frame late and the missed pixels are reported);
+//! 4. keep the visible objects for the next frame.
+//!
+//! Exact in the default mode: an object with a pixel in the final image has
+//! that pixel at a depth no farther than the step-1 depth there, so its box,
+//! which contains it and is pulled towards the eye, passes the test there,
+//! and the object is drawn in step 1 or 3.
+
+use super::vfc::ViewFrustumCulling;
+use super::{CullingMethod, FrameContext, OptionError, OptionReader};
+use crate::backend::Backend;
+use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
+use std::fmt;
+use std::str::FromStr;
+
+/// Whether a frame draws what its own test found (`exact`) or only what the
+/// previous frame's test found (`last`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RocMode {
+    /// Steps 1-4: exact for the current frame.
+    Exact,
+    /// Steps 1, 2 and 4: no second draw, objects may appear a frame late.
+    Last,
+}
+
+impl fmt::Display for RocMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            RocMode::Exact => "exact",
+            RocMode::Last => "last",
+        })
+    }
+}
+
+impl FromStr for RocMode {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        match s {
+            "exact" => Ok(RocMode::Exact),
+            "last" => Ok(RocMode::Last),
+            _ => Err(()),
+        }
+    }
+}
+
+/// Parameters of `roc`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RocParams {
+    /// `roc.mode`: `exact` (default) or `last`.
+    pub mode: RocMode,
+}
+
+impl RocParams {
+    /// Reads `roc.mode`.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        Ok(Self { mode: r.get("mode", RocMode::Exact, "exact or last", |_| true)? })
+    }
+}
+
+/// The temporal half of ROC, shared with `ioc` (the poster: "we first
+/// pre-render the depth buffer of the occluders, which are visible at the
+/// previous frame"): per-instance flags of this frame and the last, and the
+/// lists drawn from them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TemporalSet {
+    /// This frame's visibility flags, per instance.
+    visible: Flags,
+    /// Last frame's (the two are swapped at the end of each frame).
+    previous: Flags,
+    /// Last frame's visible instances, drawn first.
+    occluders: IdList,
+    /// Instances visible now and not among the occluders.
+    newly_visible: IdList,
+}
+
+impl TemporalSet {
+    /// The resources for `instances` instances, nothing visible yet.
+    pub(crate) fn new(gpu: &mut dyn GpuCulling, instances: u32) -> Self {
+        Self {
+            visible: gpu.create_flags(instances),
+            previous: gpu.create_flags(instances),
+            occluders: gpu.create_list(instances, &[]),
+            newly_visible: gpu.create_list(instances, &[]),
+        }
+    }
+
+    /// Step 1 and the start of step 2: draws the occluders and clears this
+    /// frame's flags; returns them, for the frame's tests to set.
+    pub(crate) fn begin(&self, gpu: &mut dyn GpuCulling) -> Flags {
+        gpu.draw_list(self.occluders);
+        gpu.clear_flags(self.visible);
+        self.visible
+    }
+
+    /// Steps 3 (when `draw_new`) and 4.
+    pub(crate) fn finish(&mut self, gpu: &mut dyn GpuCulling, draw_new: bool) {
+        if draw_new {
+            gpu.compact(self.visible, Some(self.previous), self.newly_visible);
+            gpu.draw_list(self.newly_visible);
+        }
+        gpu.compact(self.visible, None, self.occluders);
+        std::mem::swap(&mut self.visible, &mut self.previous);
+    }
+}
+
+/// The device resources of `roc`, made on its first frame.
+#[derive(Clone, Copy, Debug)]
+struct Resources {
+    /// Every instance's box.
+    boxes: BoxSet,
+    /// Every instance id.
+    all: IdList,
+    temporal: TemporalSet,
+}
+
+/// `roc`: raster occlusion culling of every object against last frame's
+/// visible objects (module documentation).
+#[derive(Clone, Debug)]
+pub struct RasterOcclusion {
+    params: RocParams,
+    resources: Option<Resources>,
+}
+
+impl RasterOcclusion {
+    /// A fresh `roc` (nothing visible yet).
+    pub fn new(params: RocParams) -> Self {
+        Self { params, resources: None }
+    }
+}
+
+impl CullingMethod for RasterOcclusion {
+    fn name(&self) -> &'static str {
+        "roc"
+    }
+
+    fn needs_gpu_culling(&self) -> bool {
+        true
+    }
+
+    fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        if self.resources.is_some() {
+            return;
+        }
+        let Ok(gpu) = backend.gpu_culling() else { return };
+        let n = ctx.scene.instances.len() as u32;
+        let boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
+        let all: Vec<u32> = (0..n).collect();
+        self.resources = Some(Resources {
+            boxes: gpu.create_boxes(&boxes),
+            all: gpu.create_list(n, &all),
+            temporal: TemporalSet::new(gpu, n),
+        });
+    }
+
+    /// A backend without [`GpuCulling`] (which the runner refuses first)
+    /// gets view-frustum culling.
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
+            return ViewFrustumCulling.render(ctx, backend);
+        };
+        let visible = r.temporal.begin(gpu);
+        gpu.test_boxes(r.boxes, r.all, visible);
+        r.temporal.finish(gpu, self.params.mode == RocMode::Exact);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::MethodOptions;
+
+    #[test]
+    fn mode_defaults_to_exact_and_rejects_others() {
+        let read = |opts: &[&str]| RocParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("roc"));
+        assert_eq!(read(&[]), Ok(RocParams { mode: RocMode::Exact }));
+        assert_eq!(read(&["roc.mode=last"]), Ok(RocParams { mode: RocMode::Last }));
+        let err = read(&["roc.mode=fast"]).unwrap_err();
+        assert!(err.to_string().contains("roc.mode = fast: expected exact or last"), "{err}");
+    }
+}

@@ -1,0 +1,122 @@
+//! The GPU-driven methods (`roc`, `ioc`) on the soft backend's
+//! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
+//! every `small` scene with both hierarchies, `ioc` over several depth
+//! ranges, `roc.mode=last` reporting the pixels it misses, the frame
+//! statistics of a GPU-driven frame, and the depth options' errors and
+//! warnings. `tests/gpu.rs` runs the same methods on the wgpu backend.
+
+use indicatif::ProgressBar;
+use occlude::bench::runner::{run_scene, BenchRun};
+use occlude::bench::BenchConfig;
+use occlude_core::methods::MethodOptions;
+use occlude_core::{HierarchyKind, Scene};
+use occlude_scenes::{generate, Size, SCENE_NAMES};
+
+fn config(scene: &str, hierarchy: HierarchyKind, methods: &[&str], options: &[&str]) -> BenchConfig {
+    BenchConfig {
+        scene: scene.into(),
+        methods: methods.iter().map(|m| m.to_string()).collect(),
+        options: MethodOptions::parse(options).unwrap(),
+        frames: 90,
+        resolution: (480, 360),
+        hierarchy,
+        ..BenchConfig::default()
+    }
+}
+
+fn small(scene: &str) -> Scene {
+    generate(scene, Size::Small, 1).unwrap()
+}
+
+fn run(scene: &Scene, cfg: &BenchConfig) -> BenchRun {
+    run_scene(scene, cfg, &ProgressBar::hidden()).unwrap()
+}
+
+fn assert_exact(run: &BenchRun, what: &str) {
+    for m in &run.methods {
+        for (f, stats) in m.frames.iter().enumerate() {
+            assert_eq!(stats.missing_pixels, 0, "{what}/{}: frame {f} differs from vfc", m.name);
+        }
+    }
+}
+
+#[test]
+fn roc_and_ioc_match_vfc_on_every_frame_and_cull() {
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            let r = run(&scene, &config(name, hierarchy, &["vfc", "roc", "ioc"], &[]));
+            assert_exact(&r, &format!("{name}/{hierarchy}"));
+            let triangles = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+            assert!(triangles(1) < triangles(0), "{name}/{hierarchy}: roc culled nothing");
+            // At its bottom depth ioc draws whole subtrees, in view or not: it
+            // draws less than vfc only where occlusion is strong.
+            if name == "city" {
+                assert!(triangles(2) < triangles(0), "{name}/{hierarchy}: ioc culled nothing");
+            }
+        }
+    }
+}
+
+#[test]
+fn ioc_is_exact_over_every_depth_range() {
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for (start, bottom) in [("0", "deepest"), ("0", "0"), ("2", "3"), ("deepest", "deepest"), ("6", "deepest-1")] {
+            let options = [format!("ioc.start={start}"), format!("ioc.bottom={bottom}")];
+            let cfg = config(name, HierarchyKind::Bvh, &["vfc", "ioc"], &[&options[0], &options[1]]);
+            assert_exact(&run(&scene, &cfg), &format!("{name}/ioc {start}..{bottom}"));
+        }
+    }
+}
+
+#[test]
+fn roc_last_mode_reports_the_pixels_it_misses() {
+    let scene = small("city");
+    let r = run(&scene, &config("city", HierarchyKind::Bvh, &["roc"], &["roc.mode=last"]));
+    let frames = &r.methods[0].frames;
+    // The first frame has no previous visible set: nothing is drawn.
+    assert_eq!(frames[0].triangles, 0);
+    assert!(frames[0].missing_pixels > 0);
+    // Later frames draw what the frame before found, which is not always enough.
+    let later: u64 = frames[1..].iter().map(|f| f.missing_pixels).sum();
+    assert!(frames[1..].iter().all(|f| f.triangles > 0));
+    assert!(later > 0, "the walkthrough never shows an object a frame late");
+}
+
+#[test]
+fn a_gpu_driven_frame_reads_nothing_back_and_counts_its_passes() {
+    let scene = small("figures");
+    let r = run(&scene, &config("figures", HierarchyKind::Bvh, &["vfc", "roc", "ioc"], &[]));
+    let (vfc, roc, ioc) = (&r.methods[0].frames, &r.methods[1].frames, &r.methods[2].frames);
+    for f in vfc {
+        assert_eq!((f.dispatches, f.indirect_draws, f.readbacks), (0, 0, 0));
+        assert!((f.render_ms > 0.0 || f.triangles == 0) && f.cull_ms == 0.0);
+    }
+    for f in roc.iter().chain(ioc) {
+        assert_eq!((f.queries, f.readbacks, f.traversal_steps), (0, 0, 0));
+        assert_eq!(f.draw_calls, f.indirect_draw_calls, "every draw is inside a multi-draw");
+        assert!(f.cull_ms > 0.0 && (f.render_ms > 0.0 || f.triangles == 0));
+        assert!((f.cull_ms + f.render_ms - f.gpu_ms).abs() < 1e-9, "GPU time is culling plus drawing");
+    }
+    assert!(roc.iter().chain(ioc).map(|f| f.query_boxes).sum::<u64>() > 0);
+    // roc: occluders, one box test, newly visible; 6 dispatches (clear, test,
+    // two compactions, two draw-argument passes).
+    assert!(roc.iter().all(|f| f.indirect_draws == 3 && f.dispatches == 6), "{:?}", roc[1]);
+    // The levels' box tests are indirect draws too.
+    let levels = ioc[1].indirect_draws - 2;
+    assert!(levels >= 1 && ioc.iter().all(|f| f.indirect_draws == levels + 2));
+}
+
+#[test]
+fn ioc_depths_past_the_tree_are_clamped_with_a_warning() {
+    let scene = small("teapots");
+    let cfg = config("teapots", HierarchyKind::Bvh, &["vfc", "ioc"], &["ioc.start=2", "ioc.bottom=400"]);
+    let r = run(&scene, &BenchConfig { frames: 5, ..cfg });
+    assert_exact(&r, "teapots/ioc bottom=400");
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+    assert!(r.warnings[0].contains("ioc.bottom = 400 is past the hierarchy's depth"), "{}", r.warnings[0]);
+    let cfg = config("teapots", HierarchyKind::Bvh, &["ioc"], &["ioc.start=7", "ioc.bottom=5"]);
+    let err = run_scene(&scene, &cfg, &ProgressBar::hidden()).err().expect("start below bottom is an error");
+    assert!(err.to_string().contains("ioc.bottom = 5"), "{err:#}");
+}
