@@ -40,6 +40,13 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--dump-frame", "99", "--frames", "5"], "--dump-frame 99 is past the last frame");
     assert_usage_error(&["bench", "--dump-frame", "1", "--paper", "om"], "--paper");
     assert_usage_error(&["bench", "--methods", "vfc", "--method-opt", "sw.x=1"], "not in --methods");
+    assert_usage_error(
+        &["bench", "--methods", "ioc", "--method-opt", "ioc.start=7", "--method-opt", "ioc.bottom=5"],
+        "ioc.start = 7: expected a level no deeper than ioc.bottom = 5",
+    );
+    assert_usage_error(&["bench", "--methods", "roc", "--method-opt", "roc.mode=fast"], "roc.mode = fast");
+    // No adapter, or one whose backend has no GPU-resident culling: exit 2 either way.
+    assert_usage_error(&["bench", "--backend", "wgpu", "--methods", "roc", "--frames", "1"], "");
     let dir = std::env::temp_dir().join(format!("occlude-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.toml");
