@@ -40,8 +40,7 @@ pub struct FrameStats {
     pub wall_ms: f64,
     /// GPU time of the occlusion tests: query boxes, batched box tests and
     /// the compute passes that compact their results (simulated on the soft
-    /// backend; from pass timestamps on wgpu, where only passes that do
-    /// nothing else count).
+    /// backend; the wgpu backend does not measure it yet and reports 0).
     #[serde(default)]
     pub cull_ms: f64,
     /// GPU time of drawing the scene's instances (as `cull_ms`).

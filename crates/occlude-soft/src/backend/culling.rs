@@ -68,7 +68,12 @@ impl SoftBackend<'_> {
         self.flush();
         self.stats.dispatches += 1;
         self.clock.cpu_work(self.model.cpu_dispatch_us);
-        let us = self.model.gpu_dispatch_us + items as f64 * self.model.gpu_compute_item_ns * 1e-3;
+        self.culling_work(self.model.gpu_dispatch_us + items as f64 * self.model.gpu_compute_item_ns * 1e-3);
+    }
+
+    /// Puts `us` of occlusion-test work on the GPU time line, issued now
+    /// (everything recorded before it has run).
+    fn culling_work(&mut self, us: f64) {
         self.clock.gpu_command(self.clock.cpu, us);
         charge_gpu_time(&mut self.stats, true, us);
     }
@@ -132,13 +137,14 @@ impl GpuCulling for SoftBackend<'_> {
         }
         // The indirect draw of the raster list, one box per instance.
         self.indirect_draw(RenderState::Query);
+        self.culling_work(self.model.gpu_indirect_draw_us);
         self.stats.query_boxes += raster.len() as u64;
-        for (k, (_, b)) in raster.iter().enumerate() {
+        for (_, b) in &raster {
             let first = self.triangles.len();
             self.push_box_triangles(b);
             let op = GpuOp {
                 issued_us: self.clock.cpu,
-                fixed_us: self.model.gpu_box_us + if k == 0 { self.model.gpu_indirect_draw_us } else { 0.0 },
+                fixed_us: self.model.gpu_box_us,
                 fragment_ns: self.model.gpu_query_fragment_ns,
                 passed_ns: self.model.gpu_box_fragment_ns,
                 query: None,
