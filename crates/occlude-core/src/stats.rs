@@ -40,7 +40,9 @@ pub struct FrameStats {
     pub wall_ms: f64,
     /// GPU time of the occlusion tests: query boxes, batched box tests and
     /// the compute passes that compact their results (simulated on the soft
-    /// backend; the wgpu backend does not measure it yet and reports 0).
+    /// backend; on wgpu from pass timestamps where the adapter has them, 0
+    /// otherwise, and a pass that mixes tests and draws counts in `gpu_ms`
+    /// only).
     #[serde(default)]
     pub cull_ms: f64,
     /// GPU time of drawing the scene's instances (as `cull_ms`).

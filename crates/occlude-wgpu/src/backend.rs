@@ -1,19 +1,28 @@
 //! [`WgpuBackend`]: the [`Backend`] interface on a real GPU.
 //!
-//! Draws and queries are recorded on the CPU and submitted as one render pass
-//! when a query result is asked for (as an OpenGL driver flushes on
-//! `glGetQueryObject`) or the frame ends. Each submission's query results
+//! Draws and queries are recorded on the CPU and submitted together when a
+//! query result or a list's length is asked for (as an OpenGL driver flushes
+//! on `glGetQueryObject`) or the frame ends. Consecutive draws and queries
+//! share a render pass; the GPU-resident culling commands ([`GpuCulling`],
+//! module `culling`) put their compute passes between render passes, so that
+//! everything runs in the order recorded. Each submission's query results
 //! are resolved into a buffer and mapped with `map_async`: "is it
 //! available?" polls the device without blocking, "give me the result"
 //! waits, and that wait is the frame's wait time (CHC paper, section 3).
 
 use crate::context::GpuContext;
-use crate::queries::{encode_resolve, read_values, PassTimer, QueryPool, Readback, QUERIES_PER_SET};
+use crate::culling::{CullOp, Culling};
+use crate::queries::{
+    encode_resolve, read_values, GpuTimes, PassKind, PassTimer, QueryPool, Readback, QUERIES_PER_SET,
+};
 use crate::readback::Mapping;
 use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
-use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle, RenderState, Scene, StateTracker};
+use occlude_core::{
+    Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
+    OracleView, QueryHandle, RangeTable, RenderState, Scene, StateTracker,
+};
 use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -21,7 +30,7 @@ use std::time::{Duration, Instant};
 /// Background of the colour image.
 const CLEAR_COLOR: wgpu::Color = wgpu::Color { r: 0.62, g: 0.74, b: 0.86, a: 1.0 };
 
-/// Bytes of one query box in the box buffer (min and max as `vec4`s).
+/// Bytes of one query box in the box buffer (min, a slot, max, padding).
 const BOX_BYTES: u64 = 32;
 
 /// A recorded command, waiting for the next submission.
@@ -33,6 +42,79 @@ enum Op {
     BoxQuery { slot: u32, boxes: Range<u32> },
     /// Occlusion query `slot` over an instance drawn with depth test equal.
     EqualQuery { slot: u32, instance: u32 },
+    /// A GPU-resident culling command: a compute pass, and for box tests and
+    /// list draws a draw in the render pass after it.
+    Cull(CullOp),
+}
+
+impl Op {
+    /// Whether the op draws in a render pass.
+    fn renders(&self) -> bool {
+        match self {
+            Op::Cull(op) => op.draws(),
+            _ => true,
+        }
+    }
+
+    /// The pipeline its draw needs (for ops that render).
+    fn pipeline(&self) -> Bound {
+        match self {
+            Op::Draw(_) => Bound::Draw,
+            Op::BoxQuery { .. } => Bound::Query,
+            Op::EqualQuery { .. } => Bound::Oracle,
+            Op::Cull(CullOp::TestBoxes { .. }) => Bound::BoxTest,
+            // List draws; the other culling ops draw nothing.
+            Op::Cull(_) => Bound::ListDraw,
+        }
+    }
+
+    /// What its draw does, for the frame's GPU times.
+    fn pass_kind(&self) -> PassKind {
+        match self.pipeline() {
+            Bound::Draw | Bound::ListDraw => PassKind::Render,
+            Bound::Query | Bound::Oracle | Bound::BoxTest => PassKind::Cull,
+        }
+    }
+}
+
+/// A part of a submission: a render pass over the draws of a range of ops,
+/// or the compute work of one culling op.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Segment {
+    Render(Range<usize>),
+    Compute(usize),
+}
+
+/// The passes that run `ops` in order: consecutive draws share a render
+/// pass, each culling op's compute pass comes before its draw. With `clear`,
+/// the first segment is a render pass (which clears the target), empty if
+/// need be.
+fn segments(ops: &[Op], clear: bool) -> Vec<Segment> {
+    let mut out = Vec::new();
+    if clear && ops.first().is_none_or(|op| matches!(op, Op::Cull(_))) {
+        out.push(Segment::Render(0..0));
+    }
+    for (k, op) in ops.iter().enumerate() {
+        if matches!(op, Op::Cull(_)) {
+            out.push(Segment::Compute(k));
+        }
+        if op.renders() {
+            match out.last_mut() {
+                Some(Segment::Render(r)) if r.end == k => r.end = k + 1,
+                _ => out.push(Segment::Render(k..k + 1)),
+            }
+        }
+    }
+    out
+}
+
+/// What a render pass over `ops` does: all draws, all tests, or a mix.
+fn pass_kind(ops: &[Op]) -> PassKind {
+    let mut kinds = ops.iter().map(Op::pass_kind);
+    match kinds.next() {
+        Some(first) if kinds.all(|k| k == first) => first,
+        _ => PassKind::Other,
+    }
 }
 
 /// Where a query's answer is.
@@ -60,6 +142,15 @@ enum Bound {
     Draw,
     Query,
     Oracle,
+    BoxTest,
+    ListDraw,
+}
+
+impl Bound {
+    /// Whether the pipeline's group 1 is a material's group.
+    fn material_group(self) -> bool {
+        matches!(self, Bound::Draw | Bound::Query | Bound::Oracle)
+    }
 }
 
 /// One method's view of a [`GpuScene`]: its own render target, camera,
@@ -87,6 +178,8 @@ pub struct WgpuBackend<'s> {
     drawn: Vec<bool>,
     frame_start: Instant,
     wait: Duration,
+    /// GPU-resident culling's resources, made by the first `create_*`.
+    pub(crate) culling: Option<Culling>,
 }
 
 impl<'s> WgpuBackend<'s> {
@@ -124,6 +217,7 @@ impl<'s> WgpuBackend<'s> {
             drawn: vec![false; scene.instances.len()],
             frame_start: Instant::now(),
             wait: Duration::ZERO,
+            culling: None,
         }
     }
 
@@ -165,6 +259,9 @@ impl<'s> WgpuBackend<'s> {
         uniform[..16].copy_from_slice(&camera.view_projection().to_cols_array());
         uniform[16] = QUERY_DEPTH_BIAS;
         self.gpu.ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::cast_slice(&uniform));
+        if let Some(culling) = &self.culling {
+            culling.set_camera(camera);
+        }
         self.cleared = false;
         self.next_slot = 0;
         self.queries.clear();
@@ -185,9 +282,10 @@ impl<'s> WgpuBackend<'s> {
         QueryHandle(self.queries.len() as u32 - 1)
     }
 
-    /// Submits everything recorded as one render pass, its queries resolved
-    /// and mapped for reading. A frame that recorded nothing still gets a
-    /// pass, which clears its target.
+    /// Submits everything recorded (render passes, and compute passes of
+    /// culling between them), its queries resolved and mapped for reading. A
+    /// frame that recorded nothing still gets a pass, which clears its
+    /// target.
     fn flush(&mut self) {
         if self.ops.is_empty() && self.cleared {
             return;
@@ -197,11 +295,22 @@ impl<'s> WgpuBackend<'s> {
         let ctx = &gpu.ctx;
         let set_index = self.recorded_set.take();
         let set = set_index.map(|k| self.pool.set(ctx, k as usize).clone());
+        let ops = std::mem::take(&mut self.ops);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        {
+        for segment in segments(&ops, !self.cleared) {
+            let range = match segment {
+                Segment::Compute(k) => {
+                    if let (Op::Cull(op), Some(culling)) = (&ops[k], self.culling.as_mut()) {
+                        culling.encode_compute(&mut encoder, op, self.timer.as_mut());
+                    }
+                    continue;
+                }
+                Segment::Render(range) => range,
+            };
             let load_color = if self.cleared { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(CLEAR_COLOR) };
             let load_depth = if self.cleared { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(1.0) };
-            let timestamp_writes = self.timer.as_mut().and_then(PassTimer::next_pass);
+            let kind = pass_kind(&ops[range.clone()]);
+            let timestamp_writes = self.timer.as_mut().and_then(|t| t.render_pass(kind));
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("frame"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -219,12 +328,14 @@ impl<'s> WgpuBackend<'s> {
                 occlusion_query_set: set.as_ref(),
                 multiview_mask: None,
             });
-            encode_ops(&mut pass, &gpu, self.scene, &self.frame_group, &self.ops);
+            let frame =
+                Encoding { gpu: &gpu, scene: self.scene, frame: &self.frame_group, culling: self.culling.as_ref() };
+            encode_ops(&mut pass, &frame, &ops[range]);
+            self.cleared = true;
         }
-        self.cleared = true;
-        let slots = self.ops.iter().filter_map(|op| match op {
+        let slots = ops.iter().filter_map(|op| match op {
             Op::BoxQuery { slot, .. } | Op::EqualQuery { slot, .. } => Some(*slot),
-            Op::Draw(_) => None,
+            Op::Draw(_) | Op::Cull(_) => None,
         });
         let (first, count) = match slots.clone().min() {
             Some(first) => (first, slots.count() as u32),
@@ -236,6 +347,7 @@ impl<'s> WgpuBackend<'s> {
             _ => 0,
         };
         ctx.queue.submit([encoder.finish()]);
+        self.ops = ops;
         self.ops.clear();
         self.boxes.clear();
         if let Some(readback) = readback {
@@ -304,6 +416,55 @@ impl<'s> WgpuBackend<'s> {
         Some(value)
     }
 
+    /// Adds what the frame's box tests and list draws did, counted on the
+    /// GPU, to its statistics: boxes rasterized, draw calls, triangles, and
+    /// the instances that no CPU draw drew too.
+    fn add_cull_stats(&mut self) {
+        let Some(culling) = self.culling.as_mut() else { return };
+        match culling.take_stats() {
+            Ok(Some(counted)) => {
+                self.stats.query_boxes += counted.boxes;
+                self.stats.draw_calls += counted.draws;
+                self.stats.indirect_draw_calls += counted.draws;
+                self.stats.triangles += counted.triangles;
+                let drawn = &counted.drawn;
+                let new = self.drawn.iter().enumerate().filter(|&(i, &cpu)| !cpu && drawn[i / 32] >> (i % 32) & 1 != 0);
+                self.stats.visible_objects += new.count() as u64;
+            }
+            Ok(None) => {}
+            Err(e) => self.gpu.ctx.fail(e),
+        }
+    }
+
+    /// GPU-resident culling's resources, made on first use.
+    fn culling(&mut self) -> &mut Culling {
+        let (gpu, scene, camera_buffer, camera) = (&self.gpu, self.scene, &self.camera_buffer, self.camera);
+        self.culling.get_or_insert_with(|| {
+            let culling = Culling::new(gpu, scene, camera_buffer);
+            if let Some(camera) = &camera {
+                culling.set_camera(camera);
+            }
+            culling
+        })
+    }
+
+    /// Records a culling command (one dispatch).
+    fn record_cull(&mut self, op: CullOp) {
+        self.stats.dispatches += 1;
+        self.ops.push(Op::Cull(op));
+    }
+
+    /// Records a culling command that ends in an indirect draw in `state`
+    /// (box tests, list draws), whose counts are read after the frame.
+    fn record_indirect(&mut self, op: CullOp, state: RenderState) {
+        if self.state.switch(state) {
+            self.stats.state_changes += 1;
+        }
+        self.stats.indirect_draws += 1;
+        self.culling().note_counted();
+        self.record_cull(op);
+    }
+
     /// Submits what is recorded and waits until the GPU is idle and every
     /// read-back has been collected, so the next frame starts clean.
     fn settle(&mut self) {
@@ -323,7 +484,7 @@ impl<'s> WgpuBackend<'s> {
 }
 
 /// The frame bind group over `camera`, the scene's transforms and `boxes`.
-fn frame_group(gpu: &GpuScene, camera: &wgpu::Buffer, boxes: &wgpu::Buffer) -> wgpu::BindGroup {
+pub(crate) fn frame_group(gpu: &GpuScene, camera: &wgpu::Buffer, boxes: &wgpu::Buffer) -> wgpu::BindGroup {
     gpu.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("frame"),
         layout: &gpu.pipelines.frame_layout,
@@ -344,36 +505,54 @@ fn box_buffer(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
     })
 }
 
-/// Encodes the recorded ops into `pass`, binding pipelines, index buffers
-/// and material groups only when they change.
-fn encode_ops(pass: &mut wgpu::RenderPass<'_>, gpu: &GpuScene, scene: &Scene, frame: &wgpu::BindGroup, ops: &[Op]) {
-    pass.set_bind_group(0, frame, &[]);
+/// What a render pass draws with.
+struct Encoding<'a> {
+    gpu: &'a GpuScene,
+    scene: &'a Scene,
+    /// Group 0 of instance draws and queries.
+    frame: &'a wgpu::BindGroup,
+    culling: Option<&'a Culling>,
+}
+
+/// Encodes the draws of `ops` into `pass`, binding pipelines, index buffers
+/// and groups only when they change.
+fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
+    let gpu = enc.gpu;
     pass.set_vertex_buffer(0, gpu.vertices.slice(..));
     let mut bound: Option<Bound> = None;
+    let mut frame_bound = false;
     let mut material: Option<u32> = None;
-    let mut bind = |pass: &mut wgpu::RenderPass<'_>, want: Bound| {
+    for op in ops {
+        let want = op.pipeline();
         if bound != Some(want) {
-            let (pipeline, indices) = match want {
-                Bound::Draw => (&gpu.pipelines.draw, &gpu.indices),
-                Bound::Query => (&gpu.pipelines.query, &gpu.box_indices),
-                Bound::Oracle => (&gpu.pipelines.oracle, &gpu.indices),
+            let (pipeline, indices) = match (want, enc.culling) {
+                (Bound::Draw, _) => (&gpu.pipelines.draw, &gpu.indices),
+                (Bound::Query, _) => (&gpu.pipelines.query, &gpu.box_indices),
+                (Bound::Oracle, _) => (&gpu.pipelines.oracle, &gpu.indices),
+                (Bound::BoxTest, Some(c)) => (c.scene().test_pipeline(), &gpu.box_indices),
+                (Bound::ListDraw, Some(c)) => (c.scene().list_pipeline(), &gpu.indices),
+                // Culling ops are recorded only once culling exists.
+                (Bound::BoxTest | Bound::ListDraw, None) => continue,
             };
             pass.set_pipeline(pipeline);
             pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+            if !want.material_group() || bound.is_some_and(|b| !b.material_group()) {
+                material = None;
+            }
             bound = Some(want);
         }
-    };
-    for op in ops {
+        if want != Bound::BoxTest && !frame_bound {
+            pass.set_bind_group(0, enc.frame, &[]);
+            frame_bound = true;
+        }
         match op {
             Op::Draw(i) | Op::EqualQuery { instance: i, .. } => {
-                let want = if matches!(op, Op::Draw(_)) { Bound::Draw } else { Bound::Oracle };
-                bind(pass, want);
                 let group = gpu.instance_material[*i as usize];
                 if material != Some(group) {
                     pass.set_bind_group(1, &gpu.material_groups[group as usize], &[]);
                     material = Some(group);
                 }
-                let mesh = gpu.meshes[scene.instances[*i as usize].mesh as usize];
+                let mesh = gpu.meshes[enc.scene.instances[*i as usize].mesh as usize];
                 if let Op::EqualQuery { slot, .. } = op {
                     pass.begin_occlusion_query(slot % QUERIES_PER_SET);
                 }
@@ -383,7 +562,6 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, gpu: &GpuScene, scene: &Scene, fr
                 }
             }
             Op::BoxQuery { slot, boxes } => {
-                bind(pass, Bound::Query);
                 if material.is_none() {
                     // The query pipeline's layout includes the material group.
                     pass.set_bind_group(1, &gpu.material_groups[0], &[]);
@@ -392,6 +570,13 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, gpu: &GpuScene, scene: &Scene, fr
                 pass.begin_occlusion_query(slot % QUERIES_PER_SET);
                 pass.draw_indexed(0..36, 0, boxes.clone());
                 pass.end_occlusion_query();
+            }
+            Op::Cull(op) => {
+                if let Some(culling) = enc.culling {
+                    culling.encode_draw(pass, op);
+                }
+                // Box tests bind their own group 0 (the raster list's boxes).
+                frame_bound &= want != Bound::BoxTest;
             }
         }
     }
@@ -464,19 +649,22 @@ impl Backend for WgpuBackend<'_> {
         let _ = self.ctx().device.poll(wgpu::PollType::wait_indefinitely());
         let frame = self.frame_start.elapsed();
         let gpu = Arc::clone(&self.gpu);
-        let gpu_ms = match self.timer.as_mut().map(|t| t.finish(&gpu.ctx)) {
-            Some(Ok(ms)) => ms,
+        let times = match self.timer.as_mut().map(|t| t.finish(&gpu.ctx)) {
+            Some(Ok(times)) => times,
             Some(Err(e)) => {
                 gpu.ctx.fail(e);
-                0.0
+                GpuTimes::default()
             }
-            None => 0.0,
+            None => GpuTimes::default(),
         };
+        self.add_cull_stats();
         let mut s = self.stats;
         s.frame_ms = frame.as_secs_f64() * 1e3;
         s.cpu_ms = cpu_end.saturating_sub(self.wait).as_secs_f64() * 1e3;
         s.wait_ms = self.wait.as_secs_f64() * 1e3;
-        s.gpu_ms = gpu_ms;
+        s.gpu_ms = times.total;
+        s.cull_ms = times.cull;
+        s.render_ms = times.render;
         s.wall_ms = s.frame_ms;
         self.camera = None;
         s
@@ -506,5 +694,93 @@ impl Backend for WgpuBackend<'_> {
 
     fn failure(&self) -> Option<String> {
         self.ctx().failure()
+    }
+
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        self.ctx().gpu_culling_support()?;
+        Ok(self)
+    }
+}
+
+/// Resources are made at once (outside frames, as the trait asks); commands
+/// are recorded as ops and run at the next submission, in order with the
+/// draws and queries around them.
+impl GpuCulling for WgpuBackend<'_> {
+    fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
+        self.culling().create_boxes(boxes)
+    }
+
+    fn create_flags(&mut self, len: u32) -> Flags {
+        self.culling().create_flags(len)
+    }
+
+    fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
+        self.culling().create_list(capacity, ids)
+    }
+
+    fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
+        self.culling().create_table(ranges, items)
+    }
+
+    fn clear_flags(&mut self, flags: Flags) {
+        self.record_cull(CullOp::ClearFlags(flags));
+    }
+
+    fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
+        self.record_indirect(CullOp::TestBoxes { boxes, ids, flags }, RenderState::Query);
+    }
+
+    fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {
+        // One dispatch cannot read a buffer and write it too.
+        assert!(into != ExpandInto::List(src), "expand cannot replace the list it reads (use a second list)");
+        assert!(into != ExpandInto::Flags(filter), "expand cannot set the flags it filters by (use a second buffer)");
+        self.record_cull(CullOp::Expand { src, filter, table, into });
+    }
+
+    fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
+        self.record_cull(CullOp::Compact { flags, unless, dst });
+    }
+
+    fn draw_list(&mut self, list: IdList) {
+        self.record_indirect(CullOp::DrawList(list), RenderState::Indirect);
+    }
+
+    fn read_count(&mut self, list: IdList) -> u32 {
+        self.stats.readbacks += 1;
+        self.flush();
+        let start = Instant::now();
+        let count = self.culling().read_count(list);
+        self.wait += start.elapsed();
+        count.unwrap_or_else(|e| {
+            self.gpu.ctx.fail(e);
+            0
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn culling_ops_split_render_passes_in_order() {
+        let list = IdList(0);
+        let test = Op::Cull(CullOp::TestBoxes { boxes: BoxSet(0), ids: list, flags: Flags(0) });
+        let compact = Op::Cull(CullOp::Compact { flags: Flags(0), unless: None, dst: list });
+        let draw_list = Op::Cull(CullOp::DrawList(list));
+        let ops = [Op::Draw(0), test, compact, draw_list, Op::Draw(1)];
+        use Segment::{Compute, Render};
+        assert_eq!(
+            segments(&ops, true),
+            [Render(0..1), Compute(1), Render(1..2), Compute(2), Compute(3), Render(3..5)]
+        );
+        // A frame starting with culling work clears its target first.
+        assert_eq!(segments(&ops[2..], true), [Render(0..0), Compute(0), Compute(1), Render(1..3)]);
+        assert_eq!(segments(&ops[2..], false), [Compute(0), Compute(1), Render(1..3)]);
+        assert_eq!(segments(&[], true), [Render(0..0)]);
+        assert_eq!(pass_kind(&ops[3..]), PassKind::Render);
+        assert_eq!(pass_kind(&ops[1..2]), PassKind::Cull);
+        assert_eq!(pass_kind(&ops), PassKind::Other);
+        assert_eq!(pass_kind(&[]), PassKind::Other);
     }
 }

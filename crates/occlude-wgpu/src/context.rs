@@ -1,6 +1,7 @@
 //! Opening a GPU: adapter, device and queue, with the optional features the
 //! backend uses when the adapter has them.
 
+use occlude_core::GpuCullingUnsupported;
 use std::sync::{Arc, Mutex};
 
 /// Why the GPU could not be used.
@@ -50,6 +51,11 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether render passes can write timestamps (GPU time per frame).
     pub timestamps: bool,
+    /// What the GPU-driven methods need that the adapter lacks, in words
+    /// (empty when it has everything).
+    culling_lacks: Vec<&'static str>,
+    /// Whether indirect multi-draws take their count from a GPU buffer.
+    multi_draw_count: bool,
     failure: Arc<Mutex<Option<String>>>,
 }
 
@@ -79,22 +85,35 @@ impl GpuContext {
         }
     }
 
-    /// Opens a device on `adapter`, asking for timestamp queries when it has
-    /// them, and routes device loss and uncaptured errors to
-    /// [`GpuContext::failure`] instead of wgpu's default panic.
+    /// Opens a device on `adapter`, asking for timestamp queries and the
+    /// features of GPU-resident culling (forced early depth tests, a first
+    /// instance in indirect draws, multi-draw-indirect-count) when it has them, and routes device loss and
+    /// uncaptured errors to [`GpuContext::failure`] instead of wgpu's default
+    /// panic.
     ///
     /// An adapter lacking one of [`REQUIRED_DOWNLEVEL`] is refused
-    /// ([`GpuError::Unsuitable`]).
+    /// ([`GpuError::Unsuitable`]); one lacking what culling needs still runs
+    /// the CPU-driven methods.
     pub fn open(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
         let candidate = Candidate::of(adapter);
         if !candidate.missing.is_empty() {
             return Err(GpuError::Unsuitable(candidate.describe()));
         }
         let info = adapter.get_info();
-        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT | CULLING_FEATURES;
+        let features = adapter.features() & wanted;
+        let downlevel = adapter.get_downlevel_capabilities().flags;
+        let culling_lacks = CULLING_NEEDS
+            .iter()
+            .filter(|(need, _)| match need {
+                Need::Feature(f) => !features.contains(*f),
+                Need::Downlevel(d) => !downlevel.contains(*d),
+            })
+            .map(|&(_, words)| words)
+            .collect();
         let descriptor = wgpu::DeviceDescriptor {
             label: Some("occlude"),
-            required_features: if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() },
+            required_features: features,
             required_limits: adapter.limits(),
             ..Default::default()
         };
@@ -109,7 +128,34 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
             record_failure(&uncaptured, format!("GPU error: {error}"));
         }));
-        Ok(Self { device, queue, info, timestamps, failure })
+        Ok(Self {
+            device,
+            queue,
+            info,
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            culling_lacks,
+            multi_draw_count: features.contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+            failure,
+        })
+    }
+
+    /// Whether the GPU-driven methods' list draws are one
+    /// `multi_draw_indexed_indirect_count` (the count read on the GPU); without
+    /// it they draw the list's whole capacity, the draws past its count empty.
+    pub fn multi_draw_indirect_count(&self) -> bool {
+        self.multi_draw_count
+    }
+
+    /// Whether the device can run GPU-resident culling, or what it lacks.
+    pub fn gpu_culling_support(&self) -> Result<(), GpuCullingUnsupported> {
+        if self.culling_lacks.is_empty() {
+            return Ok(());
+        }
+        Err(GpuCullingUnsupported(format!(
+            "the GPU adapter '{}' lacks {}, which the GPU-driven methods (roc, ioc) need",
+            self.info.name,
+            in_words(&self.culling_lacks)
+        )))
     }
 
     /// A one-line description of the adapter for reports:
@@ -158,6 +204,39 @@ const NEEDS: [(wgpu::DownlevelFlags, &str); 3] = [
     (wgpu::DownlevelFlags::BASE_VERTEX, "a base vertex in indexed draws"),
     (wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES, "copies of depth textures to buffers"),
 ];
+
+/// Optional device features that GPU-resident culling needs: fragment
+/// shaders that set visibility flags only for fragments that passed the depth
+/// test, and indirect draws whose first instance names the instance drawn.
+const CULLING_FEATURES: wgpu::Features =
+    wgpu::Features::SHADER_EARLY_DEPTH_TEST.union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+
+/// A capability GPU-resident culling needs.
+enum Need {
+    Feature(wgpu::Features),
+    Downlevel(wgpu::DownlevelFlags),
+}
+
+/// What GPU-resident culling needs, each with the words a refusal uses.
+const CULLING_NEEDS: [(Need, &str); 5] = [
+    (Need::Downlevel(wgpu::DownlevelFlags::COMPUTE_SHADERS), "compute shaders"),
+    (Need::Downlevel(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE), "storage buffers written by fragment shaders"),
+    (Need::Downlevel(wgpu::DownlevelFlags::INDIRECT_EXECUTION), "indirect draws and dispatches"),
+    (Need::Feature(wgpu::Features::SHADER_EARLY_DEPTH_TEST), "forced early depth tests (shader-early-depth-test)"),
+    (
+        Need::Feature(wgpu::Features::INDIRECT_FIRST_INSTANCE),
+        "a first instance in indirect draws (indirect-first-instance)",
+    ),
+];
+
+/// `a`, `a and b`, `a, b and c`.
+fn in_words(items: &[&str]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => (*one).to_string(),
+        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
 
 /// The adapter of `instance` to open, as [`choose`] picks it (of those that
 /// can draw to `surface`, when given); `WGPU_ADAPTER_NAME` narrows the names.
@@ -284,5 +363,12 @@ mod tests {
             other => panic!("expected NoAdapter, got {other:?}"),
         }
         assert!(matches!(choose(&[], None), Err(GpuError::NoAdapter(_))));
+    }
+
+    #[test]
+    fn lacks_are_listed_in_words() {
+        assert_eq!(in_words(&["a"]), "a");
+        assert_eq!(in_words(&["a", "b"]), "a and b");
+        assert_eq!(in_words(&["a", "b", "c"]), "a, b and c");
     }
 }

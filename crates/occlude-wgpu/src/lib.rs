@@ -7,6 +7,9 @@
 //! [`GpuContext`] opens the adapter once; [`GpuScene`] uploads a scene and
 //! builds the pipelines once per run; each method gets its own
 //! [`WgpuBackend`] (its own render target and queries) over that shared scene.
+//! The backend also runs GPU-resident culling ([`occlude_core::GpuCulling`]:
+//! batched box tests, compute passes over id lists, indirect multi-draws)
+//! where the device has what it needs.
 //! [`DepthRaster`] is bare depth rasterization of clip-space triangles, for
 //! comparing the GPU with the soft rasterizer on the same triangles.
 
@@ -14,6 +17,7 @@
 
 mod backend;
 mod context;
+mod culling;
 mod depth_raster;
 mod pipelines;
 mod queries;

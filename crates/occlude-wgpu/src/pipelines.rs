@@ -1,5 +1,6 @@
-//! The three render pipelines: drawing instances, rasterizing query boxes,
-//! and the oracle's depth-equal test of instances.
+//! The render pipelines: drawing instances, rasterizing query boxes, the
+//! oracle's depth-equal test of instances, and for GPU-resident culling the
+//! batched box tests and the list draws.
 
 /// Depth format of every render target: 32-bit float, the same values the
 /// soft rasterizer stores.
@@ -22,6 +23,22 @@ pub(crate) struct Pipelines {
     /// Instances again, depth test equal, no writes: which instances own a
     /// pixel of the final image (`opt`'s oracle).
     pub oracle: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    color_format: wgpu::TextureFormat,
+}
+
+/// The render pipelines of GPU-resident culling.
+pub(crate) struct CullingPipelines {
+    /// Group 1 of box tests: the flags their fragments set.
+    pub flags_layout: wgpu::BindGroupLayout,
+    /// Group 1 of list draws: every instance's colour.
+    pub colors_layout: wgpu::BindGroupLayout,
+    /// Box tests: the query pipeline, its fragments setting the box's flag
+    /// after the depth test.
+    pub test: wgpu::RenderPipeline,
+    /// List draws: the draw pipeline, the colour read per instance (one
+    /// multi-draw has one bind group).
+    pub list: wgpu::RenderPipeline,
 }
 
 /// How one pipeline differs from the others.
@@ -29,12 +46,40 @@ struct Variant<'a> {
     label: &'a str,
     vertex_entry: &'a str,
     fragment_entry: &'a str,
+    /// Module of the fragment entry, when not the scene shaders'.
+    fragment_module: Option<&'a wgpu::ShaderModule>,
     instance_vertices: bool,
     depth_write: bool,
     compare: wgpu::CompareFunction,
     cull_back: bool,
     color: bool,
 }
+
+/// Instances, depth test less, depth writes on, shaded colour.
+const DRAW: Variant<'static> = Variant {
+    label: "draw",
+    vertex_entry: "vs_instance",
+    fragment_entry: "fs_shaded",
+    fragment_module: None,
+    instance_vertices: true,
+    depth_write: true,
+    compare: wgpu::CompareFunction::Less,
+    cull_back: false,
+    color: true,
+};
+
+/// Query boxes: front faces only, depth test less, no writes.
+const QUERY: Variant<'static> = Variant {
+    label: "query boxes",
+    vertex_entry: "vs_query_box",
+    fragment_entry: "fs_none",
+    fragment_module: None,
+    instance_vertices: false,
+    depth_write: false,
+    compare: wgpu::CompareFunction::Less,
+    cull_back: true,
+    color: false,
+};
 
 impl Pipelines {
     /// Builds the pipelines for colour target `color_format`.
@@ -62,37 +107,47 @@ impl Pipelines {
             immediate_size: 0,
         });
         let build = |v: Variant| build_pipeline(device, &layout, &module, color_format, v);
-        let draw = build(Variant {
-            label: "draw",
-            vertex_entry: "vs_instance",
-            fragment_entry: "fs_shaded",
-            instance_vertices: true,
-            depth_write: true,
-            compare: wgpu::CompareFunction::Less,
-            cull_back: false,
-            color: true,
-        });
-        let query = build(Variant {
-            label: "query boxes",
-            vertex_entry: "vs_query_box",
-            fragment_entry: "fs_none",
-            instance_vertices: false,
-            depth_write: false,
-            compare: wgpu::CompareFunction::Less,
-            cull_back: true,
-            color: false,
-        });
+        let draw = build(DRAW);
+        let query = build(QUERY);
         let oracle = build(Variant {
             label: "oracle",
-            vertex_entry: "vs_instance",
             fragment_entry: "fs_none",
-            instance_vertices: true,
             depth_write: false,
             compare: wgpu::CompareFunction::Equal,
-            cull_back: false,
             color: false,
+            ..DRAW
         });
-        Self { frame_layout, material_layout, draw, query, oracle }
+        Self { frame_layout, material_layout, draw, query, oracle, module, color_format }
+    }
+
+    /// The pipelines of GPU-resident culling, whose box-test fragments are
+    /// `fs_test_box` of `cull_module`. Only for a device with forced early
+    /// depth tests.
+    pub fn culling(&self, device: &wgpu::Device, cull_module: &wgpu::ShaderModule) -> CullingPipelines {
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let group1 = |label, binding, read_only| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &[layout_entry(binding, fragment, wgpu::BufferBindingType::Storage { read_only })],
+            })
+        };
+        // Bindings as in shader.wgsl and cull.wgsl.
+        let flags_layout = group1("box-test flags", 0, false);
+        let colors_layout = group1("instance colours", 1, true);
+        let build = |group1: &wgpu::BindGroupLayout, v: Variant| {
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(v.label),
+                bind_group_layouts: &[Some(&self.frame_layout), Some(group1)],
+                immediate_size: 0,
+            });
+            build_pipeline(device, &layout, &self.module, self.color_format, v)
+        };
+        let test = build(
+            &flags_layout,
+            Variant { label: "box tests", fragment_entry: "fs_test_box", fragment_module: Some(cull_module), ..QUERY },
+        );
+        let list = build(&colors_layout, Variant { label: "list draws", fragment_entry: "fs_listed", ..DRAW });
+        CullingPipelines { flags_layout, colors_layout, test, list }
     }
 }
 
@@ -147,7 +202,7 @@ fn build_pipeline(
         }),
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
-            module,
+            module: v.fragment_module.unwrap_or(module),
             entry_point: Some(v.fragment_entry),
             compilation_options: Default::default(),
             targets: &[Some(wgpu::ColorTargetState { format: color_format, blend: None, write_mask })],

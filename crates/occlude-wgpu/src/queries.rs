@@ -82,17 +82,39 @@ pub(crate) fn read_values(readback: &Readback, bytes: u64) -> Result<Vec<u64>, S
     Ok(raw.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8-byte chunk"))).collect())
 }
 
-/// Render passes of one frame whose GPU time is measured; passes past this
-/// count go untimed, and the frame's `gpu_ms` undercounts.
+/// Passes of one frame whose GPU time is measured; passes past this count go
+/// untimed, and the frame's `gpu_ms` undercounts.
 const TIMED_PASSES: u32 = 2048;
 
-/// Timestamps at the start and end of each render pass of a frame; their
+/// What a pass does, for splitting the frame's GPU time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PassKind {
+    /// Occlusion tests only: queries, batched box tests, the compute passes
+    /// of GPU-resident culling (`cull_ms`).
+    Cull,
+    /// Draws of the scene's instances only (`render_ms`).
+    Render,
+    /// Both, or neither (a pass that only clears): counted in `gpu_ms` only.
+    Other,
+}
+
+/// A frame's GPU time in milliseconds: all passes, and the cull and render
+/// passes among them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct GpuTimes {
+    pub total: f64,
+    pub cull: f64,
+    pub render: f64,
+}
+
+/// Timestamps at the start and end of each pass of a frame; their
 /// differences summed are the frame's GPU busy time.
 pub(crate) struct PassTimer {
     set: wgpu::QuerySet,
     readback: Readback,
     period_ns: f64,
-    passes: u32,
+    /// What each timed pass of the frame does, in order.
+    kinds: Vec<PassKind>,
 }
 
 impl PassTimer {
@@ -106,36 +128,59 @@ impl PassTimer {
             }),
             readback: new_readback(ctx, u64::from(2 * TIMED_PASSES) * QUERY_BYTES, "timestamps"),
             period_ns: f64::from(ctx.queue.get_timestamp_period()),
-            passes: 0,
+            kinds: Vec::new(),
         })
     }
 
-    /// Timestamp writes for the next pass, while any are left.
-    pub fn next_pass(&mut self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        (self.passes < TIMED_PASSES).then(|| {
-            let k = self.passes;
-            self.passes += 1;
-            wgpu::RenderPassTimestampWrites {
-                query_set: &self.set,
-                beginning_of_pass_write_index: Some(2 * k),
-                end_of_pass_write_index: Some(2 * k + 1),
-            }
+    /// The first of the next pass's two timestamp slots, while any are left.
+    fn next_slots(&mut self, kind: PassKind) -> Option<u32> {
+        let k = self.kinds.len() as u32;
+        (k < TIMED_PASSES).then(|| {
+            self.kinds.push(kind);
+            2 * k
         })
     }
 
-    /// Reads the frame's timestamps back (blocking) and returns the GPU busy
-    /// time in milliseconds; resets for the next frame.
-    pub fn finish(&mut self, ctx: &GpuContext) -> Result<f64, String> {
-        let passes = std::mem::take(&mut self.passes);
-        if passes == 0 {
-            return Ok(0.0);
+    /// Timestamp writes for the next render pass, doing `kind`.
+    pub fn render_pass(&mut self, kind: PassKind) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        self.next_slots(kind).map(|k| wgpu::RenderPassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: Some(k),
+            end_of_pass_write_index: Some(k + 1),
+        })
+    }
+
+    /// Timestamp writes for the next compute pass (culling work).
+    pub fn compute_pass(&mut self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.next_slots(PassKind::Cull).map(|k| wgpu::ComputePassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: Some(k),
+            end_of_pass_write_index: Some(k + 1),
+        })
+    }
+
+    /// Reads the frame's timestamps back (blocking) and returns its GPU busy
+    /// times; resets for the next frame.
+    pub fn finish(&mut self, ctx: &GpuContext) -> Result<GpuTimes, String> {
+        let kinds = std::mem::take(&mut self.kinds);
+        if kinds.is_empty() {
+            return Ok(GpuTimes::default());
         }
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let bytes = encode_resolve(&mut encoder, &self.set, 0, 2 * passes, &self.readback);
+        let bytes = encode_resolve(&mut encoder, &self.set, 0, 2 * kinds.len() as u32, &self.readback);
         ctx.queue.submit([encoder.finish()]);
         Mapping::start(&self.readback.staging, bytes).wait(ctx)?;
         let stamps = read_values(&self.readback, bytes)?;
-        let ticks: u64 = stamps.chunks_exact(2).map(|p| p[1].saturating_sub(p[0])).sum();
-        Ok(ticks as f64 * self.period_ns * 1e-6)
+        let mut times = GpuTimes::default();
+        for (pair, kind) in stamps.chunks_exact(2).zip(kinds) {
+            let ms = pair[1].saturating_sub(pair[0]) as f64 * self.period_ns * 1e-6;
+            times.total += ms;
+            match kind {
+                PassKind::Cull => times.cull += ms,
+                PassKind::Render => times.render += ms,
+                PassKind::Other => {}
+            }
+        }
+        Ok(times)
     }
 }

@@ -4,12 +4,13 @@
 //! and one bind group per material.
 
 use crate::context::{GpuContext, GpuError};
+use crate::culling::CullingScene;
 use crate::pipelines::Pipelines;
 use occlude_core::query_box::BOX_TRIANGLES;
 use occlude_core::rng::mix64;
 use occlude_core::Scene;
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use wgpu::util::DeviceExt;
 
 /// Colour target format of the backend's off-screen render target (what a
@@ -37,6 +38,9 @@ pub struct GpuScene {
     /// Per instance, its material's bind group in `material_groups`.
     pub(crate) instance_material: Vec<u32>,
     pub(crate) material_groups: Vec<wgpu::BindGroup>,
+    /// GPU-resident culling's pipelines and per-instance data, built when a
+    /// backend first uses it.
+    culling: OnceLock<Arc<CullingScene>>,
 }
 
 /// Bytes between two materials' colours in the material buffer (the
@@ -103,7 +107,15 @@ impl GpuScene {
             meshes,
             instance_material,
             material_groups,
+            culling: OnceLock::new(),
         })
+    }
+
+    /// GPU-resident culling's shared part for `scene` (the scene this was
+    /// uploaded from), built on first use; the device must have what culling
+    /// needs ([`GpuContext::gpu_culling_support`]).
+    pub(crate) fn culling(&self, scene: &Scene) -> Arc<CullingScene> {
+        Arc::clone(self.culling.get_or_init(|| Arc::new(CullingScene::new(self, scene))))
     }
 
     /// The device this scene lives on.
@@ -126,11 +138,8 @@ fn material_groups(ctx: &GpuContext, pipelines: &Pipelines, scene: &Scene) -> (V
     let count = ids.len().max(1) as u64;
     let mut bytes = vec![0u8; (count * MATERIAL_STRIDE) as usize];
     for (&id, &slot) in &ids {
-        let h = mix64(u64::from(id));
-        let channel = |shift: u32| 0.3 + 0.7 * ((h >> shift) & 0xff) as f32 / 255.0;
-        let color = [channel(0), channel(8), channel(16), 1.0f32];
         let at = slot as usize * MATERIAL_STRIDE as usize;
-        bytes[at..at + 16].copy_from_slice(bytemuck::cast_slice(&color));
+        bytes[at..at + 16].copy_from_slice(bytemuck::cast_slice(&material_color(id)));
     }
     let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("materials"),
@@ -155,6 +164,13 @@ fn material_groups(ctx: &GpuContext, pipelines: &Pipelines, scene: &Scene) -> (V
         .collect();
     let per_instance = scene.instances.iter().map(|i| ids[&i.material]).collect();
     (per_instance, groups)
+}
+
+/// The colour of material `id`, derived from the id.
+pub(crate) fn material_color(id: u32) -> [f32; 4] {
+    let h = mix64(u64::from(id));
+    let channel = |shift: u32| 0.3 + 0.7 * ((h >> shift) & 0xff) as f32 / 255.0;
+    [channel(0), channel(8), channel(16), 1.0]
 }
 
 fn too_large(ctx: &GpuContext, reason: &str) -> GpuError {

@@ -1,0 +1,559 @@
+//! GPU-resident culling on wgpu ([`occlude_core::GpuCulling`]): the
+//! visibility buffer of the IOC poster and the "raster" technique of nvpro's
+//! `gl_occlusion_culling` sample. Boxes are tested in one batch per command:
+//! a compute pass flags the boxes near the eye, drops those outside the view
+//! frustum and appends the rest to a raster list, and one indirect draw of
+//! that list rasterizes them as query boxes (the same proxies, bias and
+//! depth state as [`Backend::issue_query`](occlude_core::Backend::issue_query)),
+//! each fragment that passes the depth test setting its box's flag. Compute
+//! passes turn flags into id lists, and a list into indirect draw arguments
+//! drawn by one multi-draw (`multi_draw_indexed_indirect_count` where the
+//! device has it). The shaders are in `cull.wgsl`.
+//!
+//! [`CullingScene`] is the part shared by every backend on a scene (pipelines,
+//! per-instance draw data); [`Culling`] one backend's resources, which live as
+//! long as the backend. The backend records [`CullOp`]s among its draws and
+//! queries and encodes each as a compute pass ([`Culling::encode_compute`])
+//! and, for box tests and list draws, a draw in the render pass that follows
+//! ([`Culling::encode_draw`]).
+
+use crate::backend::frame_group;
+use crate::context::GpuContext;
+use crate::pipelines::CullingPipelines;
+use crate::queries::PassTimer;
+use crate::readback::{take_bytes, Mapping};
+use crate::scene_buffers::{material_color, GpuScene};
+use occlude_core::query_box::QUERY_BOX_PAD;
+use occlude_core::{Aabb, BoxSet, Camera, ExpandInto, Flags, IdList, ItemRange, RangeTable, Scene};
+use std::collections::HashMap;
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// Threads per workgroup of every culling compute shader.
+const GROUP_SIZE: u32 = 64;
+
+/// Workgroups per dispatch dimension that every device accepts.
+const MAX_GROUPS_PER_DIMENSION: u32 = 65535;
+
+/// Bytes of a list's header (count, capacity) before its ids.
+const LIST_HEADER: u64 = 8;
+
+/// Bytes of one box (min, slot, max, padding), as `Box` in `cull.wgsl`.
+const BOX_BYTES: u64 = 32;
+
+/// Bytes of one `DrawIndexedIndirectArgs`.
+const DRAW_ARGS_BYTES: u64 = 20;
+
+/// Bytes of the statistics' header (list draws' draws, their triangles low
+/// and high, boxes rasterized) before the drawn-instance bits.
+const STATS_HEADER: u64 = 16;
+
+/// A GPU-resident culling command, recorded among the backend's draws.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum CullOp {
+    TestBoxes { boxes: BoxSet, ids: IdList, flags: Flags },
+    Expand { src: IdList, filter: Flags, table: RangeTable, into: ExpandInto },
+    Compact { flags: Flags, unless: Option<Flags>, dst: IdList },
+    ClearFlags(Flags),
+    DrawList(IdList),
+}
+
+impl CullOp {
+    /// Whether the command draws in the render pass after its compute pass.
+    pub fn draws(&self) -> bool {
+        matches!(self, Self::TestBoxes { .. } | Self::DrawList(_))
+    }
+
+    /// The command's resources, naming its compute bind group.
+    fn key(&self) -> [u32; 5] {
+        match *self {
+            Self::TestBoxes { boxes, ids, flags } => [0, boxes.0, ids.0, flags.0, 0],
+            Self::Expand { src, filter, table, into: ExpandInto::List(dst) } => [1, src.0, filter.0, table.0, dst.0],
+            Self::Expand { src, filter, table, into: ExpandInto::Flags(f) } => [2, src.0, filter.0, table.0, f.0],
+            Self::Compact { flags, unless, dst } => [3, flags.0, unless.map_or(u32::MAX, |u| u.0), dst.0, 0],
+            Self::ClearFlags(flags) => [4, flags.0, 0, 0, 0],
+            Self::DrawList(list) => [5, list.0, 0, 0, 0],
+        }
+    }
+}
+
+/// Culling's part of a [`GpuScene`]: its pipelines, and per instance the
+/// mesh range and triangle count that list draws need and its colour.
+pub(crate) struct CullingScene {
+    render: CullingPipelines,
+    test_boxes: wgpu::ComputePipeline,
+    expand_list: wgpu::ComputePipeline,
+    expand_flags: wgpu::ComputePipeline,
+    compact: wgpu::ComputePipeline,
+    compact_unless: wgpu::ComputePipeline,
+    draw_args: wgpu::ComputePipeline,
+    /// `InstanceDraw` of `cull.wgsl` per instance.
+    instances: wgpu::Buffer,
+    /// Group 1 of list draws: every instance's colour.
+    colors: wgpu::BindGroup,
+}
+
+impl CullingScene {
+    /// Builds the pipelines and uploads the per-instance data of `scene`.
+    pub fn new(gpu: &GpuScene, scene: &Scene) -> Self {
+        let device = &gpu.ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("occlude culling shaders"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("cull.wgsl").into()),
+        });
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let draws: Vec<[u32; 4]> = scene
+            .instances
+            .iter()
+            .map(|i| {
+                let m = gpu.meshes[i.mesh as usize];
+                let triangles = scene.meshes[i.mesh as usize].triangle_count() as u32;
+                [m.index_count, m.first_index, m.base_vertex as u32, triangles]
+            })
+            .collect();
+        let colors: Vec<[f32; 4]> = scene.instances.iter().map(|i| material_color(i.material)).collect();
+        let instances =
+            storage_init(&gpu.ctx, "instance draws", bytemuck::cast_slice(&draws), wgpu::BufferUsages::empty());
+        let colors =
+            storage_init(&gpu.ctx, "instance colours", bytemuck::cast_slice(&colors), wgpu::BufferUsages::empty());
+        let render = gpu.pipelines.culling(device, &module);
+        let colors = bind_group(&gpu.ctx, "instance colours", &render.colors_layout, &[(1, &colors)]);
+        Self {
+            test_boxes: compute("cs_test_boxes"),
+            expand_list: compute("cs_expand_list"),
+            expand_flags: compute("cs_expand_flags"),
+            compact: compute("cs_compact"),
+            compact_unless: compute("cs_compact_unless"),
+            draw_args: compute("cs_draw_args"),
+            render,
+            instances,
+            colors,
+        }
+    }
+
+    /// The box-test render pipeline (vertex stage of the query boxes).
+    pub fn test_pipeline(&self) -> &wgpu::RenderPipeline {
+        &self.render.test
+    }
+
+    /// The list-draw render pipeline (vertex stage of the draws).
+    pub fn list_pipeline(&self) -> &wgpu::RenderPipeline {
+        &self.render.list
+    }
+}
+
+/// A flag buffer and the bind group through which box-test fragments set it.
+struct FlagBuffer {
+    buffer: wgpu::Buffer,
+    fragment_group: wgpu::BindGroup,
+}
+
+/// An id list: count, capacity and ids in one buffer (the count doubles as
+/// the draw count of list draws).
+struct ListBuffer {
+    buffer: wgpu::Buffer,
+    capacity: u32,
+}
+
+/// A range table: ranges as `(first, count)` pairs, and the items.
+struct TableBuffers {
+    ranges: wgpu::Buffer,
+    items: wgpu::Buffer,
+}
+
+/// What the box tests and list draws of a frame did, counted on the GPU.
+pub(crate) struct CullStats {
+    /// Draws inside list draws.
+    pub draws: u64,
+    /// Triangles of those draws.
+    pub triangles: u64,
+    /// Boxes the box tests rasterized (not those flagged near the eye or
+    /// dropped outside the frustum).
+    pub boxes: u64,
+    /// One bit per instance drawn (bit `i % 32` of word `i / 32`).
+    pub drawn: Vec<u32>,
+}
+
+/// One backend's culling resources, created outside frames and kept for the
+/// backend's life.
+pub(crate) struct Culling {
+    gpu: Arc<GpuScene>,
+    scene: Arc<CullingScene>,
+    /// The backend's camera uniform, which box tests draw with.
+    frame_camera: wgpu::Buffer,
+    /// `Cull` of `cull.wgsl`: frustum planes and near region of the frame.
+    camera: wgpu::Buffer,
+    boxes: Vec<wgpu::Buffer>,
+    flags: Vec<FlagBuffer>,
+    lists: Vec<ListBuffer>,
+    tables: Vec<TableBuffers>,
+    /// Scratch shared by the commands, which run one after the other: the
+    /// raster list of box tests, its draw arguments, and list draws' draw
+    /// arguments, for the largest list capacity.
+    raster: wgpu::Buffer,
+    box_draw: wgpu::Buffer,
+    draw_args: wgpu::Buffer,
+    scratch_capacity: u32,
+    /// The frame group drawing `raster` as query boxes, made when needed.
+    test_frame: Option<wgpu::BindGroup>,
+    /// Compute bind groups by [`CullOp::key`].
+    groups: HashMap<[u32; 5], wgpu::BindGroup>,
+    stats: wgpu::Buffer,
+    stats_staging: wgpu::Buffer,
+    count_staging: wgpu::Buffer,
+    /// Whether list draws take their count from the list (else the fallback:
+    /// a multi-draw over the list's whole capacity).
+    multi_draw_count: bool,
+    /// Whether a box test or list draw was recorded since the statistics
+    /// were last read.
+    stats_pending: bool,
+}
+
+impl Culling {
+    /// Resources for a backend on `gpu`, drawing box tests with the camera
+    /// uniform `frame_camera`.
+    pub fn new(gpu: &Arc<GpuScene>, scene: &Scene, frame_camera: &wgpu::Buffer) -> Self {
+        let ctx = &gpu.ctx;
+        let stats_bytes = STATS_HEADER + 4 * (scene.instances.len() as u64).div_ceil(32).max(1);
+        let buffer = |label, size, usage| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let staging = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
+        let box_draw = [36u32, 0, 0, 0, 0];
+        let indirect = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST;
+        Self {
+            scene: gpu.culling(scene),
+            gpu: Arc::clone(gpu),
+            frame_camera: frame_camera.clone(),
+            camera: buffer("culling camera", 112, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
+            boxes: Vec::new(),
+            flags: Vec::new(),
+            lists: Vec::new(),
+            tables: Vec::new(),
+            raster: buffer("raster boxes", BOX_BYTES, wgpu::BufferUsages::STORAGE),
+            box_draw: storage_init(ctx, "box-test draw", bytemuck::cast_slice(&box_draw), indirect),
+            draw_args: buffer(
+                "list draws",
+                DRAW_ARGS_BYTES,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            ),
+            scratch_capacity: 1,
+            test_frame: None,
+            groups: HashMap::new(),
+            stats: buffer(
+                "list-draw statistics",
+                stats_bytes,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+            stats_staging: buffer("list-draw statistics read-back", stats_bytes, staging),
+            count_staging: buffer("list count read-back", LIST_HEADER, staging),
+            multi_draw_count: ctx.multi_draw_indirect_count(),
+            stats_pending: false,
+        }
+    }
+
+    fn ctx(&self) -> &GpuContext {
+        &self.gpu.ctx
+    }
+
+    /// Sets the frame's camera for box tests (frustum planes, near region).
+    pub fn set_camera(&self, camera: &Camera) {
+        let mut uniform = [0f32; 28];
+        for (k, plane) in camera.frustum().planes.iter().enumerate() {
+            uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
+        }
+        let r = camera.near_region_radius() * 1.01;
+        uniform[24..28].copy_from_slice(&camera.position.extend(r * r).to_array());
+        self.ctx().queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
+    }
+
+    /// Uploads `boxes` padded as query boxes, each with its slot; empty boxes
+    /// stay empty (min > max), which tests skip.
+    pub fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
+        let data: Vec<[u32; 8]> = boxes
+            .iter()
+            .zip(0u32..)
+            .map(|(b, slot)| {
+                let (lo, hi) = if b.is_empty() {
+                    (glam::Vec3::ONE, glam::Vec3::ZERO)
+                } else {
+                    let p = b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element());
+                    (p.min, p.max)
+                };
+                let [lx, ly, lz] = lo.to_array().map(f32::to_bits);
+                let [hx, hy, hz] = hi.to_array().map(f32::to_bits);
+                [lx, ly, lz, slot, hx, hy, hz, 0]
+            })
+            .collect();
+        self.boxes.push(storage_init(self.ctx(), "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty()));
+        BoxSet(self.boxes.len() as u32 - 1)
+    }
+
+    /// A flag buffer of `len` slots, all 0.
+    pub fn create_flags(&mut self, len: u32) -> Flags {
+        let buffer = self.ctx().device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("flags"),
+            size: 4 * u64::from(len.max(1)),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let layout = &self.scene.render.flags_layout;
+        let fragment_group = bind_group(self.ctx(), "box-test flags", layout, &[(0, &buffer)]);
+        self.flags.push(FlagBuffer { buffer, fragment_group });
+        Flags(self.flags.len() as u32 - 1)
+    }
+
+    /// A list of up to `capacity` ids holding `ids`; grows the scratch
+    /// buffers to the capacity.
+    pub fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
+        assert!(ids.len() <= capacity as usize, "a list of capacity {capacity} cannot hold {} ids", ids.len());
+        let mut words = vec![0u32; 2 + capacity.max(1) as usize];
+        words[0] = ids.len() as u32;
+        words[1] = capacity;
+        words[2..2 + ids.len()].copy_from_slice(ids);
+        let usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let buffer = storage_init(self.ctx(), "id list", bytemuck::cast_slice(&words), usage);
+        self.lists.push(ListBuffer { buffer, capacity });
+        if capacity > self.scratch_capacity {
+            self.grow_scratch(capacity);
+        }
+        IdList(self.lists.len() as u32 - 1)
+    }
+
+    /// A table giving id `k` the items `items[ranges[k]]`.
+    pub fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
+        let pairs: Vec<[u32; 2]> = ranges.iter().map(|r| [r.first, r.count]).collect();
+        let empty = wgpu::BufferUsages::empty();
+        let ranges = storage_init(self.ctx(), "table ranges", bytemuck::cast_slice(&pairs), empty);
+        let items = storage_init(self.ctx(), "table items", bytemuck::cast_slice(items), empty);
+        self.tables.push(TableBuffers { ranges, items });
+        RangeTable(self.tables.len() as u32 - 1)
+    }
+
+    /// Replaces the scratch buffers by ones for lists of `capacity` ids; the
+    /// bind groups naming the old ones go.
+    fn grow_scratch(&mut self, capacity: u32) {
+        let device = &self.gpu.ctx.device;
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let cap = u64::from(capacity);
+        self.raster = buffer("raster boxes", cap * BOX_BYTES, wgpu::BufferUsages::STORAGE);
+        self.draw_args =
+            buffer("list draws", cap * DRAW_ARGS_BYTES, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT);
+        self.scratch_capacity = capacity;
+        self.test_frame = None;
+        self.groups.clear();
+    }
+
+    /// Notes a box test or list draw: the statistics are to be read after
+    /// the frame.
+    pub fn note_counted(&mut self) {
+        self.stats_pending = true;
+    }
+
+    /// Encodes `op`'s compute work: the buffer clears it starts with, then
+    /// its dispatch in a compute pass of its own (timed when `timer` is
+    /// given). Clearing flags is a buffer clear alone.
+    pub fn encode_compute(&mut self, encoder: &mut wgpu::CommandEncoder, op: &CullOp, timer: Option<&mut PassTimer>) {
+        let scene = Arc::clone(&self.scene);
+        let (pipeline, threads) = match *op {
+            CullOp::ClearFlags(flags) => {
+                encoder.clear_buffer(&self.flags[flags.0 as usize].buffer, 0, None);
+                return;
+            }
+            CullOp::TestBoxes { ids, .. } => {
+                // Zero the box draw's instance count (the appended boxes).
+                encoder.clear_buffer(&self.box_draw, 4, Some(4));
+                (&scene.test_boxes, self.lists[ids.0 as usize].capacity)
+            }
+            CullOp::Expand { src, into, .. } => {
+                let pipeline = match into {
+                    ExpandInto::List(dst) => {
+                        encoder.clear_buffer(&self.lists[dst.0 as usize].buffer, 0, Some(4));
+                        &scene.expand_list
+                    }
+                    ExpandInto::Flags(_) => &scene.expand_flags,
+                };
+                (pipeline, self.lists[src.0 as usize].capacity)
+            }
+            CullOp::Compact { flags, unless, dst } => {
+                encoder.clear_buffer(&self.lists[dst.0 as usize].buffer, 0, Some(4));
+                let pipeline = if unless.is_some() { &scene.compact_unless } else { &scene.compact };
+                (pipeline, (self.flags[flags.0 as usize].buffer.size() / 4) as u32)
+            }
+            CullOp::DrawList(list) => (&scene.draw_args, self.lists[list.0 as usize].capacity),
+        };
+        let group = self.compute_group(op, pipeline);
+        if matches!(op, CullOp::TestBoxes { .. }) && self.test_frame.is_none() {
+            self.test_frame = Some(frame_group(&self.gpu, &self.frame_camera, &self.raster));
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("culling"),
+            timestamp_writes: timer.and_then(PassTimer::compute_pass),
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        let (x, y) = workgroups(threads);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Encodes the draw of a box test or a list draw into `pass`, whose
+    /// pipeline ([`CullingScene::test_pipeline`] or
+    /// [`CullingScene::list_pipeline`]), index buffer, vertex buffer and (for
+    /// list draws) frame group are bound; after a box test, group 0 holds
+    /// the raster list's frame group.
+    pub fn encode_draw(&self, pass: &mut wgpu::RenderPass<'_>, op: &CullOp) {
+        match *op {
+            CullOp::TestBoxes { flags, .. } => {
+                let Some(test_frame) = &self.test_frame else { return };
+                pass.set_bind_group(0, test_frame, &[]);
+                pass.set_bind_group(1, &self.flags[flags.0 as usize].fragment_group, &[]);
+                pass.draw_indexed_indirect(&self.box_draw, 0);
+            }
+            CullOp::DrawList(list) => {
+                let list = &self.lists[list.0 as usize];
+                pass.set_bind_group(1, &self.scene.colors, &[]);
+                if self.multi_draw_count {
+                    pass.multi_draw_indexed_indirect_count(&self.draw_args, 0, &list.buffer, 0, list.capacity);
+                } else {
+                    pass.multi_draw_indexed_indirect(&self.draw_args, 0, list.capacity);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The shared part: the box-test and list-draw pipelines.
+    pub fn scene(&self) -> &CullingScene {
+        &self.scene
+    }
+
+    /// The compute bind group of `op` for `pipeline`, made on first use.
+    fn compute_group(&mut self, op: &CullOp, pipeline: &wgpu::ComputePipeline) -> wgpu::BindGroup {
+        if let Some(group) = self.groups.get(&op.key()) {
+            return group.clone();
+        }
+        let list = |l: IdList| &self.lists[l.0 as usize].buffer;
+        let flags = |f: Flags| &self.flags[f.0 as usize].buffer;
+        let table = |t: RangeTable| &self.tables[t.0 as usize];
+        let entries: Vec<(u32, &wgpu::Buffer)> = match *op {
+            CullOp::TestBoxes { boxes, ids, flags: f } => vec![
+                (0, &self.camera),
+                (1, &self.boxes[boxes.0 as usize]),
+                (2, list(ids)),
+                (3, flags(f)),
+                (4, &self.raster),
+                (5, &self.box_draw),
+                (13, &self.stats),
+            ],
+            CullOp::Expand { src, filter, table: t, into } => {
+                let out = match into {
+                    ExpandInto::List(dst) => (8, list(dst)),
+                    ExpandInto::Flags(f) => (3, flags(f)),
+                };
+                vec![(2, list(src)), (6, flags(filter)), out, (9, &table(t).ranges), (10, &table(t).items)]
+            }
+            CullOp::Compact { flags: f, unless, dst } => {
+                let mut entries = vec![(6, flags(f)), (8, list(dst))];
+                entries.extend(unless.map(|u| (7, flags(u))));
+                entries
+            }
+            CullOp::DrawList(l) => {
+                vec![(2, list(l)), (11, &self.scene.instances), (12, &self.draw_args), (13, &self.stats)]
+            }
+            CullOp::ClearFlags(_) => Vec::new(),
+        };
+        let group = bind_group(self.ctx(), "culling", &pipeline.get_bind_group_layout(0), &entries);
+        self.groups.insert(op.key(), group.clone());
+        group
+    }
+
+    /// The length of `list` after all submitted work, read back (blocking).
+    pub fn read_count(&self, list: IdList) -> Result<u32, String> {
+        let list = &self.lists[list.0 as usize];
+        let ctx = self.ctx();
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&list.buffer, 0, &self.count_staging, 0, LIST_HEADER);
+        ctx.queue.submit([encoder.finish()]);
+        Mapping::start(&self.count_staging, LIST_HEADER).wait(ctx)?;
+        let bytes = take_bytes(&self.count_staging, LIST_HEADER)?;
+        let count = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+        Ok(count.min(list.capacity))
+    }
+
+    /// What the box tests and list draws since the last call did (`None`
+    /// when there were none), read back after all submitted work (blocking), and the
+    /// counters zeroed for the next frame.
+    pub fn take_stats(&mut self) -> Result<Option<CullStats>, String> {
+        if !std::mem::take(&mut self.stats_pending) {
+            return Ok(None);
+        }
+        let ctx = &self.gpu.ctx;
+        let size = self.stats.size();
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.stats, 0, &self.stats_staging, 0, size);
+        encoder.clear_buffer(&self.stats, 0, None);
+        ctx.queue.submit([encoder.finish()]);
+        Mapping::start(&self.stats_staging, size).wait(ctx)?;
+        let bytes = take_bytes(&self.stats_staging, size)?;
+        let words: Vec<u32> = bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+        Ok(Some(CullStats {
+            draws: u64::from(words[0]),
+            triangles: u64::from(words[1]) | u64::from(words[2]) << 32,
+            boxes: u64::from(words[3]),
+            drawn: words[4..].to_vec(),
+        }))
+    }
+}
+
+/// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.
+fn workgroups(threads: u32) -> (u32, u32) {
+    let groups = threads.div_ceil(GROUP_SIZE).max(1);
+    let x = groups.min(MAX_GROUPS_PER_DIMENSION);
+    (x, groups.div_ceil(x))
+}
+
+/// A storage buffer holding `contents`, with `usage` besides; zeros follow up
+/// to 32 bytes, so that even an empty array binds one element of any type
+/// here.
+fn storage_init(ctx: &GpuContext, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    let mut bytes = contents.to_vec();
+    bytes.resize(contents.len().max(BOX_BYTES as usize), 0);
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &bytes,
+        usage: wgpu::BufferUsages::STORAGE | usage,
+    })
+}
+
+/// A bind group of whole buffers at the given bindings.
+fn bind_group(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
+        .collect();
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+}
+
+#[cfg(test)]
+mod tests;
