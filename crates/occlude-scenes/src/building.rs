@@ -1,8 +1,8 @@
 //! A generated building to be written as a model file ([`crate::export`])
 //! and imported: the imported model with real occlusion that the import tests
-//! and benchmarks walk through. It is not one of the procedural
-//! [`SCENE_NAMES`](crate::SCENE_NAMES) because its point is to exercise the
-//! import path (glTF nodes, instancing, the automatic walk).
+//! and benchmarks walk through, exercising the import path (glTF nodes,
+//! instancing, the automatic walk). The procedural scene `rooms` is built
+//! from it, with a walkthrough through the doors of its ground floor.
 //!
 //! Every floor is a square grid of rooms. Walls between rooms have a door
 //! (1.2 m x 2.1 m) at a random place; outer walls are closed. Each room has
@@ -37,6 +37,11 @@ const METAL: u32 = 4;
 const LEAVES: u32 = 5;
 const BOOKS: u32 = 6;
 const MATERIALS: u32 = 7;
+
+/// Whether instances of `material` are furniture (not walls or slabs).
+pub(crate) fn is_furniture(material: u32) -> bool {
+    !matches!(material, WALLS | FLOORS)
+}
 
 /// The shared meshes of a building.
 struct Meshes {
@@ -144,6 +149,46 @@ fn plant() -> Mesh {
 /// it makes one. A room has about 4 thousand triangles on average: 3 floors
 /// of 6 x 6 rooms have 449,792 in 1,580 instances of 8 meshes.
 pub fn generate(floors: u32, rooms: u32, seed: u64) -> Scene {
+    with_doors(floors, rooms, seed).0
+}
+
+/// Where the doors of the ground floor are, for a walkthrough through them.
+pub(crate) struct Doors {
+    rooms: u32,
+    /// Per wall along x (`line * rooms + k`: the wall at `z = line * ROOM`
+    /// beside room `k`), the `x` of its door's centre; NaN without a door.
+    along_x: Vec<f32>,
+    /// The same for walls along z (at `x = line * ROOM`): the `z` of the
+    /// door's centre.
+    along_z: Vec<f32>,
+}
+
+impl Doors {
+    /// The centre of the door between rooms `(i, j)` and `(i + 1, j)` (rooms
+    /// counted along x and z), at floor height.
+    pub(crate) fn towards_x(&self, i: u32, j: u32) -> Vec3 {
+        let line = i + 1;
+        Vec3::new(line as f32 * ROOM, 0.0, self.along_z[(line * self.rooms + j) as usize])
+    }
+
+    /// The centre of the door between rooms `(i, j)` and `(i, j + 1)`.
+    pub(crate) fn towards_z(&self, i: u32, j: u32) -> Vec3 {
+        let line = j + 1;
+        Vec3::new(self.along_x[(line * self.rooms + i) as usize], 0.0, line as f32 * ROOM)
+    }
+}
+
+/// The room side, for walkthroughs: room `(i, j)` spans `[i, i + 1] * ROOM`
+/// along x and `[j, j + 1] * ROOM` along z.
+pub(crate) const ROOM_SIDE: f32 = ROOM;
+
+/// The lowest height above a floor at which a door's lintel starts.
+pub(crate) const DOOR_HEIGHT: f32 = DOOR.1;
+
+/// [`generate`], and where the ground floor's doors are.
+pub(crate) fn with_doors(floors: u32, rooms: u32, seed: u64) -> (Scene, Doors) {
+    let walls = ((rooms + 1) * rooms) as usize;
+    let mut doors = Doors { rooms, along_x: vec![f32::NAN; walls], along_z: vec![f32::NAN; walls] };
     let mut scene = empty_scene("building");
     scene.material_count = MATERIALS;
     let mut rng = Rng::new(seed, 0x0062_7569_6c64);
@@ -199,6 +244,10 @@ pub fn generate(floors: u32, rooms: u32, seed: u64) -> Scene {
                     let (a, b) = (start - reach, end + reach);
                     let parts = if inner {
                         let door = start + rng.range(1.6, ROOM - 1.6);
+                        if floor == 0 {
+                            let list = if along_x { &mut doors.along_x } else { &mut doors.along_z };
+                            list[(line * rooms + k) as usize] = door;
+                        }
                         let (l, r) = (door - DOOR.0 / 2.0, door + DOOR.0 / 2.0);
                         vec![piece(a, l, y), piece(r, b, y), piece(l, r, y + DOOR.1)]
                     } else {
@@ -217,7 +266,7 @@ pub fn generate(floors: u32, rooms: u32, seed: u64) -> Scene {
             }
         }
     }
-    scene
+    (scene, doors)
 }
 
 /// Places random furniture in the room whose free floor starts at `corner`

@@ -6,6 +6,9 @@
 //! the walkthrough walks the streets, then rises above the roofs where almost
 //! nothing is occluded (the CHC paper's frames 1200-1800), then comes down
 //! into another street.
+//!
+//! `downtown` is the same city over more blocks, the IOC poster's wide-scale
+//! downtown scene (section 3, Figure 3).
 
 use crate::rng::Rng;
 use crate::shapes::{block, cone, cuboid, cylinder, prism, MeshBuilder};
@@ -38,8 +41,15 @@ const FACADE_FIRST: u32 = 4;
 const FACADES: u32 = 8;
 
 /// Blocks per side and number of distinct building meshes of a size.
-fn layout(size: Size) -> (u32, u32) {
+pub(crate) fn layout(size: Size) -> (u32, u32) {
     size.pick((8, 16), (16, 32), (21, 48))
+}
+
+/// Blocks along each side and building meshes of `downtown`: the city at
+/// the IOC poster's downtown scale, 33 x 33 blocks at `paper` (about 32
+/// thousand objects; the poster's has 31,392 in 62k BVH nodes).
+pub(crate) fn downtown_layout(size: Size) -> (u32, u32) {
+    size.pick((9, 16), (20, 32), (33, 48))
 }
 
 /// A ledge or cornice: a thin slab slightly wider than a `side` x `side`
@@ -171,9 +181,19 @@ fn walkthrough(roofs: f32) -> CameraPath {
 
 /// Builds the city.
 pub(crate) fn generate(size: Size, seed: u64) -> Scene {
-    let (blocks, kinds) = layout(size);
+    build("city", layout(size), seed)
+}
+
+/// Builds `downtown`: the same streets and walkthrough over more blocks.
+pub(crate) fn downtown(size: Size, seed: u64) -> Scene {
+    build("downtown", downtown_layout(size), seed)
+}
+
+/// A city called `name` of `blocks` x `blocks` blocks built from `kinds`
+/// building meshes.
+fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
     let span = blocks as f32 * PITCH;
-    let mut scene = empty_scene("city");
+    let mut scene = empty_scene(name);
     let mut rng = Rng::new(seed, 0xC17E);
 
     let ground = scene.add_mesh(cuboid(Vec3::new(-100.0, -0.3, -100.0), Vec3::new(span + 100.0, 0.0, span + 100.0)));
@@ -236,8 +256,7 @@ pub(crate) fn generate(size: Size, seed: u64) -> Scene {
 /// Instance count and an estimate of triangles of a size (buildings at the
 /// mean of a sample of building meshes), without building the scene.
 #[cfg(test)]
-pub(crate) fn planned_counts(size: Size) -> (usize, usize) {
-    let (blocks, _) = layout(size);
+pub(crate) fn planned_counts((blocks, _): (u32, u32)) -> (usize, usize) {
     let blocks = (blocks * blocks) as usize;
     let mut rng = Rng::new(1, 2);
     let sample: Vec<Mesh> = (0..200).map(|_| building(&mut rng)).collect();

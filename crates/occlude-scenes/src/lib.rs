@@ -6,7 +6,8 @@
 //!
 //! The scenes stand in for those of the occlusion-culling papers (CHC 2004,
 //! CHC++ 2008, IOC): a long field of Utah teapots, a city of streets and
-//! buildings, a dense industrial plant, and a volume of scattered figures.
+//! buildings, a dense industrial plant, a volume of scattered figures, and
+//! the IOC poster's furnished rooms and wide downtown.
 //! Objects are instances of shared meshes (one draw call each), so even the
 //! `paper` sizes with millions of triangles stay small in memory.
 //!
@@ -23,6 +24,7 @@ mod figures;
 pub mod import;
 pub mod newell;
 mod plant;
+mod rooms;
 pub use occlude_core::rng;
 pub mod shapes;
 mod teapots;
@@ -86,13 +88,13 @@ impl FromStr for Size {
 }
 
 /// The scenes [`generate`] knows, by name.
-pub const SCENE_NAMES: [&str; 4] = ["teapots", "city", "plant", "figures"];
+pub const SCENE_NAMES: [&str; 6] = ["teapots", "city", "plant", "figures", "rooms", "downtown"];
 
 /// Why a scene could not be generated.
 #[derive(Debug, Error)]
 pub enum GenerateError {
     /// The name is not one of [`SCENE_NAMES`].
-    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures")]
+    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures, rooms, downtown")]
     UnknownScene(String),
     /// The size is not one of `small`, `medium`, `paper`.
     #[error("unknown scene size '{0}'; the sizes are: small, medium, paper")]
@@ -111,6 +113,8 @@ pub fn generate(name: &str, size: Size, seed: u64) -> Result<Scene, GenerateErro
         "city" => city::generate(size, seed),
         "plant" => plant::generate(size, seed),
         "figures" => figures::generate(size, seed),
+        "rooms" => rooms::generate(size, seed),
+        "downtown" => city::downtown(size, seed),
         _ => return Err(GenerateError::UnknownScene(name.to_string())),
     };
     scene.validate()?;

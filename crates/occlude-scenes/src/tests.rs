@@ -113,8 +113,8 @@ fn unknown_scene_names_the_valid_ones() {
 
 #[test]
 fn larger_sizes_plan_the_papers_counts() {
-    // Without building the scenes: the teapot field, the city (from a sample
-    // of its building meshes) and the figures.
+    // Without building the scenes: the teapot field, the city and downtown
+    // (from a sample of their building meshes) and the figures.
     let (teapots, triangles) = teapots::planned_counts(Size::Paper);
     assert_eq!(teapots, 5000);
     assert!((10_500_000..=12_500_000).contains(&triangles), "paper teapots: {triangles} triangles");
@@ -122,8 +122,14 @@ fn larger_sizes_plan_the_papers_counts() {
     assert!(teapots > 1000 && (1_000_000..=3_000_000).contains(&triangles), "{teapots} teapots, {triangles}");
     let (figures, triangles) = figures::planned_counts(Size::Paper);
     assert!(figures > 72_000 && triangles > 5_000_000, "paper figures: {figures}, {triangles} triangles");
-    let (instances, triangles) = city::planned_counts(Size::Paper);
+    let (instances, triangles) = city::planned_counts(city::layout(Size::Paper));
     assert!(instances > 5_000 && (700_000..=1_500_000).contains(&triangles), "paper city: {instances}, {triangles}");
+    // The IOC poster's downtown: 31,392 objects.
+    let (instances, _) = city::planned_counts(city::downtown_layout(Size::Paper));
+    assert!((29_000..=34_000).contains(&instances), "paper downtown: {instances} objects");
+    // The poster's rooms: 2,753 objects (cheap enough to build).
+    let rooms = generate("rooms", Size::Paper, 1).unwrap().instances.len();
+    assert!((2_500..=3_300).contains(&rooms), "paper rooms: {rooms} objects");
     let (figures, triangles) = figures::planned_counts(Size::Medium);
     assert!(figures > 10_000 && (1_000_000..=3_000_000).contains(&triangles), "{figures} figures, {triangles}");
 }

@@ -57,7 +57,7 @@ enum Command {
 /// share.
 #[derive(clap::Args)]
 struct SceneArgs {
-    /// Scene: teapots, city, plant or figures, or a model file (.gltf, .glb, .obj;
+    /// Scene: teapots, city, plant, figures, rooms or downtown, or a model file (.gltf, .glb, .obj;
     /// y-up, metres).
     #[arg(long, default_value = "city")]
     scene: String,
@@ -144,7 +144,7 @@ struct BenchArgs {
     plot_queries: Option<PathBuf>,
     /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
     /// model as in the paper; size, frames, resolution and seed from the
-    /// other options): chc, chcpp or om.
+    /// other options): chc, chcpp, om or ioc.
     #[arg(long)]
     paper: Option<String>,
     /// Worker threads for the rasterizer (default: all cores).

@@ -9,19 +9,26 @@
 //! - `om` (Staneker, Bartz, Straßer): city and plant, BVH, `gpu-2004`; single
 //!   queries (`sw`) against multiple queries without occupancy-map grouping
 //!   and `om`.
+//! - `ioc` (the IOC poster, section 3): rooms, downtown and figures, BVH with
+//!   one object per leaf (the poster's node counts), `modern`; Table 1 (the
+//!   occlusion test's and the occludees' GPU time of ROC and IOC, each beside
+//!   the poster's figure) and Figure 4 (frame time of VFC, ROC, IOC and the
+//!   ideal set; the poster gives that one as a chart, without figures, and
+//!   its NOCULL has no method here).
 
 use super::config::BenchConfig;
 use super::runner::run_scene;
 use super::summary::BenchReport;
 use anyhow::Result;
 use indicatif::ProgressBar;
+use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
 use occlude_soft::GpuModel;
 use std::fmt::Write;
 
 /// Papers whose experiments `--paper` can run.
-pub const PAPERS: [&str; 3] = ["chc", "chcpp", "om"];
+pub const PAPERS: [&str; 4] = ["chc", "chcpp", "om", "ioc"];
 
 /// The scenes of the CHC papers' tables, in the CHC paper's order.
 const CHC_SCENES: &[&str] = &["teapots", "city", "plant"];
@@ -102,6 +109,7 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
         "chc" => &CHC,
         "chcpp" => &CHCPP,
         "om" => &OM,
+        "ioc" => return run_ioc(base, progress),
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
     };
     run_experiment(experiment, base, progress)
@@ -170,7 +178,101 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
     Ok(PaperResult { text: format!("{comparison}\n{variants}"), reports })
 }
 
+/// The IOC poster's scenes, as its tables name them.
+const IOC_SCENES: [(&str, &str); 3] = [("rooms", "RM"), ("downtown", "DT"), ("figures", "GF")];
+
+/// The poster's Table 1 (GTX 1080 Ti, 1920x1080): per scene, ROC's and IOC's
+/// occlusion test and occludee rendering, ms.
+const IOC_TABLE_1: [[(f64, f64); 2]; 3] =
+    [[(0.41, 0.40), (0.61, 0.40)], [(3.47, 3.50), (0.78, 3.58)], [(7.96, 7.81), (1.05, 8.04)]];
+
+/// `--paper ioc` (module documentation).
+fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
+    let times = if base.backend == super::config::BackendKind::Soft { "simulated" } else { "measured" };
+    let mut table = format!(
+        "IOC poster (BVH, one object per leaf, modern; times {times}) — Table 1: GPU time per frame, ms\n\
+         scene          method  occlusion test  (poster)  occludee rendering  (poster)  test vs roc  (poster)\n"
+    );
+    let mut figure = String::from(
+        "IOC poster — Figure 4: frame time per frame, ms (the poster's chart gives no figures)\n\
+         scene          method  frame ms  speedup vs vfc  rendered triangles  missing px\n",
+    );
+    let mut reports = Vec::new();
+    for (&(scene_name, label), published) in IOC_SCENES.iter().zip(IOC_TABLE_1) {
+        let config = BenchConfig {
+            scene: scene_name.into(),
+            methods: ["vfc", "roc", "ioc", "opt"].map(String::from).to_vec(),
+            hierarchy: HierarchyKind::Bvh,
+            build: BuildOptions { leaf_size: 1, ..base.build },
+            gpu_model: GpuModel::modern(),
+            options: MethodOptions::default(),
+            ..base.clone()
+        };
+        config.validate()?;
+        let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
+        let report = run_labelled(&scene, &config, progress, "vfc, roc, ioc, opt")?;
+        let method = |name: &str| report.methods.iter().find(|m| m.name == name);
+        let roc_test = method("roc").map_or(0.0, |m| m.cull_ms_per_frame);
+        let shown = format!("{scene_name} ({label})");
+        for (name, (test, render)) in ["roc", "ioc"].into_iter().zip(published) {
+            let Some(m) = method(name) else { continue };
+            let ratio = if name == "roc" || roc_test == 0.0 {
+                format!("{:>11}  {:>8}", "", "")
+            } else {
+                format!("{:>11.2}  {:>8.2}", m.cull_ms_per_frame / roc_test, test / published[0].0)
+            };
+            let _ = writeln!(
+                table,
+                "{shown:<14} {name:<6} {:>15.3}  {test:>8.2}  {:>18.3}  {render:>8.2}  {ratio}",
+                m.cull_ms_per_frame, m.render_ms_per_frame,
+            );
+        }
+        for m in &report.methods {
+            let _ = writeln!(
+                figure,
+                "{shown:<14} {:<6} {:>9.3} {:>15.2} {:>19.0} {:>11}",
+                m.name, m.mean_frame_ms, m.speedup_vs_vfc, m.triangles_per_frame, m.missing_pixels,
+            );
+        }
+        reports.push(report);
+    }
+    Ok(PaperResult { text: format!("{table}\n{figure}"), reports })
+}
+
 fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {
     progress.set_message(format!("{} {}: {label}", config.scene, config.size));
     Ok(run_scene(scene, config, progress)?.report(config))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ioc_tables_set_every_scene_beside_the_posters_figures() {
+        let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
+        let result = run("ioc", &base, &ProgressBar::hidden()).unwrap();
+        assert_eq!(result.reports.len(), 3);
+        for (report, (scene, label)) in result.reports.iter().zip(IOC_SCENES) {
+            assert_eq!(report.scene, scene);
+            assert_eq!(report.hierarchy, "bvh");
+            // One object per leaf: a binary tree of 2n - 1 nodes.
+            let s = &report.scene_stats;
+            assert_eq!(s.nodes, 2 * s.instances - 1, "{scene}: {s:?}");
+            for m in &report.methods {
+                assert_eq!(m.missing_pixels, 0, "{scene}/{}", m.name);
+            }
+            for method in ["roc", "ioc"] {
+                let row = format!("{scene} ({label})");
+                let lines = result.text.lines().filter(|l| l.starts_with(&row) && l.contains(method)).count();
+                assert_eq!(lines, 2, "{scene}/{method}: a Table 1 row and a Figure 4 row\n{}", result.text);
+            }
+        }
+        // The poster's figures stand beside ours: DT's test times and ratio.
+        assert!(
+            result.text.contains("3.47") && result.text.contains("0.78") && result.text.contains("0.22"),
+            "{}",
+            result.text
+        );
+    }
 }
