@@ -7,14 +7,20 @@
 //!
 //! Each cost comes from a synthetic frame that isolates it (many draws of an
 //! off-screen triangle, many zero-coverage triangles, full-screen quads, query
-//! boxes), minus an empty frame's time, as the median of several repeats.
+//! boxes; for GPU-driven culling many tiny dispatches, one over a million
+//! flags, batched tests of tiny and of screen-covering boxes, a list draw of
+//! off-screen triangles, a read-back), minus an empty frame's time, as the
+//! median of several repeats. On an adapter without GPU-resident culling the
+//! GPU-driven costs stay those of `modern`, and the TOML says so.
 
 use crate::bench::config::BackendKind;
 use crate::bench::{runner, BenchConfig};
 use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use indicatif::ProgressBar;
-use occlude_core::{Aabb, Backend, Camera, CameraPath, FrameStats, Keyframe, Mesh, Scene};
+use occlude_core::{
+    Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, Scene,
+};
 use occlude_soft::GpuModel;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::sync::Arc;
@@ -60,6 +66,9 @@ pub struct Calibration {
     pub model: GpuModel,
     /// Per method, the check of the prediction (empty when skipped).
     pub predictions: Vec<Prediction>,
+    /// Why the GPU-driven costs were not measured (kept from `modern`), if
+    /// they were not.
+    pub culling_unmeasured: Option<String>,
 }
 
 impl Calibration {
@@ -71,6 +80,9 @@ impl Calibration {
              # cpu_node_us is not measured (CPU traversal cost): kept from the `modern` preset.\n",
             self.adapter
         );
+        if let Some(why) = &self.culling_unmeasured {
+            text += &format!("# GPU-driven culling costs not measured ({why}): kept from the `modern` preset.\n");
+        }
         for p in &self.predictions {
             text += &format!(
                 "# check {}: measured {:.3} ms, predicted {:.3} ms, ratio {:.2}\n",
@@ -103,6 +115,12 @@ const DRAWS: usize = 3000;
 /// Queries of the small-box frame and of the full-screen frame.
 const SMALL_QUERIES: usize = 1000;
 const SCREEN_QUERIES: usize = 50;
+/// Dispatches of the dispatch frame, flags of the compute-item frame, boxes
+/// of the batched tiny-box frame and of the screen-box frame.
+const DISPATCHES: usize = 200;
+const COMPUTE_ITEMS: u32 = 1 << 20;
+const TEST_BOXES: u32 = 10_000;
+const SCREEN_TEST_BOXES: u32 = 50;
 /// Frames of the latency measurement.
 const LATENCY_FRAMES: usize = 30;
 /// Most availability checks of a query in flight per latency frame, to time
@@ -180,8 +198,9 @@ fn timed(
     (median(frames.iter().map(|f| f.cpu_ms).collect()), median(frames.iter().map(|f| f.gpu_ms).collect()))
 }
 
-/// Measures the cost model on `ctx`'s adapter.
-pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<GpuModel> {
+/// Measures the cost model on `ctx`'s adapter, and why its GPU-driven costs
+/// could not be measured, if they could not.
+pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(GpuModel, Option<String>)> {
     anyhow::ensure!(
         ctx.timestamps,
         "GPU adapter '{}' has no timestamp queries: its GPU costs cannot be measured",
@@ -234,7 +253,7 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<G
     let gpu_draw_call_us = draw_us(gpu_draws, gpu0);
     let gpu_query_box_us = per(gpu_queries, gpu0, SMALL_QUERIES as f64) * 1e3;
     let (latency_us, poll_us) = measure_latency(&mut backend, &camera, small_box, gpu_query_box_us);
-    Ok(GpuModel {
+    let mut model = GpuModel {
         name: "calibrated".into(),
         cpu_draw_call_us: draw_us(cpu_draws, cpu0),
         cpu_state_change_us: draw_us(cpu_states, cpu_draws),
@@ -256,7 +275,84 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<G
         ) * 1e6,
         query_latency_us: latency_us,
         ..GpuModel::modern()
-    })
+    };
+    let boxes = Boxes { tiny: small_box, screen: screen_box, pixels };
+    let unmeasured = measure_culling(&mut backend, &camera, repeats, boxes, &mut model).err().map(|e| e.0);
+    Ok((model, unmeasured))
+}
+
+/// The boxes of the culling frames: one of a few pixels, one covering the
+/// screen, both in front of nothing; and the screen's pixel count.
+struct Boxes {
+    tiny: Aabb,
+    screen: Aabb,
+    pixels: f64,
+}
+
+/// Sets `model`'s GPU-driven culling costs from frames of [`GpuCulling`]
+/// commands, each isolating one cost (the empty frame's time and the
+/// dispatch around it subtracted), or says why the backend cannot run them.
+fn measure_culling(
+    backend: &mut WgpuBackend<'_>,
+    camera: &Camera,
+    repeats: usize,
+    boxes: Boxes,
+    model: &mut GpuModel,
+) -> Result<(), GpuCullingUnsupported> {
+    let c = backend.gpu_culling()?;
+    let one_flag = c.create_flags(1);
+    let one_slot = c.create_list(1, &[]);
+    let many_flags = c.create_flags(COMPUTE_ITEMS);
+    let tiny = c.create_boxes(&vec![boxes.tiny; TEST_BOXES as usize]);
+    let screen = c.create_boxes(&vec![boxes.screen; SCREEN_TEST_BOXES as usize]);
+    let tiny_ids = c.create_list(TEST_BOXES, &(0..TEST_BOXES).collect::<Vec<_>>());
+    let screen_ids = c.create_list(SCREEN_TEST_BOXES, &(0..SCREEN_TEST_BOXES).collect::<Vec<_>>());
+    let tested = c.create_flags(TEST_BOXES);
+    let draws = c.create_list(DRAWS as u32, &vec![OFF_SCREEN_A; DRAWS]);
+    fn culling<'a>(b: &'a mut WgpuBackend<'_>) -> &'a mut dyn GpuCulling {
+        b.gpu_culling().expect("checked above")
+    }
+
+    let (cpu0, gpu0) = timed(backend, camera, repeats, |_| {});
+    let (cpu_dispatches, gpu_dispatches) = timed(backend, camera, repeats, |b| {
+        (0..DISPATCHES).for_each(|_| culling(b).compact(one_flag, None, one_slot));
+    });
+    let per = |total_ms: f64, base_ms: f64, count: f64| ((total_ms - base_ms) / count).max(0.0);
+    let dispatch_us = per(gpu_dispatches, gpu0, DISPATCHES as f64) * 1e3;
+    // The time of one command of `count` elements, less the empty frame and a
+    // dispatch, per element, ms.
+    let per_element = |gpu: f64, count: f64| per(gpu - dispatch_us * 1e-3, gpu0, count);
+    let (_, gpu_items) = timed(backend, camera, repeats, |b| culling(b).compact(many_flags, None, one_slot));
+    let (_, gpu_tiny) = timed(backend, camera, repeats, |b| culling(b).test_boxes(tiny, tiny_ids, tested));
+    let (_, gpu_screen) = timed(backend, camera, repeats, |b| culling(b).test_boxes(screen, screen_ids, tested));
+    let (_, gpu_list) = timed(backend, camera, repeats, |b| culling(b).draw_list(draws));
+    // From recording a dispatch to holding its list's length, µs; the
+    // frame's first read-back also clears the target, so it is not timed.
+    let waits: Vec<f64> = (0..repeats)
+        .map(|_| {
+            backend.begin_frame(camera);
+            let c = culling(backend);
+            c.read_count(one_slot);
+            let start = Instant::now();
+            c.compact(one_flag, None, one_slot);
+            c.read_count(one_slot);
+            let us = start.elapsed().as_secs_f64() * 1e6;
+            backend.end_frame();
+            us
+        })
+        .collect();
+
+    model.cpu_dispatch_us = per(cpu_dispatches, cpu0, DISPATCHES as f64) * 1e3;
+    model.gpu_dispatch_us = dispatch_us;
+    model.gpu_compute_item_ns = per_element(gpu_items, f64::from(COMPUTE_ITEMS)) * 1e6;
+    model.gpu_box_us = per_element(gpu_tiny, f64::from(TEST_BOXES)) * 1e3;
+    let screen_pixels = f64::from(SCREEN_TEST_BOXES) * boxes.pixels;
+    let box_pixel_ns =
+        per_element(gpu_screen - f64::from(SCREEN_TEST_BOXES) * model.gpu_box_us * 1e-3, screen_pixels) * 1e6;
+    model.gpu_box_fragment_ns = (box_pixel_ns - model.gpu_query_fragment_ns).max(0.0);
+    model.gpu_indirect_draw_us = per_element(gpu_list, DRAWS as f64) * 1e3;
+    model.readback_us = (median(waits) - dispatch_us).max(0.0);
+    Ok(())
 }
 
 /// Time from a query's submission until its result is read, waiting for it as
@@ -302,12 +398,12 @@ pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Cal
     let ctx = Arc::new(GpuContext::new()?);
     let adapter = ctx.adapter_name();
     progress.set_message(format!("measuring {adapter}"));
-    let model = measure_model(ctx, config)?;
+    let (model, culling_unmeasured) = measure_model(ctx, config)?;
     let predictions = match &config.check {
         Some(check) => predict(check, &model, progress)?,
         None => Vec::new(),
     };
-    Ok(Calibration { adapter, model, predictions })
+    Ok(Calibration { adapter, model, predictions, culling_unmeasured })
 }
 
 /// Runs `check` on the GPU and on the soft backend with `model`, and pairs

@@ -143,8 +143,9 @@ struct BenchArgs {
     #[arg(long, value_parser = parse_output_path)]
     plot_queries: Option<PathBuf>,
     /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
-    /// model as in the paper; size, frames, resolution and seed from the
-    /// other options): chc, chcpp, om or ioc.
+    /// model as in the paper, except ioc, which takes --gpu-model; size,
+    /// frames, resolution, seed and backend from the other options): chc,
+    /// chcpp, om or ioc.
     #[arg(long)]
     paper: Option<String>,
     /// Worker threads for the rasterizer (default: all cores).
@@ -163,7 +164,8 @@ struct BenchArgs {
 struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// The method shown first (keys 1-6 and M switch).
+    /// The method shown first: vfc, sw, chc, chcpp, om, roc, ioc or opt (keys
+    /// 1-8 switch to them in that order, M to the next).
     #[arg(long, default_value = occlude::view::DEFAULT_METHOD)]
     method: String,
     /// Window size, WIDTHxHEIGHT (the screenshot's size).

@@ -376,7 +376,7 @@ impl<'s> Viewer<'s> {
         if self.show_boxes {
             lines.push("query boxes: green visible, red occluded, yellow never read".into());
         }
-        lines.push("1-6/M method  H hierarchy  V boxes  P play  R record".into());
+        lines.push(format!("1-{}/M method  H hierarchy  V boxes  P play  R record", METHOD_NAMES.len()));
         lines.push("WASD QE: fly  Shift: fast  wheel: speed  drag: look".into());
         lines
     }

@@ -2,13 +2,15 @@
 //! command keys an [`Action`].
 
 use super::camera_control::Movement;
+use occlude_core::methods::METHOD_NAMES;
 use std::collections::HashSet;
 use winit::keyboard::KeyCode;
 
 /// A one-shot command bound to a key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    /// 1 to 6: the method at this index of `METHOD_NAMES`.
+    /// 1 to 8 (one digit per method of `METHOD_NAMES`): the method at this
+    /// index.
     Method(usize),
     /// M: the next method.
     NextMethod,
@@ -26,9 +28,18 @@ pub enum Action {
 
 /// The command bound to `key`, if any.
 pub fn action(key: KeyCode) -> Option<Action> {
-    const DIGITS: [KeyCode; 6] =
-        [KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6];
-    if let Some(i) = DIGITS.iter().position(|&d| d == key) {
+    const DIGITS: [KeyCode; 9] = [
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+        KeyCode::Digit5,
+        KeyCode::Digit6,
+        KeyCode::Digit7,
+        KeyCode::Digit8,
+        KeyCode::Digit9,
+    ];
+    if let Some(i) = DIGITS.iter().take(METHOD_NAMES.len()).position(|&d| d == key) {
         return Some(Action::Method(i));
     }
     Some(match key {
@@ -83,6 +94,12 @@ mod tests {
     #[test]
     fn keys_map_to_actions_and_movement() {
         assert_eq!(action(KeyCode::Digit4), Some(Action::Method(3)));
+        // Every method has a digit (roc and ioc are 6 and 7), and no digit
+        // names a method that is not there.
+        assert_eq!(METHOD_NAMES[5..7], ["roc", "ioc"]);
+        assert_eq!(action(KeyCode::Digit7), Some(Action::Method(6)));
+        assert_eq!(action(KeyCode::Digit8), Some(Action::Method(7)));
+        assert_eq!(action(KeyCode::Digit9), None);
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
         assert_eq!(action(KeyCode::KeyW), None);
         let mut held = HeldKeys::default();
