@@ -190,10 +190,12 @@ const IOC_TABLE_1: [[(f64, f64); 2]; 3] =
 
 /// `--paper ioc` (module documentation).
 fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
-    let times = if base.backend == super::config::BackendKind::Soft { "simulated" } else { "measured" };
-    let model = &base.gpu_model.name;
+    let times = match base.backend {
+        super::config::BackendKind::Soft => format!("GPU model {}, times simulated", base.gpu_model.name),
+        super::config::BackendKind::Wgpu => "times measured".to_string(),
+    };
     let mut table = format!(
-        "IOC poster (BVH, one object per leaf, GPU model {model}; times {times}) — Table 1: GPU time per frame, ms\n\
+        "IOC poster (BVH, one object per leaf, {times}) — Table 1: GPU time per frame, ms\n\
          scene          method  occlusion test  (poster)  occludee rendering  (poster)  test vs roc  (poster)\n"
     );
     let mut figure = String::from(
