@@ -108,6 +108,14 @@ pub trait GpuCulling {
     /// range in `table`, into `into` (one dispatch).
     fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto);
 
+    /// Clears the set flags of `flags` whose box in `boxes` (slot for slot)
+    /// lies outside the view frustum, by the same test as [`test_boxes`]
+    /// (one dispatch over every slot). What `ioc` draws below its bottom
+    /// level is so frustum-culled without a box test.
+    ///
+    /// [`test_boxes`]: GpuCulling::test_boxes
+    fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags);
+
     /// Replaces `dst` with the slots of `flags` that are set, except those
     /// also set in `unless`, in no particular order (one dispatch).
     fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList);

@@ -737,6 +737,10 @@ impl GpuCulling for WgpuBackend<'_> {
         self.record_cull(CullOp::Expand { src, filter, table, into });
     }
 
+    fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags) {
+        self.record_cull(CullOp::DropOutside { boxes, flags });
+    }
+
     fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
         self.record_cull(CullOp::Compact { flags, unless, dst });
     }

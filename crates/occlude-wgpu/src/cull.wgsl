@@ -227,6 +227,21 @@ fn cs_compact_unless(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workg
     }
 }
 
+// Frustum culling of flagged slots: a set flag whose box (slot for slot)
+// lies outside the frustum is cleared, by the test cs_test_boxes uses.
+@compute @workgroup_size(64)
+fn cs_drop_outside(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                   @builtin(local_invocation_index) local: u32) {
+    let i = thread_index(group, groups, local);
+    if i >= arrayLength(&flags) || i >= arrayLength(&boxes) || flags[i] == 0u {
+        return;
+    }
+    let b = boxes[i];
+    if any(b.lo > b.hi) || outside_frustum(b) {
+        flags[i] = 0u;
+    }
+}
+
 // List draws: one indexed draw per listed instance, its first instance the
 // instance index (vs_instance reads the transform there). Entries past the
 // count become empty draws, so that without a count buffer a multi-draw over

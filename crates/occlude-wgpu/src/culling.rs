@@ -54,6 +54,7 @@ pub(crate) enum CullOp {
     TestBoxes { boxes: BoxSet, ids: IdList, flags: Flags },
     Expand { src: IdList, filter: Flags, table: RangeTable, into: ExpandInto },
     Compact { flags: Flags, unless: Option<Flags>, dst: IdList },
+    DropOutside { boxes: BoxSet, flags: Flags },
     ClearFlags(Flags),
     DrawList(IdList),
 }
@@ -73,6 +74,7 @@ impl CullOp {
             Self::Compact { flags, unless, dst } => [3, flags.0, unless.map_or(u32::MAX, |u| u.0), dst.0, 0],
             Self::ClearFlags(flags) => [4, flags.0, 0, 0, 0],
             Self::DrawList(list) => [5, list.0, 0, 0, 0],
+            Self::DropOutside { boxes, flags } => [6, boxes.0, flags.0, 0, 0],
         }
     }
 }
@@ -86,6 +88,7 @@ pub(crate) struct CullingScene {
     expand_flags: wgpu::ComputePipeline,
     compact: wgpu::ComputePipeline,
     compact_unless: wgpu::ComputePipeline,
+    drop_outside: wgpu::ComputePipeline,
     draw_args: wgpu::ComputePipeline,
     /// `InstanceDraw` of `cull.wgsl` per instance.
     instances: wgpu::Buffer,
@@ -133,6 +136,7 @@ impl CullingScene {
             expand_flags: compute("cs_expand_flags"),
             compact: compute("cs_compact"),
             compact_unless: compute("cs_compact_unless"),
+            drop_outside: compute("cs_drop_outside"),
             draw_args: compute("cs_draw_args"),
             render,
             instances,
@@ -397,6 +401,9 @@ impl Culling {
                 (pipeline, (self.flags[flags.0 as usize].buffer.size() / 4) as u32)
             }
             CullOp::DrawList(list) => (&scene.draw_args, self.lists[list.0 as usize].capacity),
+            CullOp::DropOutside { flags, .. } => {
+                (&scene.drop_outside, (self.flags[flags.0 as usize].buffer.size() / 4) as u32)
+            }
         };
         let group = self.compute_group(op, pipeline);
         if matches!(op, CullOp::TestBoxes { .. }) && self.test_frame.is_none() {
@@ -475,6 +482,9 @@ impl Culling {
             }
             CullOp::DrawList(l) => {
                 vec![(2, list(l)), (11, &self.scene.instances), (12, &self.draw_args), (13, &self.stats)]
+            }
+            CullOp::DropOutside { boxes, flags: f } => {
+                vec![(0, &self.camera), (1, &self.boxes[boxes.0 as usize]), (3, flags(f))]
             }
             CullOp::ClearFlags(_) => Vec::new(),
         };

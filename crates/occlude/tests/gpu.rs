@@ -48,8 +48,8 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
             }
         }
         // Occlusion works on the GPU too: the occlusion methods draw less.
-        // Not `ioc`: below its bottom level every object of a visible node is
-        // drawn, in the frustum or not, which can add up to more than vfc.
+        // Not `ioc`: every object in view below a visible bottom node is
+        // drawn, hidden or not, which can add up to more than vfc.
         let triangles = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
         for m in (1..run.methods.len()).filter(|&m| run.methods[m].name != "ioc") {
             assert!(

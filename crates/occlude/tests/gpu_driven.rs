@@ -1,7 +1,7 @@
 //! The GPU-driven methods (`roc`, `ioc`) on the soft backend's
 //! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
 //! every `small` scene with both hierarchies, `ioc` over several depth
-//! ranges, `roc.mode=last` reporting the pixels it misses, the frame
+//! ranges and with and without its frustum test, `roc.mode=last` reporting the pixels it misses, the frame
 //! statistics of a GPU-driven frame, and the depth options' errors and
 //! warnings. `tests/gpu.rs` runs the same methods on the wgpu backend.
 
@@ -49,7 +49,8 @@ fn roc_and_ioc_match_vfc_on_every_frame_and_cull() {
             assert_exact(&r, &format!("{name}/{hierarchy}"));
             let triangles = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
             assert!(triangles(1) < triangles(0), "{name}/{hierarchy}: roc culled nothing");
-            // At its bottom depth ioc draws whole subtrees, in view or not: it
+            // At its bottom depth ioc draws whole subtrees (frustum-culled), and
+            // both draw last frame's visible set first, in view or not: ioc
             // draws less than vfc only where occlusion is strong.
             if name == "city" {
                 assert!(triangles(2) < triangles(0), "{name}/{hierarchy}: ioc culled nothing");
@@ -68,6 +69,20 @@ fn ioc_is_exact_over_every_depth_range() {
             assert_exact(&run(&scene, &cfg), &format!("{name}/ioc {start}..{bottom}"));
         }
     }
+}
+
+#[test]
+fn iocs_frustum_test_draws_less_and_stays_exact() {
+    // A shallow bottom: each visible bottom node holds objects far outside
+    // the frustum.
+    let scene = small("figures");
+    let drawn = |options: &[&str]| {
+        let r = run(&scene, &config("figures", HierarchyKind::Bvh, &["vfc", "ioc"], options));
+        assert_exact(&r, &format!("figures/ioc {options:?}"));
+        r.methods[1].frames.iter().map(|f| f.triangles).sum::<u64>()
+    };
+    let (on, off) = (drawn(&["ioc.bottom=4"]), drawn(&["ioc.bottom=4", "ioc.frustum=off"]));
+    assert!(on < off, "ioc drew {on} triangles with the frustum test, {off} without");
 }
 
 #[test]

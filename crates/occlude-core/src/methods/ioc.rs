@@ -9,8 +9,11 @@
 //! stays occluded. A visible leaf marks its objects potentially visible; a
 //! visible interior node puts its children into the next level's list. At
 //! the bottom depth every object below a visible node is potentially
-//! visible. The potentially visible objects not drawn as occluders are then
-//! drawn, and all of them are the next frame's occluders. The start list
+//! visible. The potentially visible objects outside the view frustum are
+//! dropped (`ioc.frustum`, default on: the objects of a visible bottom node
+//! reach beyond the frustum, and drawing them costs without adding a pixel);
+//! the rest not drawn as occluders are then drawn, and all of them are the
+//! next frame's occluders. The start list
 //! holds the nodes at the start depth and the leaves above it.
 //!
 //! The poster reads each level's list length back to the CPU to size the next
@@ -19,7 +22,9 @@
 //!
 //! Exact for the same reason as `roc`: a node's box holds everything its
 //! subtree draws inside it, so the box of every node above a visible pixel
-//! passes the test at that pixel, and the object owning it is reached.
+//! passes the test at that pixel, and the object owning it is reached; and
+//! the frustum test that drops objects is the conservative one box tests
+//! use, so a dropped object has no pixel.
 
 use super::roc::TemporalSet;
 use super::vfc::ViewFrustumCulling;
@@ -75,6 +80,10 @@ impl FromStr for Level {
 /// Parameters of `ioc`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct IocParams {
+    /// `ioc.frustum`: whether the potentially visible objects are
+    /// frustum-culled before they are drawn (default on; off draws every
+    /// object below a visible bottom node, as the poster's text reads).
+    pub frustum: bool,
     /// `ioc.start`: the first level tested (default 4).
     pub start: Level,
     /// `ioc.bottom`: the last level tested; below it nothing is tested
@@ -90,6 +99,7 @@ impl IocParams {
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
         let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
         let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
+        let frustum = r.flag("frustum", true)?;
         let inverted = match (start, bottom) {
             (Level::FromRoot(s), Level::FromRoot(b)) => s > b,
             (Level::AboveDeepest(s), Level::AboveDeepest(b)) => s < b,
@@ -103,7 +113,7 @@ impl IocParams {
                 expected: format!("a level no deeper than ioc.bottom = {bottom}"),
             });
         }
-        Ok(Self { start, bottom })
+        Ok(Self { start, bottom, frustum })
     }
 }
 
@@ -112,6 +122,8 @@ impl IocParams {
 struct Resources {
     /// Every node's box.
     boxes: BoxSet,
+    /// Every instance's box, for the frustum test of what is drawn.
+    instance_boxes: BoxSet,
     /// Per node, whether its box passed this frame's test.
     node_visible: Flags,
     /// The nodes at the start depth and the leaves above it.
@@ -193,12 +205,14 @@ impl CullingMethod for IterativeOcclusion {
         let Ok(gpu) = backend.gpu_culling() else { return };
         let nodes = h.node_count() as u32;
         let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
+        let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
         let start: Vec<NodeId> = (0..nodes)
             .filter(|&n| h.node(n).depth == depths.0 || (h.is_leaf(n) && h.node(n).depth < depths.0))
             .collect();
         let (children, leaf_instances, subtree_instances) = tables(gpu, h);
         self.resources = Some(Resources {
             boxes: gpu.create_boxes(&boxes),
+            instance_boxes: gpu.create_boxes(&instance_boxes),
             node_visible: gpu.create_flags(nodes),
             start: gpu.create_list(nodes, &start),
             levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
@@ -230,6 +244,9 @@ impl CullingMethod for IterativeOcclusion {
                 gpu.expand(level, r.node_visible, r.children, ExpandInto::List(next));
                 level = next;
             }
+        }
+        if self.params.frustum {
+            gpu.drop_outside_frustum(r.instance_boxes, visible);
         }
         r.temporal.finish(gpu, true);
     }
@@ -286,7 +303,11 @@ mod tests {
 
     #[test]
     fn levels_parse_from_either_end_and_resolve_with_clamping() {
-        assert_eq!(read(&[]), Ok(IocParams { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2) }));
+        assert_eq!(
+            read(&[]),
+            Ok(IocParams { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2), frustum: true })
+        );
+        assert!(!read(&["ioc.frustum=off"]).unwrap().frustum);
         let p = read(&["ioc.start=deepest-5", "ioc.bottom=deepest"]).unwrap();
         assert_eq!((p.start, p.bottom), (Level::AboveDeepest(5), Level::AboveDeepest(0)));
         assert_eq!(Level::FromRoot(3).resolve(10), (3, false));

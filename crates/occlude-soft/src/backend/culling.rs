@@ -178,6 +178,16 @@ impl GpuCulling for SoftBackend<'_> {
         }
     }
 
+    fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags) {
+        let frustum = self.camera.expect("drop_outside_frustum outside a frame").frustum();
+        let len = self.device.flags[flags.0 as usize].len();
+        self.dispatch(len);
+        let set = &mut self.device.flags[flags.0 as usize];
+        for (flag, b) in set.iter_mut().zip(&self.device.boxes[boxes.0 as usize]) {
+            *flag &= b.is_some_and(|b| frustum.intersects(&b));
+        }
+    }
+
     fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
         let d = &self.device;
         let set = &d.flags[flags.0 as usize];

@@ -339,6 +339,32 @@ fn expand_and_compact_build_lists_and_flags() {
 }
 
 #[test]
+fn frustum_culling_clears_only_the_flags_of_boxes_out_of_view() {
+    let scene = scene();
+    let Some(gpu) = gpu("frustum_culling_clears_only_the_flags_of_boxes_out_of_view", &scene) else { return };
+    let mut backend = WgpuBackend::new(gpu, &scene, SIZE, SIZE);
+    let n = scene.instances.len() as u32;
+    let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
+    let c = backend.gpu_culling().unwrap();
+    let set = c.create_boxes(&boxes);
+    let eye = c.create_boxes(&[Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))]);
+    let first = c.create_list(1, &[0]);
+    let every = c.create_table(&[ItemRange { first: 0, count: n }], &all_instances(&scene));
+    let (seed, flags) = (c.create_flags(1), c.create_flags(n));
+    let visible = c.create_list(n, &[]);
+    backend.begin_frame(&camera());
+    let c = backend.gpu_culling().unwrap();
+    // Every flag set (the box around the eye passes untested), then culled.
+    c.test_boxes(eye, first, seed);
+    c.expand(first, seed, every, ExpandInto::Flags(flags));
+    c.drop_outside_frustum(set, flags);
+    c.compact(flags, None, visible);
+    backend.end_frame();
+    assert_eq!(backend.failure(), None);
+    assert_eq!(read_list(&backend, visible), [WALL, HIDDEN, BESIDE, AROUND_EYE, IN_FRONT]);
+}
+
+#[test]
 fn dispatches_cover_every_thread() {
     assert_eq!(workgroups(0), (1, 1));
     assert_eq!(workgroups(64), (1, 1));
