@@ -1,7 +1,8 @@
 //! The GPU-driven methods (`roc`, `ioc`) on the soft backend's
 //! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
 //! every `small` scene with both hierarchies, `ioc` over several depth
-//! ranges and with and without its frustum test, `roc.mode=last` reporting the pixels it misses, the frame
+//! ranges, with its start chosen per frame, and with and without its
+//! frustum test, `roc.mode=last` reporting the pixels it misses, the frame
 //! statistics of a GPU-driven frame, and the depth options' errors and
 //! warnings. `tests/gpu.rs` runs the same methods on the wgpu backend.
 
@@ -68,6 +69,8 @@ fn ioc_is_exact_over_every_depth_range() {
             let cfg = config(name, HierarchyKind::Bvh, &["vfc", "ioc"], &[&options[0], &options[1]]);
             assert_exact(&run(&scene, &cfg), &format!("{name}/ioc {start}..{bottom}"));
         }
+        let cfg = config(name, HierarchyKind::Bvh, &["vfc", "ioc"], &["ioc.auto=on"]);
+        assert_exact(&run(&scene, &cfg), &format!("{name}/ioc auto"));
     }
 }
 

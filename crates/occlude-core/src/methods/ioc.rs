@@ -16,6 +16,15 @@
 //! next frame's occluders. The start list
 //! holds the nodes at the start depth and the leaves above it.
 //!
+//! `ioc.auto` chooses the start per frame (the poster's stated open
+//! limitation is the manual choice of the depth range): the shallowest depth,
+//! no deeper than the bottom, at which no node in the frustum spans more than
+//! half the screen's height, judged on the CPU from the nodes' bounding
+//! spheres by a walk down through the large nodes only (charged as traversal
+//! of the nodes looked at). The bottom stays
+//! `ioc.bottom`: how deep to go is what trades box tests against drawing
+//! hidden objects, and nothing known before the frame's test measures that.
+//!
 //! The poster reads each level's list length back to the CPU to size the next
 //! level's draw; here the length stays on the device and the next level's
 //! dispatch and indirect draw read it there, so a frame reads nothing back.
@@ -89,7 +98,18 @@ pub struct IocParams {
     /// `ioc.bottom`: the last level tested; below it nothing is tested
     /// (default `deepest-2`).
     pub bottom: Level,
+    /// `ioc.auto`: choose the start per frame instead of `ioc.start` (the
+    /// module documentation; default off).
+    pub auto: bool,
 }
+
+/// The largest share of the screen's height a node's bounding sphere may
+/// span for `ioc.auto` to start at its depth. Boxes larger than that almost
+/// always pass (something in so large a box is in front of the occluders)
+/// and each costs a good part of a screen of fragments, which is what ioc's
+/// upper levels spend (docs/benchmarks.md); fixed at one half, not fitted to
+/// any scene.
+const AUTO_SPAN: f32 = 0.5;
 
 const LEVEL: &str = "a depth N >= 0, 'deepest' or 'deepest-K'";
 
@@ -100,6 +120,7 @@ impl IocParams {
         let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
         let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
         let frustum = r.flag("frustum", true)?;
+        let auto = r.flag("auto", false)?;
         let inverted = match (start, bottom) {
             (Level::FromRoot(s), Level::FromRoot(b)) => s > b,
             (Level::AboveDeepest(s), Level::AboveDeepest(b)) => s < b,
@@ -113,12 +134,12 @@ impl IocParams {
                 expected: format!("a level no deeper than ioc.bottom = {bottom}"),
             });
         }
-        Ok(Self { start, bottom, frustum })
+        Ok(Self { start, bottom, frustum, auto })
     }
 }
 
 /// The device resources of `ioc`, made on its first frame.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Resources {
     /// Every node's box.
     boxes: BoxSet,
@@ -126,8 +147,10 @@ struct Resources {
     instance_boxes: BoxSet,
     /// Per node, whether its box passed this frame's test.
     node_visible: Flags,
-    /// The nodes at the start depth and the leaves above it.
-    start: IdList,
+    /// Per depth down to the bottom, the nodes at that depth and the leaves
+    /// above it: the start list of a frame starting there (made for the
+    /// start depth only, unless `ioc.auto`).
+    starts: Vec<Option<IdList>>,
     /// The lists of the levels below, used in turn.
     levels: [IdList; 2],
     /// Per node, its children (none for a leaf).
@@ -206,15 +229,22 @@ impl CullingMethod for IterativeOcclusion {
         let nodes = h.node_count() as u32;
         let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
         let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
-        let start: Vec<NodeId> = (0..nodes)
-            .filter(|&n| h.node(n).depth == depths.0 || (h.is_leaf(n) && h.node(n).depth < depths.0))
+        let auto = self.params.auto;
+        let starts = (0..=depths.1)
+            .map(|d| {
+                (auto || d == depths.0).then(|| {
+                    let start: Vec<NodeId> =
+                        (0..nodes).filter(|&n| h.node(n).depth == d || (h.is_leaf(n) && h.node(n).depth < d)).collect();
+                    gpu.create_list(nodes, &start)
+                })
+            })
             .collect();
         let (children, leaf_instances, subtree_instances) = tables(gpu, h);
         self.resources = Some(Resources {
             boxes: gpu.create_boxes(&boxes),
             instance_boxes: gpu.create_boxes(&instance_boxes),
             node_visible: gpu.create_flags(nodes),
-            start: gpu.create_list(nodes, &start),
+            starts,
             levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
             children,
             leaf_instances,
@@ -227,13 +257,19 @@ impl CullingMethod for IterativeOcclusion {
     /// A backend without [`GpuCulling`] (which the runner refuses first)
     /// gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
+        let Some(r) = self.resources.as_mut().filter(|_| backend.gpu_culling().is_ok()) else {
             return ViewFrustumCulling.render(ctx, backend);
         };
+        let (mut start, bottom) = r.depths;
+        if self.params.auto {
+            let (depth, visited) = auto_start(ctx, bottom);
+            start = depth;
+            backend.traverse(visited);
+        }
+        let gpu = backend.gpu_culling().expect("checked above");
         let visible = r.temporal.begin(gpu);
         gpu.clear_flags(r.node_visible);
-        let (start, bottom) = r.depths;
-        let mut level = r.start;
+        let mut level = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
         for depth in start..=bottom {
             gpu.test_boxes(r.boxes, level, r.node_visible);
             if depth == bottom {
@@ -250,6 +286,38 @@ impl CullingMethod for IterativeOcclusion {
         }
         r.temporal.finish(gpu, true);
     }
+}
+
+/// `ioc.auto`'s start for this frame: one below the deepest node in the
+/// frustum that spans more than [`AUTO_SPAN`] of the screen's height
+/// (judged from its bounding sphere), at most `bottom`; and how many nodes
+/// it looked at (charged as traversal). The walk goes down only through
+/// such large nodes: a node inside a small one is small too (its box lies
+/// inside), up to the sphere's rounding, which only moves the start.
+fn auto_start(ctx: &FrameContext<'_>, bottom: u32) -> (u32, u64) {
+    let h = ctx.hierarchy;
+    let eye = ctx.camera.position;
+    let limit = AUTO_SPAN * (ctx.camera.fov_y_deg.to_radians() * 0.5).tan();
+    let large = |n: NodeId| {
+        let b = &h.node(n).bounds;
+        let r = 0.5 * b.extent().length();
+        let d = b.center().distance(eye);
+        // The sphere's half-angle is asin(r / d); its tangent over the
+        // view's half-angle tangent is the share of the screen's height.
+        d <= r || r / (d * d - r * r).sqrt() > limit
+    };
+    let (mut start, mut visited) = (0, 0u64);
+    let mut stack = vec![h.root()];
+    while let Some(n) = stack.pop() {
+        visited += 1;
+        let depth = h.node(n).depth;
+        if depth >= bottom || !ctx.frustum.intersects(&h.node(n).bounds) || !large(n) {
+            continue;
+        }
+        start = start.max(depth + 1);
+        stack.extend_from_slice(h.children(n));
+    }
+    (start.min(bottom), visited)
 }
 
 /// The three tables `ioc` walks: children, a leaf's instances and a
@@ -305,7 +373,7 @@ mod tests {
     fn levels_parse_from_either_end_and_resolve_with_clamping() {
         assert_eq!(
             read(&[]),
-            Ok(IocParams { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2), frustum: true })
+            Ok(IocParams { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2), frustum: true, auto: false })
         );
         assert!(!read(&["ioc.frustum=off"]).unwrap().frustum);
         let p = read(&["ioc.start=deepest-5", "ioc.bottom=deepest"]).unwrap();
