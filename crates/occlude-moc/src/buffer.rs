@@ -1,0 +1,164 @@
+//! The buffer: per-subtile coverage masks and two depth layers, and their update.
+
+/// How a subtile takes in a triangle's coverage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum MergeMode {
+    /// The paper's heuristic (section 3): when the triangle is farther from the
+    /// working layer than the working layer is from the reference, the working
+    /// layer is discarded before the merge. Tighter bounds on layered scenes.
+    #[default]
+    LayerMerge,
+    /// Always merge into the working layer; simpler, never discards.
+    QuickMask,
+}
+
+/// Errors from building a buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Error {
+    /// Width or height was zero.
+    ZeroSize,
+}
+
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Error::ZeroSize => write!(f, "occlusion buffer width and height must be at least 1"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// One 8x4-pixel subtile: bit `x + 8 * y` of `mask` set means the pixel is bounded
+/// by `working`, clear means by `reference`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Subtile {
+    pub mask: u32,
+    pub working: f32,
+    pub reference: f32,
+}
+
+const CLEAR: Subtile = Subtile { mask: 0, working: 0.0, reference: 1.0 };
+
+/// A conservative, low-resolution-in-depth occlusion buffer.
+///
+/// Render occluders with [`render_triangles`](Self::render_triangles), then ask
+/// whether boxes or rectangles are hidden ([`test_aabb`](Self::test_aabb),
+/// [`test_rect`](Self::test_rect)). A test never says
+/// [`Occluded`](crate::Visibility::Occluded) for something an exact depth buffer
+/// of the same occluders would show; it may say visible for hidden things.
+///
+/// Memory: 12 bytes per 32 pixels. Cost: proportional to the subtiles each
+/// triangle's bounding box touches.
+///
+/// ```
+/// use glam::{Mat4, Vec3};
+/// use occlude_moc::{CullMode, MaskedBuffer, Visibility};
+/// let mut buffer = MaskedBuffer::new(64, 48).unwrap();
+/// // A quad filling the screen at NDC depth 0.5.
+/// let p = [Vec3::new(-1.0, -1.0, 0.5), Vec3::new(1.0, -1.0, 0.5), Vec3::new(1.0, 1.0, 0.5), Vec3::new(-1.0, 1.0, 0.5)];
+/// buffer.render_triangles(&p, &[0, 1, 2, 0, 2, 3], Mat4::IDENTITY, CullMode::Back);
+/// let behind = buffer.test_aabb(Vec3::new(-0.2, -0.2, 0.7), Vec3::new(0.2, 0.2, 0.8), Mat4::IDENTITY);
+/// assert_eq!(behind, Visibility::Occluded);
+/// let in_front = buffer.test_aabb(Vec3::new(-0.2, -0.2, 0.2), Vec3::new(0.2, 0.2, 0.3), Mat4::IDENTITY);
+/// assert_eq!(in_front, Visibility::Visible);
+/// ```
+#[derive(Clone, Debug)]
+pub struct MaskedBuffer {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// Subtiles per row (the width padded to whole 32-pixel tiles).
+    pub(crate) cols: u32,
+    /// Subtile rows (the height padded to whole 8-pixel tiles).
+    pub(crate) rows: u32,
+    pub(crate) subtiles: Vec<Subtile>,
+    /// The merge rule used by renders.
+    pub merge: MergeMode,
+}
+
+impl MaskedBuffer {
+    /// A cleared buffer of `width` x `height` pixels; an error if either is zero.
+    pub fn new(width: u32, height: u32) -> Result<Self, Error> {
+        let mut b =
+            MaskedBuffer { width: 0, height: 0, cols: 0, rows: 0, subtiles: Vec::new(), merge: MergeMode::default() };
+        b.resize(width, height)?;
+        Ok(b)
+    }
+
+    /// Changes the resolution and clears; reuses the allocation where it fits.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), Error> {
+        if width == 0 || height == 0 {
+            return Err(Error::ZeroSize);
+        }
+        self.width = width;
+        self.height = height;
+        self.cols = width.div_ceil(32) * 4;
+        self.rows = height.div_ceil(8) * 2;
+        self.subtiles.clear();
+        self.subtiles.resize((self.cols * self.rows) as usize, CLEAR);
+        Ok(())
+    }
+
+    /// Screen width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Screen height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Forgets every occluder: all pixels at the far plane (depth 1).
+    pub fn clear(&mut self) {
+        self.subtiles.fill(CLEAR);
+    }
+
+    /// Mask of the pixels of subtile (`sx`, `sy`) outside the screen.
+    pub(crate) fn outside_mask(&self, sx: u32, sy: u32) -> u32 {
+        let mut m = 0;
+        for i in 0..32 {
+            let (x, y) = (sx * 8 + i % 8, sy * 4 + i / 8);
+            if x >= self.width || y >= self.height {
+                m |= 1 << i;
+            }
+        }
+        m
+    }
+
+    /// Merges a triangle covering `cover` of subtile (`sx`, `sy`) with its depth
+    /// bounded by `depth` there.
+    pub(crate) fn merge(&mut self, sx: u32, sy: u32, cover: u32, depth: f32) {
+        if cover == 0 {
+            return;
+        }
+        let cover = cover | self.outside_mask(sx, sy);
+        let mode = self.merge;
+        let s = &mut self.subtiles[(sy * self.cols + sx) as usize];
+        if !(depth < s.reference) {
+            return;
+        }
+        if mode == MergeMode::LayerMerge && s.mask != 0 && (depth - s.working).abs() > s.reference - s.working {
+            s.mask = 0;
+        }
+        s.working = if s.mask == 0 { depth } else { s.working.max(depth) };
+        s.mask |= cover;
+        if s.mask == u32::MAX {
+            s.reference = s.working;
+            s.mask = 0;
+        }
+    }
+
+    /// The bound on the stored depth of every pixel, row by row (`width * height`
+    /// values, 1 where nothing was drawn): for debugging and viewers.
+    pub fn depth_image(&self, out: &mut Vec<f32>) {
+        out.clear();
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let s = &self.subtiles[((y / 4) * self.cols + x / 8) as usize];
+                let bit = (x % 8) + 8 * (y % 4);
+                out.push(if s.mask >> bit & 1 == 1 { s.working } else { s.reference });
+            }
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! A masked software occlusion buffer, after Hasselgren, Andersson and
+//! Akenine-Möller, "Masked Software Occlusion Culling" (HPG 2016).
+//!
+//! The screen is cut into 32x8-pixel tiles of eight 8x4-pixel subtiles. Each
+//! subtile keeps a 32-bit coverage mask and two depths (section 3 of the paper):
+//! a reference layer bounding the pixels whose mask bit is clear and a working
+//! layer bounding the pixels whose bit is set.
+//!
+//! # Depth
+//! Depth is NDC `z / w` (wgpu: 0 near, 1 far), affine in screen space after the
+//! perspective divide, so a triangle's farthest depth over a subtile is reached
+//! at one of the subtile's corners. A larger value is farther.
+//!
+//! # Why a test never says "occluded" wrongly
+//! Let `E(p)` be the depth of pixel `p` in an exact depth buffer of the same
+//! occluders (pixel centres, far plane 1 where nothing is drawn). The buffer
+//! keeps, for every on-screen pixel, a bound `B(p) >= E(p)`:
+//! - Coverage: a pixel enters a triangle's mask only if its centre is strictly
+//!   inside all three edges, evaluated in `f64` from the `f32` screen positions,
+//!   so a mask never claims a pixel the triangle does not cover.
+//! - Depth per subtile: the triangle's depth over the subtile is bounded by the
+//!   largest of its plane's values at the subtile's four corners (computed in
+//!   `f64`, nudged farther by a relative epsilon), capped by its farthest vertex.
+//! - Layer merge: a merge of a triangle (mask `C`, depth `t`) into the working
+//!   layer (mask `M`, depth `w`) gives `M | C` the depth `max(w, t)`, which bounds
+//!   both; the working layer is only discarded (its pixels falling back to the
+//!   reference depth) while `w <= reference`, and a triangle at or beyond the
+//!   reference depth is ignored, so the invariant `w <= reference` holds. A full
+//!   mask moves the working depth into the reference layer.
+//! - Pixels outside the screen (padding of the last tiles) count as covered by
+//!   every triangle touching their subtile; tests never read them.
+//! - Near-plane clipping: triangles are clipped to `z >= 0` in clip space before
+//!   the divide, so no vertex behind the eye is projected.
+//! - Tests: a rectangle's pixels are rounded outward, and it is visible when its
+//!   nearest depth is strictly less than any bound it overlaps. If an exact
+//!   buffer shows a pixel, `nearest < E(p) <= B(p)`, so the test says visible.
+//!
+//! Only the portable scalar path exists so far (see the crate's report).
+
+mod buffer;
+mod clip;
+mod raster;
+mod test;
+
+pub use buffer::{Error, MaskedBuffer, MergeMode};
+pub use raster::CullMode;
+pub use test::Visibility;
+
+/// Subtile width in pixels.
+pub const SUBTILE_W: u32 = 8;
+/// Subtile height in pixels.
+pub const SUBTILE_H: u32 = 4;
