@@ -135,7 +135,7 @@ impl MaskedBuffer {
         let cover = cover | self.outside_mask(sx, sy);
         let mode = self.merge;
         let s = &mut self.subtiles[(sy * self.cols + sx) as usize];
-        if !(depth < s.reference) {
+        if depth.is_nan() || depth >= s.reference {
             return;
         }
         if mode == MergeMode::LayerMerge && s.mask != 0 && (depth - s.working).abs() > s.reference - s.working {

@@ -15,9 +15,10 @@
 //! Let `E(p)` be the depth of pixel `p` in an exact depth buffer of the same
 //! occluders (pixel centres, far plane 1 where nothing is drawn). The buffer
 //! keeps, for every on-screen pixel, a bound `B(p) >= E(p)`:
-//! - Coverage: a pixel enters a triangle's mask only if its centre is strictly
-//!   inside all three edges, evaluated in `f64` from the `f32` screen positions,
-//!   so a mask never claims a pixel the triangle does not cover.
+//! - Coverage: a pixel enters a triangle's mask only if its centre is inside
+//!   all three edges (on an edge: for one of its two directions only, so shared
+//!   edges leave no holes), evaluated in `f64` from the screen positions, so a
+//!   mask never claims a pixel whose centre the triangle does not cover.
 //! - Depth per subtile: the triangle's depth over the subtile is bounded by the
 //!   largest of its plane's values at the subtile's four corners (computed in
 //!   `f64`, nudged farther by a relative epsilon), capped by its farthest vertex.

@@ -57,16 +57,20 @@ impl MaskedBuffer {
         if area == 0.0 || (cull == CullMode::Back && area > 0.0) {
             return;
         }
-        if area > 0.0 {
+        // Edge functions below are positive inside for a positive area.
+        if area < 0.0 {
             t.swap(1, 2);
         }
         let area = area.abs();
-        // Edge i: e(p) > 0 strictly inside.
-        let edges: Vec<(f64, f64, f64)> = (0..3)
+        // Edge i: e(p) > 0 inside; a pixel centre on the edge counts on one side
+        // only (for one of two triangles sharing the edge, by the edge's direction),
+        // so that a shared edge leaves no hole. Both inclusions are pixels whose
+        // centre the triangle covers (its closure).
+        let edges: Vec<(f64, f64, f64, bool)> = (0..3)
             .map(|i| {
                 let (a, b) = (t[i], t[(i + 1) % 3]);
                 let (ex, ey) = (a.y - b.y, b.x - a.x);
-                (ex, ey, -(ex * a.x + ey * a.y))
+                (ex, ey, -(ex * a.x + ey * a.y), ex > 0.0 || (ex == 0.0 && ey > 0.0))
             })
             .collect();
         // Depth plane z = zx * x + zy * y + z0 (cofactors of the vertex matrix).
@@ -90,7 +94,10 @@ impl MaskedBuffer {
                 let mut cover = 0u32;
                 for i in 0..32u32 {
                     let (px, py) = (bx + (i % 8) as f64 + 0.5, by + (i / 8) as f64 + 0.5);
-                    if edges.iter().all(|&(a, b, c)| a * px + b * py + c > 0.0) {
+                    if edges.iter().all(|&(a, b, c, on)| {
+                        let e = a * px + b * py + c;
+                        e > 0.0 || (on && e == 0.0)
+                    }) {
                         cover |= 1 << i;
                     }
                 }
