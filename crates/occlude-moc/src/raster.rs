@@ -91,8 +91,27 @@ impl MaskedBuffer {
         for sy in sy0..sy1 {
             for sx in sx0..sx1 {
                 let (bx, by) = ((sx * 8) as f64, (sy * 4) as f64);
-                let mut cover = 0u32;
-                for i in 0..32u32 {
+                // Edge functions are affine: over the subtile's pixel centres they
+                // are extreme at the four corner centres. All positive for an edge
+                // means every centre passes it; all negative, none does.
+                let centres = [(bx + 0.5, by + 0.5), (bx + 7.5, by + 0.5), (bx + 0.5, by + 3.5), (bx + 7.5, by + 3.5)];
+                let extremes = edges.iter().map(|&(a, b, c, _)| {
+                    centres
+                        .iter()
+                        .map(|&(x, y)| a * x + b * y + c)
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| (lo.min(e), hi.max(e)))
+                });
+                let mut all_inside = true;
+                let mut none = false;
+                for (lo, hi) in extremes {
+                    all_inside &= lo > 0.0;
+                    none |= hi < 0.0;
+                }
+                if none {
+                    continue;
+                }
+                let mut cover = if all_inside { u32::MAX } else { 0 };
+                for i in (0..32u32).filter(|_| !all_inside) {
                     let (px, py) = (bx + (i % 8) as f64 + 0.5, by + (i / 8) as f64 + 0.5);
                     if edges.iter().all(|&(a, b, c, on)| {
                         let e = a * px + b * py + c;
