@@ -36,7 +36,9 @@
 //!   nearest depth is strictly less than any bound it overlaps. If an exact
 //!   buffer shows a pixel, `nearest < E(p) <= B(p)`, so the test says visible.
 //!
-//! Only the portable scalar path exists so far (see the crate's report).
+//! Only a portable scalar path exists so far: no AVX2 path, no binning over
+//! threads, and in a first informal timing about 0.02x the speed of
+//! Intel's MOC (no benchmark of it is in the repository yet).
 
 mod buffer;
 mod clip;
