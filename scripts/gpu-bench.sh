@@ -1,25 +1,27 @@
 #!/usr/bin/env bash
 # Issue 8's measurements on a machine with a real GPU, in one go: every
 # hierarchical method through the wgpu backend on city and plant, a calibrated
-# GPU model checked against the measured frame times, and the rasterizer
-# fill-rate table with the GPU's rows. Built for a borrowed machine with little
+# GPU model checked against the measured frame times, the IOC poster's tables
+# (`--paper ioc`) measured and predicted by the soft backend with that model,
+# and the rasterizer fill-rate table with the GPU's rows. Built for a borrowed machine with little
 # time on it (see DEVELOPERS.md, "Measuring on a real GPU"): it needs only a
-# release build of `occlude` and a Vulkan driver, and writes five files.
+# release build of `occlude` and a Vulkan driver, and writes seven files.
 #
 #   scripts/gpu-bench.sh [OCCLUDE_BINARY]      (default: target/release/occlude)
 #
 # Environment: OUT (where the files go, default ./gpu-out), SIZE (scene size,
 # default medium), FRAMES (frames per scene, default 100).
 # Files: city.json, plant.json (`occlude bench --json`), gpu.toml (`occlude
-# calibrate`), raster.json (`occlude raster-bench --json`) and log.txt (every
-# command's printed output, in order).
+# calibrate`), ioc.json and ioc-soft.json (`--paper ioc` on wgpu and on soft
+# with gpu.toml, 1920x1080), raster.json (`occlude raster-bench --json`) and
+# log.txt (every command's printed output, in order).
 set -euo pipefail
 
 bin=${1:-target/release/occlude}
 out=${OUT:-gpu-out}
 size=${SIZE:-medium}
 frames=${FRAMES:-100}
-methods=vfc,sw,chc,chcpp,om,opt
+methods=vfc,sw,chc,chcpp,om,roc,ioc,opt
 
 if [[ ! -x $bin ]]; then
   echo "gpu-bench: no occlude binary at $bin (cargo build --release -p occlude, or pass its path)" >&2
@@ -52,6 +54,9 @@ for scene in city plant; do
     --json "$out/$scene.json"
 done
 step "$bin" calibrate --backend wgpu --out "$out/gpu.toml"
+paper=(bench --paper ioc --size "$size" --frames "$frames" --resolution 1920x1080)
+step "$bin" "${paper[@]}" --backend wgpu --json "$out/ioc.json"
+step "$bin" "${paper[@]}" --gpu-model "$out/gpu.toml" --json "$out/ioc-soft.json"
 step "$bin" raster-bench --gpu required --json "$out/raster.json"
 grep -ho '"adapter": *"[^"]*"' "$out/city.json" | head -1 | tee -a "$log"
 echo "gpu-bench: done; files in $out" | tee -a "$log"
