@@ -175,6 +175,12 @@ fn synthetic_scene() -> Scene {
     scene
 }
 
+/// The time a frame took beyond `base_ms`, per one of `count` things it did
+/// (ms; 0 when noise made it faster than the base).
+fn per(total_ms: f64, base_ms: f64, count: f64) -> f64 {
+    ((total_ms - base_ms) / count).max(0.0)
+}
+
 /// Median of the values.
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -221,7 +227,6 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
     };
     let repeats = config.repeats.max(1);
     let pixels = f64::from(w) * f64::from(h);
-    let per = |total_ms: f64, base_ms: f64, count: f64| ((total_ms - base_ms) / count).max(0.0);
 
     let (cpu0, gpu0) = timed(&mut backend, &camera, repeats, |_| {});
     let (cpu_draws, gpu_draws) = timed(&mut backend, &camera, repeats, |b| {
@@ -317,7 +322,6 @@ fn measure_culling(
     let (cpu_dispatches, gpu_dispatches) = timed(backend, camera, repeats, |b| {
         (0..DISPATCHES).for_each(|_| culling(b).compact(one_flag, None, one_slot));
     });
-    let per = |total_ms: f64, base_ms: f64, count: f64| ((total_ms - base_ms) / count).max(0.0);
     let dispatch_us = per(gpu_dispatches, gpu0, DISPATCHES as f64) * 1e3;
     // The time of one command of `count` elements, less the empty frame and a
     // dispatch, per element, ms.
