@@ -23,8 +23,11 @@
 //! tests against the current depth), [`GpuCulling::expand`] and
 //! [`GpuCulling::compact`] (compute passes building lists and flags) and
 //! [`GpuCulling::draw_list`] (one indirect multi-draw). Only
-//! [`GpuCulling::read_count`] brings anything back, and it is counted as a
-//! read-back in [`FrameStats::readbacks`](crate::FrameStats::readbacks).
+//! [`GpuCulling::read_count`] brings anything back to a method, and it is
+//! counted as a read-back in
+//! [`FrameStats::readbacks`](crate::FrameStats::readbacks);
+//! [`GpuCulling::read_list`] and [`GpuCulling::read_flags`] are instruments
+//! for the viewer and tests, counted the same way.
 //!
 //! The resources live as long as the backend; methods create them in
 //! `CullingMethod::prepare` of their first frame, outside the frame's clock,
@@ -34,19 +37,19 @@ use crate::geometry::Aabb;
 use thiserror::Error;
 
 /// Boxes on the device; slot `k` holds the `k`-th box given at creation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct BoxSet(pub u32);
 
 /// One `u32` visibility flag per slot on the device (0: hidden, 1: visible).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Flags(pub u32);
 
 /// A list of ids and its length on the device, up to a fixed capacity.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct IdList(pub u32);
 
 /// For each id, a range of a static item array on the device.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct RangeTable(pub u32);
 
 /// Where [`GpuCulling::expand`] puts the items it gathers.
@@ -128,4 +131,17 @@ pub trait GpuCulling {
     /// the CPU: the frame waits for the GPU (wait time) and counts a
     /// read-back.
     fn read_count(&mut self, list: IdList) -> u32;
+
+    /// The ids of `list` after everything recorded so far, read back. An
+    /// instrument (the viewer's box view, tests), not a culling step: it
+    /// waits and counts a read-back as [`read_count`] does.
+    ///
+    /// [`read_count`]: GpuCulling::read_count
+    fn read_list(&mut self, list: IdList) -> Vec<u32>;
+
+    /// The flags of `flags` after everything recorded so far, read back
+    /// (`true`: set). An instrument, like [`read_list`].
+    ///
+    /// [`read_list`]: GpuCulling::read_list
+    fn read_flags(&mut self, flags: Flags) -> Vec<bool>;
 }

@@ -750,14 +750,31 @@ impl GpuCulling for WgpuBackend<'_> {
     }
 
     fn read_count(&mut self, list: IdList) -> u32 {
+        self.read_back(|c| c.read_count(list))
+    }
+
+    fn read_list(&mut self, list: IdList) -> Vec<u32> {
+        self.read_back(|c| c.read_list(list))
+    }
+
+    fn read_flags(&mut self, flags: Flags) -> Vec<bool> {
+        self.read_back(|c| c.read_flags(flags))
+    }
+}
+
+impl WgpuBackend<'_> {
+    /// Runs everything recorded, then `read` (a blocking read-back of the
+    /// culling resources): the time is wait time, the call a read-back. A
+    /// failed read-back fails the backend and answers the default.
+    fn read_back<T: Default>(&mut self, read: impl FnOnce(&Culling) -> Result<T, String>) -> T {
         self.stats.readbacks += 1;
         self.flush();
         let start = Instant::now();
-        let count = self.culling().read_count(list);
+        let value = read(self.culling());
         self.wait += start.elapsed();
-        count.unwrap_or_else(|e| {
+        value.unwrap_or_else(|e| {
             self.gpu.ctx.fail(e);
-            0
+            T::default()
         })
     }
 }

@@ -158,6 +158,8 @@ impl CullingScene {
 /// A flag buffer and the bind group through which box-test fragments set it.
 struct FlagBuffer {
     buffer: wgpu::Buffer,
+    /// Slots (the buffer holds at least one, for an empty set).
+    len: u32,
     fragment_group: wgpu::BindGroup,
 }
 
@@ -317,7 +319,7 @@ impl Culling {
         });
         let layout = &self.scene.render.flags_layout;
         let fragment_group = bind_group(self.ctx(), "box-test flags", layout, &[(0, &buffer)]);
-        self.flags.push(FlagBuffer { buffer, fragment_group });
+        self.flags.push(FlagBuffer { buffer, len, fragment_group });
         Flags(self.flags.len() as u32 - 1)
     }
 
@@ -496,14 +498,46 @@ impl Culling {
     /// The length of `list` after all submitted work, read back (blocking).
     pub fn read_count(&self, list: IdList) -> Result<u32, String> {
         let list = &self.lists[list.0 as usize];
+        let header = self.read_words(&list.buffer, LIST_HEADER, &self.count_staging)?;
+        Ok(header[0].min(list.capacity))
+    }
+
+    /// The ids of `list` after all submitted work, read back (blocking).
+    pub fn read_list(&self, list: IdList) -> Result<Vec<u32>, String> {
+        let list = &self.lists[list.0 as usize];
+        let size = list.buffer.size();
+        let mut words = self.read_words(&list.buffer, size, &self.staging(size))?;
+        let count = words[0].min(list.capacity) as usize;
+        Ok(words.drain(2..2 + count).collect())
+    }
+
+    /// The flags of `flags` after all submitted work, read back (blocking).
+    pub fn read_flags(&self, flags: Flags) -> Result<Vec<bool>, String> {
+        let flags = &self.flags[flags.0 as usize];
+        let size = flags.buffer.size();
+        let words = self.read_words(&flags.buffer, size, &self.staging(size))?;
+        Ok(words[..flags.len as usize].iter().map(|&w| w != 0).collect())
+    }
+
+    /// A read-back buffer of `size` bytes, for the instruments' reads.
+    fn staging(&self, size: u64) -> wgpu::Buffer {
+        self.ctx().device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("culling read-back"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// The first `size` bytes of `source` after all submitted work, copied
+    /// through `staging` and read back (blocking), as words.
+    fn read_words(&self, source: &wgpu::Buffer, size: u64, staging: &wgpu::Buffer) -> Result<Vec<u32>, String> {
         let ctx = self.ctx();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&list.buffer, 0, &self.count_staging, 0, LIST_HEADER);
+        encoder.copy_buffer_to_buffer(source, 0, staging, 0, size);
         ctx.queue.submit([encoder.finish()]);
-        Mapping::start(&self.count_staging, LIST_HEADER).wait(ctx)?;
-        let bytes = take_bytes(&self.count_staging, LIST_HEADER)?;
-        let count = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
-        Ok(count.min(list.capacity))
+        Mapping::start(staging, size).wait(ctx)?;
+        Ok(bytemuck::pod_collect_to_vec(&take_bytes(staging, size)?))
     }
 
     /// What the box tests and list draws since the last call did (`None`

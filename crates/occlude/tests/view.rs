@@ -118,11 +118,13 @@ fn a_screenshot_of_the_city_shows_the_scene() {
     assert_eq!(count(&px, OCCLUDED_RED) + count(&px, VISIBLE_GREEN), 0, "no query boxes without --figure4");
 }
 
+/// The query boxes of the CPU-driven methods, and the batched box tests of
+/// the GPU-driven ones (ioc: every level's).
 #[test]
 fn figure4_shows_visible_and_occluded_query_boxes() {
     let Some(x) = window_setup("figure4_shows_visible_and_occluded_query_boxes") else { return };
     let dir = tempfile::tempdir().unwrap();
-    for method in ["chc", "chcpp"] {
+    for method in ["chc", "chcpp", "ioc"] {
         let shot = dir.path().join(format!("{method}.png"));
         let out = x.view(&[
             "--scene",

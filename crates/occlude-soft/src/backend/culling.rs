@@ -62,6 +62,15 @@ impl List {
 }
 
 impl SoftBackend<'_> {
+    /// Charges a read-back: the frame waits until everything recorded so
+    /// far has run and the copy has come back.
+    fn read_back(&mut self) {
+        self.flush();
+        self.stats.readbacks += 1;
+        let ready = self.clock.gpu_free + self.model.readback_us;
+        self.clock.wait_until(ready);
+    }
+
     /// Charges one compute dispatch over `items` elements, after everything
     /// recorded before it has run.
     fn dispatch(&mut self, items: usize) {
@@ -211,10 +220,17 @@ impl GpuCulling for SoftBackend<'_> {
     }
 
     fn read_count(&mut self, list: IdList) -> u32 {
-        self.flush();
-        self.stats.readbacks += 1;
-        let ready = self.clock.gpu_free + self.model.readback_us;
-        self.clock.wait_until(ready);
+        self.read_back();
         self.device.lists[list.0 as usize].ids.len() as u32
+    }
+
+    fn read_list(&mut self, list: IdList) -> Vec<u32> {
+        self.read_back();
+        self.device.lists[list.0 as usize].ids.clone()
+    }
+
+    fn read_flags(&mut self, flags: Flags) -> Vec<bool> {
+        self.read_back();
+        self.device.flags[flags.0 as usize].clone()
     }
 }

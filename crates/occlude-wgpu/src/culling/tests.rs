@@ -6,7 +6,7 @@ use super::*;
 use crate::{GpuContext, GpuScene, WgpuBackend};
 use glam::{Mat4, Quat, Vec3};
 use occlude_core::query_box::BOX_TRIANGLES;
-use occlude_core::{Backend, FrameStats, Mesh};
+use occlude_core::{Backend, FrameStats, GpuCulling, Mesh};
 
 const SIZE: u32 = 64;
 
@@ -75,38 +75,14 @@ fn gpu(test: &str, scene: &Scene) -> Option<Arc<GpuScene>> {
     Some(Arc::new(GpuScene::new(ctx, scene).expect("the scene fits")))
 }
 
-/// The first `len` words of `buffer`, after all submitted work.
-fn read_words(ctx: &GpuContext, buffer: &wgpu::Buffer, len: usize) -> Vec<u32> {
-    let bytes = 4 * len as u64;
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test read-back"),
-        size: bytes,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-    ctx.queue.submit([encoder.finish()]);
-    Mapping::start(&staging, bytes).wait(ctx).expect("read-back");
-    take_bytes(&staging, bytes)
-        .expect("read-back")
-        .chunks_exact(4)
-        .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
-        .collect()
+/// The flags of `flags` as 0 or 1, read through the backend's instrument.
+fn read_flags(backend: &mut WgpuBackend<'_>, flags: Flags) -> Vec<u32> {
+    GpuCulling::read_flags(backend, flags).into_iter().map(u32::from).collect()
 }
 
-/// The flags of `flags` (`len` slots).
-fn read_flags(backend: &WgpuBackend<'_>, flags: Flags, len: usize) -> Vec<u32> {
-    let culling = backend.culling.as_ref().expect("culling in use");
-    read_words(culling.ctx(), &culling.flags[flags.0 as usize].buffer, len)
-}
-
-/// The ids of `list`, sorted.
-fn read_list(backend: &WgpuBackend<'_>, list: IdList) -> Vec<u32> {
-    let culling = backend.culling.as_ref().expect("culling in use");
-    let l = &culling.lists[list.0 as usize];
-    let words = read_words(culling.ctx(), &l.buffer, 2 + l.capacity as usize);
-    let mut ids = words[2..2 + words[0].min(l.capacity) as usize].to_vec();
+/// The ids of `list`, sorted, read through the backend's instrument.
+fn read_list(backend: &mut WgpuBackend<'_>, list: IdList) -> Vec<u32> {
+    let mut ids = GpuCulling::read_list(backend, list);
     ids.sort_unstable();
     ids
 }
@@ -159,12 +135,12 @@ fn box_tests_flag_what_the_depth_buffer_does_not_hide() {
         expected[i as usize] = 1;
     }
     assert_eq!(
-        read_flags(&backend, flags, n + 1),
+        read_flags(&mut backend, flags),
         expected,
         "flags (hidden {HIDDEN}, behind eye {BEHIND_EYE}, off side {OFF_SIDE}, empty {n})"
     );
     assert_eq!(count, 4);
-    assert_eq!(read_list(&backend, visible), [WALL, BESIDE, AROUND_EYE, IN_FRONT]);
+    assert_eq!(read_list(&mut backend, visible), [WALL, BESIDE, AROUND_EYE, IN_FRONT]);
 
     // A frame that starts with a test clears the depth first: nothing hides
     // the box behind the wall now. Flags are kept until cleared.
@@ -174,7 +150,7 @@ fn box_tests_flag_what_the_depth_buffer_does_not_hide() {
     c.test_boxes(set, ids, flags);
     backend.end_frame();
     expected[HIDDEN as usize] = 1;
-    assert_eq!(read_flags(&backend, flags, n + 1), expected);
+    assert_eq!(read_flags(&mut backend, flags), expected);
 }
 
 /// The resources of [`culled_frame`].
@@ -331,10 +307,10 @@ fn expand_and_compact_build_lists_and_flags() {
     assert_eq!(c.read_count(dst), 5);
     let stats = backend.end_frame();
     assert_eq!(backend.failure(), None);
-    assert_eq!(read_flags(&backend, seed, 3), [1, 0, 0]);
-    assert_eq!(read_flags(&backend, flags, 3), [1, 0, 1]);
-    assert_eq!(read_list(&backend, dst), [10, 11, 13, 14, 15]);
-    assert_eq!(read_list(&backend, rest), [2]);
+    assert_eq!(read_flags(&mut backend, seed), [1, 0, 0]);
+    assert_eq!(read_flags(&mut backend, flags), [1, 0, 1]);
+    assert_eq!(read_list(&mut backend, dst), [10, 11, 13, 14, 15]);
+    assert_eq!(read_list(&mut backend, rest), [2]);
     assert_eq!((stats.dispatches, stats.readbacks, stats.draw_calls), (4, 2, 0));
 }
 
@@ -361,7 +337,7 @@ fn frustum_culling_clears_only_the_flags_of_boxes_out_of_view() {
     c.compact(flags, None, visible);
     backend.end_frame();
     assert_eq!(backend.failure(), None);
-    assert_eq!(read_list(&backend, visible), [WALL, HIDDEN, BESIDE, AROUND_EYE, IN_FRONT]);
+    assert_eq!(read_list(&mut backend, visible), [WALL, HIDDEN, BESIDE, AROUND_EYE, IN_FRONT]);
 }
 
 #[test]

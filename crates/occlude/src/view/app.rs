@@ -2,13 +2,13 @@
 //! can draw to it, running one method frame per redraw exactly as `bench`
 //! does, and reacting to keys and the mouse.
 
-use super::boxes::BoxRenderer;
+use super::boxes::{geometry, of_box_tests, of_queries, BoxRenderer};
 use super::camera_control::{FlyCamera, Playback, DEFAULT_FOV_Y_DEG};
 use super::input::{action, Action, HeldKeys};
 use super::overlay::{Overlay, ShownStats, StatsAverage, REFRESH_SECONDS};
 use super::path_recorder::{self, PathRecorder};
 use super::present::{Blit, Presenter};
-use super::recorder::RecordingBackend;
+use super::recorder::{RecordedBoxTest, RecordingBackend};
 use super::{ViewConfig, ViewError};
 use crate::bench::config::NEAR_PLANE;
 use crate::bench::runner::{far_plane, load_scene, render_frame};
@@ -134,6 +134,18 @@ impl<'s> Gpu<'s> {
         self.scene.context()
     }
 
+    /// Whether the adapter runs `method`: one that needs GPU-resident
+    /// culling is refused, naming what the device lacks (as `bench` refuses
+    /// it), rather than left to its view-frustum fallback.
+    fn supports(&mut self, method: &BuiltMethod) -> Result<()> {
+        if method.method.needs_gpu_culling() {
+            self.backend
+                .gpu_culling()
+                .map_err(|e| anyhow::Error::new(e).context(format!("{} cannot run here", method.method.name())))?;
+        }
+        Ok(())
+    }
+
     /// Renders from now on at `width` x `height` (a new backend; the
     /// method's state is kept).
     fn resize_backend(&mut self, scene: &'s Scene, (width, height): (u32, u32)) {
@@ -144,14 +156,21 @@ impl<'s> Gpu<'s> {
         self.frame = self.blit.bind(&self.ctx().device, self.backend.inner().color_view());
     }
 
-    /// Draws the query boxes (when asked) and the overlay over the frame
-    /// just rendered, and shows it in the window.
-    fn compose(&mut self, camera: &Camera, boxes: bool) {
+    /// Draws the recorded boxes (when asked: `Some` of which box test,
+    /// `None` inside for all) and the overlay over the frame just rendered,
+    /// and shows it in the window.
+    fn compose(&mut self, camera: &Camera, boxes: Option<Option<usize>>) {
         let ctx = Arc::clone(self.scene.context());
         let target = self.backend.inner().color_view();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        if boxes {
-            self.boxes.draw(&ctx.device, &ctx.queue, &mut encoder, target, camera, self.backend.queries());
+        if let Some(shown_test) = boxes {
+            let tests = self.backend.box_tests();
+            let tests = match shown_test {
+                Some(k) => tests.get(k..=k).unwrap_or_default(),
+                None => tests,
+            };
+            let geometry = geometry(of_queries(self.backend.queries()).chain(of_box_tests(tests)));
+            self.boxes.draw(&ctx.device, &ctx.queue, &mut encoder, target, camera, &geometry);
         }
         self.overlay.draw(&mut encoder, target);
         ctx.queue.submit([encoder.finish()]);
@@ -185,6 +204,8 @@ struct Viewer<'s> {
     playing: bool,
     recording: Option<PathRecorder>,
     show_boxes: bool,
+    /// The one box test shown (key L), or all of them.
+    shown_test: Option<usize>,
     held: HeldKeys,
     /// A mouse button is held: cursor motion turns the camera.
     looking: bool,
@@ -218,6 +239,7 @@ impl<'s> Viewer<'s> {
             playing: config.play,
             recording: None,
             show_boxes: config.figure4,
+            shown_test: None,
             held: HeldKeys::default(),
             looking: false,
             cursor: None,
@@ -258,7 +280,12 @@ impl<'s> Viewer<'s> {
     /// Switches to method `index` of `METHOD_NAMES`, fresh (no state from
     /// earlier frames, which may refer to another hierarchy).
     fn set_method(&mut self, index: usize) {
-        match create(METHOD_NAMES[index], &self.config.scene.options) {
+        let built =
+            create(METHOD_NAMES[index], &self.config.scene.options).map_err(anyhow::Error::from).and_then(|b| {
+                self.gpu.as_mut().map_or(Ok(()), |g| g.supports(&b))?;
+                Ok(b)
+            });
+        match built {
             Ok(built) => {
                 self.method = built;
                 self.method_index = index;
@@ -283,6 +310,14 @@ impl<'s> Viewer<'s> {
                 self.set_method(self.method_index);
             }
             Action::ToggleBoxes => self.show_boxes = !self.show_boxes,
+            Action::NextBoxTest => {
+                let tests = self.gpu.as_ref().map_or(0, |g| g.backend.box_tests().len());
+                self.shown_test = match self.shown_test {
+                    None if tests > 0 => Some(0),
+                    Some(k) if k + 1 < tests => Some(k + 1),
+                    _ => None,
+                };
+            }
             Action::TogglePlayback => self.playing = !self.playing,
             Action::ToggleRecording => match self.recording {
                 Some(_) => self.stop_recording()?,
@@ -349,7 +384,7 @@ impl<'s> Viewer<'s> {
             gpu.overlay.update(&ctx.device, &ctx.queue, &gpu.blit, &lines, (w, h))?;
         }
         let gpu = self.gpu.as_mut().expect("checked above");
-        gpu.compose(&camera, self.show_boxes);
+        gpu.compose(&camera, self.show_boxes.then_some(self.shown_test));
         if let (true, Some(path)) = (last, &self.config.screenshot) {
             gpu.screenshot(path)?;
             eprintln!("wrote {} ({w}x{h}, frame {} of {})", path.display(), self.frames, self.config.scene.frames);
@@ -375,8 +410,11 @@ impl<'s> Viewer<'s> {
         lines.push(mode);
         if self.show_boxes {
             lines.push("query boxes: green visible, red occluded, yellow never read".into());
+            if let Some(line) = self.gpu.as_ref().and_then(|g| box_test_line(g.backend.box_tests(), self.shown_test)) {
+                lines.push(line);
+            }
         }
-        lines.push(format!("1-{}/M method  H hierarchy  V boxes  P play  R record", METHOD_NAMES.len()));
+        lines.push(format!("1-{}/M method  H hierarchy  V boxes  L box test  P play  R record", METHOD_NAMES.len()));
         lines.push("WASD QE: fly  Shift: fast  wheel: speed  drag: look".into());
         lines
     }
@@ -388,10 +426,13 @@ impl ApplicationHandler for Viewer<'_> {
             return;
         }
         match Gpu::open(event_loop, self.scene, self.config) {
-            Ok(gpu) => {
-                gpu.window.request_redraw();
-                self.gpu = Some(gpu);
-            }
+            Ok(mut gpu) => match gpu.supports(&self.method) {
+                Ok(()) => {
+                    gpu.window.request_redraw();
+                    self.gpu = Some(gpu);
+                }
+                Err(e) => self.fail(event_loop, e),
+            },
             Err(e) => self.fail(event_loop, e),
         }
     }
@@ -462,6 +503,25 @@ impl ApplicationHandler for Viewer<'_> {
 
 /// A view of the whole scene from above one side, for a scene without a
 /// walkthrough.
+/// The overlay line of the frame's box tests (`ioc`: one per level): each
+/// batch's visible and tested boxes, the shown one in brackets; `None`
+/// without box tests.
+fn box_test_line(tests: &[RecordedBoxTest], shown: Option<usize>) -> Option<String> {
+    let batches: Vec<String> = tests
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let counts = format!("{}/{}", t.visible_count(), t.boxes.len());
+            if shown == Some(k) {
+                format!("[{counts}]")
+            } else {
+                counts
+            }
+        })
+        .collect();
+    (!batches.is_empty()).then(|| format!("box tests, visible/tested: {}", batches.join(" ")))
+}
+
 fn overview(scene: &Scene) -> Keyframe {
     let bounds = scene.bounds();
     let target = bounds.center();

@@ -5,12 +5,14 @@
 //! depth test: occluded boxes are hidden behind geometry, and showing them is
 //! the point. (Visible boxes get no faces: the queries of a visible node's
 //! ancestors are visible too, and their nested faces would tint the whole
-//! image.)
+//! image.) The GPU-driven methods' batched box tests are drawn the same
+//! way, green or red: all of them, or one batch at a time (key L), which for
+//! `ioc` is one level of the hierarchy (the IOC poster's Figure 4).
 
 use super::present::draw_over;
-use super::recorder::{QueryOutcome, RecordedQuery};
+use super::recorder::{QueryOutcome, RecordedBoxTest, RecordedQuery};
 use occlude_core::query_box::BOX_TRIANGLES;
-use occlude_core::Camera;
+use occlude_core::{Aabb, Camera};
 use wgpu::util::DeviceExt;
 
 /// Outline colour of a box whose query found visible pixels.
@@ -42,7 +44,7 @@ pub struct BoxGeometry {
     pub edges: Vec<BoxVertex>,
 }
 
-/// The colour of a query's boxes.
+/// The colour of a box with this outcome.
 pub fn outcome_color(outcome: QueryOutcome) -> [f32; 3] {
     match outcome {
         QueryOutcome::Visible => VISIBLE,
@@ -51,22 +53,36 @@ pub fn outcome_color(outcome: QueryOutcome) -> [f32; 3] {
     }
 }
 
-/// The geometry of every box of `queries`, coloured by its query's outcome.
-pub fn geometry(queries: &[RecordedQuery]) -> BoxGeometry {
+/// Each box of `queries` with its query's outcome.
+pub fn of_queries(queries: &[RecordedQuery]) -> impl Iterator<Item = (&Aabb, QueryOutcome)> {
+    queries.iter().flat_map(|q| q.boxes.iter().map(move |b| (b, q.outcome())))
+}
+
+/// Each box of `tests` with its outcome: visible where its flag was set,
+/// else occluded (a box test's result is always read, on the device).
+pub fn of_box_tests<'a>(
+    tests: impl IntoIterator<Item = &'a RecordedBoxTest>,
+) -> impl Iterator<Item = (&'a Aabb, QueryOutcome)> {
+    tests.into_iter().flat_map(|t| {
+        let outcome = |&v: &bool| if v { QueryOutcome::Visible } else { QueryOutcome::Occluded };
+        t.boxes.iter().zip(t.visible.iter().map(outcome))
+    })
+}
+
+/// The geometry of `boxes`, each coloured by its outcome.
+pub fn geometry<'a>(boxes: impl IntoIterator<Item = (&'a Aabb, QueryOutcome)>) -> BoxGeometry {
     let mut out = BoxGeometry::default();
-    for q in queries {
-        let [r, g, b] = outcome_color(q.outcome());
-        for aabb in &q.boxes {
-            let corners = aabb.corners();
-            let vertex = |c: u8, a: f32| BoxVertex { position: corners[c as usize].to_array(), color: [r, g, b, a] };
-            if q.outcome() != QueryOutcome::Visible {
-                out.faces.extend(BOX_TRIANGLES.iter().flatten().map(|&c| vertex(c, FACE_ALPHA)));
-            }
-            // The 12 edges join corners whose indices differ in one bit.
-            for c in 0..8u8 {
-                for bit in [1u8, 2, 4].into_iter().filter(|bit| c & bit == 0) {
-                    out.edges.extend([vertex(c, 1.0), vertex(c | bit, 1.0)]);
-                }
+    for (aabb, outcome) in boxes {
+        let [r, g, b] = outcome_color(outcome);
+        let corners = aabb.corners();
+        let vertex = |c: u8, a: f32| BoxVertex { position: corners[c as usize].to_array(), color: [r, g, b, a] };
+        if outcome != QueryOutcome::Visible {
+            out.faces.extend(BOX_TRIANGLES.iter().flatten().map(|&c| vertex(c, FACE_ALPHA)));
+        }
+        // The 12 edges join corners whose indices differ in one bit.
+        for c in 0..8u8 {
+            for bit in [1u8, 2, 4].into_iter().filter(|bit| c & bit == 0) {
+                out.edges.extend([vertex(c, 1.0), vertex(c | bit, 1.0)]);
             }
         }
     }
@@ -156,8 +172,8 @@ impl BoxRenderer {
         }
     }
 
-    /// Encodes drawing the boxes of `queries` seen by `camera` over
-    /// `target`: faces first, outlines over them.
+    /// Encodes drawing `geometry` seen by `camera` over `target`: faces
+    /// first, outlines over them.
     pub fn draw(
         &self,
         device: &wgpu::Device,
@@ -165,9 +181,8 @@ impl BoxRenderer {
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         camera: &Camera,
-        queries: &[RecordedQuery],
+        geometry: &BoxGeometry,
     ) {
-        let geometry = geometry(queries);
         if geometry.edges.is_empty() {
             return;
         }
@@ -196,7 +211,6 @@ impl BoxRenderer {
 mod tests {
     use super::*;
     use glam::Vec3;
-    use occlude_core::Aabb;
 
     #[test]
     fn every_box_gets_its_faces_and_edges_in_its_outcome_colour() {
@@ -206,7 +220,7 @@ mod tests {
             RecordedQuery { boxes: vec![unit], result: Some(0) },
             RecordedQuery { boxes: vec![unit], result: None },
         ];
-        let g = geometry(&queries);
+        let g = geometry(of_queries(&queries));
         assert_eq!((g.faces.len(), g.edges.len()), (2 * 36, 4 * 24), "faces of the occluded and unread boxes");
         let rgb = |v: &BoxVertex| [v.color[0], v.color[1], v.color[2]];
         assert!(g.edges[..48].iter().all(|v| rgb(v) == VISIBLE && v.color[3] == 1.0));
@@ -219,5 +233,19 @@ mod tests {
             let d = Vec3::from(pair[1].position) - Vec3::from(pair[0].position);
             assert_eq!(d.abs().element_sum(), 1.0, "{pair:?}");
         }
+    }
+
+    #[test]
+    fn box_tests_are_visible_or_occluded_box_by_box() {
+        let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let tests = [
+            RecordedBoxTest { boxes: vec![unit, unit], visible: vec![true, false] },
+            RecordedBoxTest { boxes: vec![unit], visible: vec![false] },
+        ];
+        let outcomes: Vec<_> = of_box_tests(&tests).map(|(_, o)| o).collect();
+        use QueryOutcome::{Occluded, Visible};
+        assert_eq!(outcomes, [Visible, Occluded, Occluded]);
+        let g = geometry(of_box_tests(&tests[1..]));
+        assert_eq!((g.faces.len(), g.edges.len()), (36, 24));
     }
 }

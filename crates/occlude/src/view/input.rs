@@ -18,6 +18,9 @@ pub enum Action {
     ToggleHierarchy,
     /// V: query boxes coloured by result (the CHC paper's Figure 4).
     ToggleBoxes,
+    /// L: of the GPU-driven methods' box tests, the next one alone (for
+    /// `ioc`, the next level), then all again.
+    NextBoxTest,
     /// P: play or stop the scene's walkthrough.
     TogglePlayback,
     /// R: start recording a camera path, or stop and write it.
@@ -46,6 +49,7 @@ pub fn action(key: KeyCode) -> Option<Action> {
         KeyCode::KeyM => Action::NextMethod,
         KeyCode::KeyH => Action::ToggleHierarchy,
         KeyCode::KeyV => Action::ToggleBoxes,
+        KeyCode::KeyL => Action::NextBoxTest,
         KeyCode::KeyP => Action::TogglePlayback,
         KeyCode::KeyR => Action::ToggleRecording,
         KeyCode::Escape => Action::Quit,
@@ -101,6 +105,7 @@ mod tests {
         assert_eq!(action(KeyCode::Digit8), Some(Action::Method(7)));
         assert_eq!(action(KeyCode::Digit9), None);
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
+        assert_eq!(action(KeyCode::KeyL), Some(Action::NextBoxTest));
         assert_eq!(action(KeyCode::KeyW), None);
         let mut held = HeldKeys::default();
         held.set(KeyCode::KeyW, true);

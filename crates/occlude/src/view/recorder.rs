@@ -1,9 +1,14 @@
-//! [`RecordingBackend`]: a [`Backend`] that forwards every call to another
-//! and, while recording, keeps each occlusion query's boxes and the result
-//! the method read, so that the viewer can draw them (the CHC paper's
-//! Figure 4) without any method knowing.
+//! [`RecordingBackend`]: a [`Backend`] (and [`GpuCulling`], where the
+//! wrapped backend has it) that forwards every call to another and, while
+//! recording, keeps each occlusion query's boxes and the result the method
+//! read, and each batched box test's boxes and outcomes, so that the viewer
+//! can draw them (the CHC paper's Figure 4; the IOC poster's levels) without
+//! any method knowing.
 
-use occlude_core::{Aabb, Backend, Camera, FrameStats, OracleView, QueryHandle};
+use occlude_core::{
+    Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
+    OracleView, QueryHandle, RangeTable,
+};
 use std::collections::HashMap;
 
 /// What a query answered, as far as the method asked.
@@ -38,23 +43,55 @@ impl RecordedQuery {
     }
 }
 
-/// Forwards to `inner`, recording the frame's queries when asked to.
+/// One batched box test ([`GpuCulling::test_boxes`]) of the last recorded
+/// frame: for `ioc`, one level of the hierarchy.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RecordedBoxTest {
+    /// The boxes of the ids tested, as the method created them.
+    pub boxes: Vec<Aabb>,
+    /// Per box, whether its flag was set after the test (by this test, or
+    /// by an earlier one of the frame into the same flags).
+    pub visible: Vec<bool>,
+}
+
+impl RecordedBoxTest {
+    /// How many of the boxes were found visible.
+    pub fn visible_count(&self) -> usize {
+        self.visible.iter().filter(|&&v| v).count()
+    }
+}
+
+/// Forwards to `inner`, recording the frame's queries and box tests when
+/// asked to.
 pub struct RecordingBackend<B> {
     inner: B,
     recording: bool,
     queries: Vec<RecordedQuery>,
     /// This frame's query handles, to the index of their record.
     index: HashMap<QueryHandle, usize>,
+    tests: Vec<RecordedBoxTest>,
+    /// The boxes of every box set created through the recorder, by set.
+    box_sets: HashMap<BoxSet, Vec<Aabb>>,
 }
 
 impl<B: Backend> RecordingBackend<B> {
     /// A wrapper around `inner`, not recording.
     pub fn new(inner: B) -> Self {
-        Self { inner, recording: false, queries: Vec::new(), index: HashMap::new() }
+        Self {
+            inner,
+            recording: false,
+            queries: Vec::new(),
+            index: HashMap::new(),
+            tests: Vec::new(),
+            box_sets: HashMap::new(),
+        }
     }
 
-    /// Records the queries of the frames that begin from now on (`true`) or
-    /// stops (`false`; nothing is kept, so recording costs nothing when off).
+    /// Records the queries and box tests of the frames that begin from now
+    /// on (`true`) or stops (`false`; nothing is kept, so recording costs
+    /// nothing when off). Recording a box test reads its ids and flags back
+    /// from the device, which the frame's statistics count (read-backs,
+    /// wait time).
     pub fn set_recording(&mut self, on: bool) {
         self.recording = on;
     }
@@ -62,6 +99,11 @@ impl<B: Backend> RecordingBackend<B> {
     /// The queries of the last frame begun while recording, in issue order.
     pub fn queries(&self) -> &[RecordedQuery] {
         &self.queries
+    }
+
+    /// The box tests of the last frame begun while recording, in order.
+    pub fn box_tests(&self) -> &[RecordedBoxTest] {
+        &self.tests
     }
 
     /// The wrapped backend.
@@ -79,12 +121,19 @@ impl<B: Backend> RecordingBackend<B> {
             self.queries[i].result = Some(value);
         }
     }
+
+    /// The wrapped backend's GPU-resident culling, which the recorder only
+    /// offers where the wrapped backend does.
+    fn culling(&mut self) -> &mut dyn GpuCulling {
+        self.inner.gpu_culling().expect("the recorder offers GPU culling only where its backend has it")
+    }
 }
 
 impl<B: Backend> Backend for RecordingBackend<B> {
     fn begin_frame(&mut self, camera: &Camera) {
         self.queries.clear();
         self.index.clear();
+        self.tests.clear();
         self.inner.begin_frame(camera);
     }
 
@@ -130,6 +179,77 @@ impl<B: Backend> Backend for RecordingBackend<B> {
     fn failure(&self) -> Option<String> {
         self.inner.failure()
     }
+
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        self.inner.gpu_culling()?;
+        Ok(self)
+    }
+}
+
+impl<B: Backend> GpuCulling for RecordingBackend<B> {
+    fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
+        let set = self.culling().create_boxes(boxes);
+        self.box_sets.insert(set, boxes.to_vec());
+        set
+    }
+
+    fn create_flags(&mut self, len: u32) -> Flags {
+        self.culling().create_flags(len)
+    }
+
+    fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
+        self.culling().create_list(capacity, ids)
+    }
+
+    fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
+        self.culling().create_table(ranges, items)
+    }
+
+    fn clear_flags(&mut self, flags: Flags) {
+        self.culling().clear_flags(flags);
+    }
+
+    fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
+        self.culling().test_boxes(boxes, ids, flags);
+        if !self.recording {
+            return;
+        }
+        let tested = self.culling().read_list(ids);
+        let set = self.culling().read_flags(flags);
+        let all = &self.box_sets[&boxes];
+        self.tests.push(RecordedBoxTest {
+            boxes: tested.iter().map(|&id| all[id as usize]).collect(),
+            visible: tested.iter().map(|&id| set[id as usize]).collect(),
+        });
+    }
+
+    fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {
+        self.culling().expand(src, filter, table, into);
+    }
+
+    fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags) {
+        self.culling().drop_outside_frustum(boxes, flags);
+    }
+
+    fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
+        self.culling().compact(flags, unless, dst);
+    }
+
+    fn draw_list(&mut self, list: IdList) {
+        self.culling().draw_list(list);
+    }
+
+    fn read_count(&mut self, list: IdList) -> u32 {
+        self.culling().read_count(list)
+    }
+
+    fn read_list(&mut self, list: IdList) -> Vec<u32> {
+        self.culling().read_list(list)
+    }
+
+    fn read_flags(&mut self, flags: Flags) -> Vec<bool> {
+        self.culling().read_flags(flags)
+    }
 }
 
 #[cfg(test)]
@@ -174,6 +294,44 @@ mod tests {
                 }
             }
         }
+        assert!(visible > 0 && occluded > 0, "visible {visible}, occluded {occluded}");
+    }
+
+    /// IOC on the soft backend through the recorder: the recorder offers the
+    /// wrapped backend's GPU culling (so ioc culls rather than falling back
+    /// to view-frustum culling), records one box test per level with every
+    /// tested box, and changes no image.
+    #[test]
+    fn records_ioc_box_tests_level_by_level_and_changes_no_image() {
+        let scene = occlude_scenes::generate("city", occlude_scenes::Size::Small, 1).unwrap();
+        let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, Default::default());
+        let cameras = scene.path.sample(4, 4.0 / 3.0, NEAR_PLANE, 2000.0);
+        let soft = || SoftBackend::new(&scene, 160, 120, GpuModel::modern());
+        let options = MethodOptions::parse(&["ioc.start=2", "ioc.bottom=deepest-1"]).unwrap();
+        let mut plain = (create("ioc", &options).unwrap(), soft(), DrawnSet::default());
+        let mut wrapped = (create("ioc", &options).unwrap(), RecordingBackend::new(soft()), DrawnSet::default());
+        let mut vfc = (create("vfc", &options).unwrap(), soft(), DrawnSet::default());
+        let (mut visible, mut occluded, mut fewer_than_vfc) = (0, 0, false);
+        let (mut plain_depth, mut wrapped_depth) = (Vec::new(), Vec::new());
+        wrapped.1.set_recording(true);
+        for (k, camera) in cameras.iter().enumerate() {
+            let a = render_frame(plain.0.method.as_mut(), &mut plain.1, &scene, &hierarchy, camera, &mut plain.2);
+            let b = render_frame(wrapped.0.method.as_mut(), &mut wrapped.1, &scene, &hierarchy, camera, &mut wrapped.2);
+            let v = render_frame(vfc.0.method.as_mut(), &mut vfc.1, &scene, &hierarchy, camera, &mut vfc.2);
+            plain.1.depth_image(&mut plain_depth);
+            wrapped.1.depth_image(&mut wrapped_depth);
+            assert!(plain_depth == wrapped_depth, "frame {k}: recording changed the image");
+            assert_eq!((a.triangles, a.query_boxes), (b.triangles, b.query_boxes), "frame {k}");
+            fewer_than_vfc |= b.triangles < v.triangles;
+            let tests = wrapped.1.box_tests();
+            assert!(!tests.is_empty(), "frame {k}: no box test recorded");
+            let tested: usize = tests.iter().map(|t| t.boxes.len()).sum();
+            assert!(tested as u64 >= b.query_boxes, "frame {k}: {tested} recorded, {} rasterized", b.query_boxes);
+            assert!(b.readbacks >= 2 * tests.len() as u64, "frame {k}: the recorder's read-backs are counted");
+            visible += tests.iter().map(RecordedBoxTest::visible_count).sum::<usize>();
+            occluded += tests.iter().map(|t| t.boxes.len() - t.visible_count()).sum::<usize>();
+        }
+        assert!(fewer_than_vfc, "ioc through the recorder never culled more than vfc");
         assert!(visible > 0 && occluded > 0, "visible {visible}, occluded {occluded}");
     }
 }
