@@ -9,6 +9,7 @@ pub mod chc;
 pub mod chcpp;
 pub mod debug;
 mod front_to_back;
+pub mod hiz;
 pub mod ioc;
 pub mod om;
 pub mod opt;
@@ -28,7 +29,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 8] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"];
+pub const METHOD_NAMES: [&str; 9] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -63,6 +64,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
+        "hiz" => Box::new(hiz::TwoPhaseHiZ::default()),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -86,6 +88,13 @@ pub trait CullingMethod {
     /// ([`Backend::gpu_culling`]); the runner refuses a backend without it
     /// before the first frame.
     fn needs_gpu_culling(&self) -> bool {
+        false
+    }
+
+    /// Whether the method builds depth pyramids on the backend's
+    /// GPU-resident culling ([`GpuCulling::pyramid_support`](crate::GpuCulling::pyramid_support));
+    /// the runner refuses a backend without them before the first frame.
+    fn needs_depth_pyramid(&self) -> bool {
         false
     }
 

@@ -213,8 +213,16 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
         .collect::<Result<Vec<_>>>()?;
     for lane in &mut lanes {
         if lane.built.method.needs_gpu_culling() {
-            if let Err(e) = lane.backend.gpu_culling() {
-                return Err(anyhow::Error::new(e).context(format!("method {} cannot run", lane.built.method.name())));
+            let method = lane.built.method.as_ref();
+            let support = lane.backend.gpu_culling().and_then(|gpu| {
+                if method.needs_depth_pyramid() {
+                    gpu.pyramid_support()
+                } else {
+                    Ok(())
+                }
+            });
+            if let Err(e) = support {
+                return Err(anyhow::Error::new(e).context(format!("method {} cannot run", method.name())));
             }
         }
     }
