@@ -16,13 +16,17 @@
 //!   buffer);
 //! - [`IdList`]: a list of ids with its length, both on the device;
 //! - [`RangeTable`]: for each id a range of a static item array (a node's
-//!   children, a leaf's instances, all instances of a subtree).
+//!   children, a leaf's instances, all instances of a subtree);
+//! - [`Pyramid`]: a depth pyramid over the backend's image (two-phase Hi-Z;
+//!   its construction and box test are `depth_pyramid`'s).
 //!
 //! Commands run in the order they are recorded, interleaved with the
 //! backend's draws, on the GPU queue: [`GpuCulling::test_boxes`] (batched box
 //! tests against the current depth), [`GpuCulling::expand`] and
-//! [`GpuCulling::compact`] (compute passes building lists and flags) and
-//! [`GpuCulling::draw_list`] (one indirect multi-draw). Only
+//! [`GpuCulling::compact`] (compute passes building lists and flags),
+//! [`GpuCulling::build_pyramid`] and [`GpuCulling::test_boxes_pyramid`]
+//! (a depth pyramid of the current depth and box tests against it, compute
+//! passes too) and [`GpuCulling::draw_list`] (one indirect multi-draw). Only
 //! [`GpuCulling::read_count`] brings anything back to a method, and it is
 //! counted as a read-back in
 //! [`FrameStats::readbacks`](crate::FrameStats::readbacks);
@@ -51,6 +55,11 @@ pub struct IdList(pub u32);
 /// For each id, a range of a static item array on the device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct RangeTable(pub u32);
+
+/// A depth pyramid of the backend's image size on the device
+/// ([`crate::depth_pyramid`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Pyramid(pub u32);
 
 /// Where [`GpuCulling::expand`] puts the items it gathers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,6 +115,30 @@ pub trait GpuCulling {
     /// A dispatch (frustum and near tests, list of boxes to draw) and one
     /// indirect draw of the boxes.
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags);
+
+    /// Whether the backend builds depth pyramids ([`Self::create_pyramid`],
+    /// [`Self::build_pyramid`], [`Self::test_boxes_pyramid`]); the error
+    /// names what it lacks. Those three are only called where this is `Ok`
+    /// (the runner asks before the first frame).
+    fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported>;
+
+    /// A depth pyramid over the backend's image, every texel at the far
+    /// plane.
+    fn create_pyramid(&mut self) -> Pyramid;
+
+    /// Rebuilds `pyramid` from the depth buffer as everything recorded so
+    /// far leaves it (one dispatch per level past level 0, which is the
+    /// depth image itself).
+    fn build_pyramid(&mut self, pyramid: Pyramid);
+
+    /// [`Self::test_boxes`] against `pyramid` instead of the depth buffer:
+    /// the same frustum and near-region rules, then each remaining box's
+    /// footprint tested against the pyramid
+    /// ([`DepthPyramid::test`](crate::depth_pyramid::DepthPyramid::test)),
+    /// setting `flags[id]` to 1 where it may be visible. Never hides a box
+    /// that [`Self::test_boxes`] against the depth the pyramid was built
+    /// from would find visible. One dispatch, no draw.
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags);
 
     /// For each id of `src` whose flag in `filter` is set, the items of its
     /// range in `table`, into `into` (one dispatch).

@@ -8,6 +8,7 @@
 
 pub mod backend;
 pub mod camera;
+pub mod depth_pyramid;
 pub mod geometry;
 pub mod gpu_culling;
 pub mod hierarchy;
@@ -21,7 +22,9 @@ pub mod stats;
 pub use backend::{Backend, OracleView, QueryHandle, RenderState, StateTracker};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
-pub use gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, RangeTable};
+pub use gpu_culling::{
+    BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
+};
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
 pub use methods::{CullingMethod, FrameContext};
 

@@ -55,6 +55,14 @@ pub struct GpuModel {
     /// (the fragment shader writing the visibility flag), on top of
     /// `gpu_query_fragment_ns` per covered pixel (the depth test), ns.
     pub gpu_box_fragment_ns: f64,
+    /// GPU time per texel a depth-pyramid reduction writes (reading its
+    /// 2x2 source texels), ns.
+    pub gpu_pyramid_texel_ns: f64,
+    /// GPU time per box tested against a depth pyramid (its 8 corners
+    /// projected, its level chosen), ns.
+    pub gpu_hiz_box_ns: f64,
+    /// GPU time per pyramid texel such a test reads, ns.
+    pub gpu_hiz_texel_ns: f64,
     /// GPU time per draw inside an indirect multi-draw (in place of
     /// `gpu_draw_call_us`), µs.
     pub gpu_indirect_draw_us: f64,
@@ -113,6 +121,9 @@ impl GpuModel {
             gpu_compute_item_ns: 2.0,
             gpu_box_us: 0.3,
             gpu_box_fragment_ns: 0.6,
+            gpu_pyramid_texel_ns: 2.0,
+            gpu_hiz_box_ns: 67.0,
+            gpu_hiz_texel_ns: 0.6,
             gpu_indirect_draw_us: 1.5,
             readback_us: 12.0,
         }
@@ -140,6 +151,9 @@ impl GpuModel {
             gpu_compute_item_ns: 0.05,
             gpu_box_us: 0.005,
             gpu_box_fragment_ns: 0.02,
+            gpu_pyramid_texel_ns: 0.05,
+            gpu_hiz_box_ns: 1.0,
+            gpu_hiz_texel_ns: 0.02,
             gpu_indirect_draw_us: 0.1,
             readback_us: 30.0,
         }
@@ -205,6 +219,9 @@ impl GpuModel {
             ("gpu_compute_item_ns", self.gpu_compute_item_ns),
             ("gpu_box_us", self.gpu_box_us),
             ("gpu_box_fragment_ns", self.gpu_box_fragment_ns),
+            ("gpu_pyramid_texel_ns", self.gpu_pyramid_texel_ns),
+            ("gpu_hiz_box_ns", self.gpu_hiz_box_ns),
+            ("gpu_hiz_texel_ns", self.gpu_hiz_texel_ns),
             ("gpu_indirect_draw_us", self.gpu_indirect_draw_us),
             ("readback_us", self.readback_us),
         ];

@@ -21,7 +21,7 @@ use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
-    OracleView, QueryHandle, RangeTable, RenderState, Scene, StateTracker,
+    OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene, StateTracker,
 };
 use std::ops::Range;
 use std::sync::Arc;
@@ -743,6 +743,22 @@ impl GpuCulling for WgpuBackend<'_> {
 
     fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
         self.record_cull(CullOp::Compact { flags, unless, dst });
+    }
+
+    fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
+        Err(GpuCullingUnsupported("the wgpu backend builds no depth pyramid yet, which hiz needs".into()))
+    }
+
+    fn create_pyramid(&mut self) -> Pyramid {
+        unreachable!("create_pyramid where pyramid_support is an error")
+    }
+
+    fn build_pyramid(&mut self, _: Pyramid) {
+        unreachable!("build_pyramid where pyramid_support is an error")
+    }
+
+    fn test_boxes_pyramid(&mut self, _: BoxSet, _: IdList, _: Pyramid, _: Flags) {
+        unreachable!("test_boxes_pyramid where pyramid_support is an error")
     }
 
     fn draw_list(&mut self, list: IdList) {

@@ -1,6 +1,7 @@
-//! The GPU-driven methods (`roc`, `ioc`) on the soft backend's
+//! The GPU-driven methods (`roc`, `ioc`, `hiz`) on the soft backend's
 //! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
-//! every `small` scene with both hierarchies, `ioc` over several depth
+//! every `small` scene with both hierarchies, `hiz` at the resolutions
+//! where pyramids go wrong (odd sizes, 1x1), `ioc` over several depth
 //! ranges, with its start chosen per frame, and with and without its
 //! frustum test, `roc.mode=last` reporting the pixels it misses, the frame
 //! statistics of a GPU-driven frame, and the depth options' errors and
@@ -9,6 +10,7 @@
 use indicatif::ProgressBar;
 use occlude::bench::runner::{run_scene, BenchRun};
 use occlude::bench::BenchConfig;
+use occlude_core::depth_pyramid::level_sizes;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
@@ -42,20 +44,35 @@ fn assert_exact(run: &BenchRun, what: &str) {
 }
 
 #[test]
-fn roc_and_ioc_match_vfc_on_every_frame_and_cull() {
+fn roc_ioc_and_hiz_match_vfc_on_every_frame_and_cull() {
     for name in SCENE_NAMES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
-            let r = run(&scene, &config(name, hierarchy, &["vfc", "roc", "ioc"], &[]));
+            let r = run(&scene, &config(name, hierarchy, &["vfc", "roc", "ioc", "hiz"], &[]));
             assert_exact(&r, &format!("{name}/{hierarchy}"));
             let triangles = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
             assert!(triangles(1) < triangles(0), "{name}/{hierarchy}: roc culled nothing");
+            assert!(triangles(3) < triangles(0), "{name}/{hierarchy}: hiz culled nothing");
             // At its bottom depth ioc draws whole subtrees (frustum-culled), and
             // both draw last frame's visible set first, in view or not: ioc
             // draws less than vfc only where occlusion is strong.
             if name == "city" {
                 assert!(triangles(2) < triangles(0), "{name}/{hierarchy}: ioc culled nothing");
             }
+        }
+    }
+}
+
+#[test]
+fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
+    let scene = small("city");
+    for resolution in [(1024, 768), (1920, 1080), (1366, 768), (1023, 767), (641, 479), (1, 1)] {
+        let cfg = BenchConfig { frames: 6, resolution, ..config("city", HierarchyKind::Bvh, &["vfc", "hiz"], &[]) };
+        let r = run(&scene, &cfg);
+        assert_exact(&r, &format!("city/hiz at {resolution:?}"));
+        let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+        if resolution.0 > 1 {
+            assert!(drawn(1) < drawn(0), "city/hiz at {resolution:?} culled nothing");
         }
     }
 }
@@ -105,13 +122,13 @@ fn roc_last_mode_reports_the_pixels_it_misses() {
 #[test]
 fn a_gpu_driven_frame_reads_nothing_back_and_counts_its_passes() {
     let scene = small("figures");
-    let r = run(&scene, &config("figures", HierarchyKind::Bvh, &["vfc", "roc", "ioc"], &[]));
-    let (vfc, roc, ioc) = (&r.methods[0].frames, &r.methods[1].frames, &r.methods[2].frames);
+    let r = run(&scene, &config("figures", HierarchyKind::Bvh, &["vfc", "roc", "ioc", "hiz"], &[]));
+    let (vfc, roc, ioc, hiz) = (&r.methods[0].frames, &r.methods[1].frames, &r.methods[2].frames, &r.methods[3].frames);
     for f in vfc {
         assert_eq!((f.dispatches, f.indirect_draws, f.readbacks), (0, 0, 0));
         assert!((f.render_ms > 0.0 || f.triangles == 0) && f.cull_ms == 0.0);
     }
-    for f in roc.iter().chain(ioc) {
+    for f in roc.iter().chain(ioc).chain(hiz) {
         assert_eq!((f.queries, f.readbacks, f.traversal_steps), (0, 0, 0));
         assert_eq!(f.draw_calls, f.indirect_draw_calls, "every draw is inside a multi-draw");
         assert!(f.cull_ms > 0.0 && (f.render_ms > 0.0 || f.triangles == 0));
@@ -124,6 +141,12 @@ fn a_gpu_driven_frame_reads_nothing_back_and_counts_its_passes() {
     // The levels' box tests are indirect draws too.
     let levels = ioc[1].indirect_draws - 2;
     assert!(levels >= 1 && ioc.iter().all(|f| f.indirect_draws == levels + 2));
+    // hiz: two list draws and no box drawn; 7 dispatches (frustum drop,
+    // three compactions, clear, pyramid test, two draw-argument passes)
+    // and one per pyramid level past level 0.
+    let reductions = level_sizes(480, 360).len() as u64 - 1;
+    assert!(hiz.iter().all(|f| f.indirect_draws == 2 && f.dispatches == 7 + reductions), "{:?}", hiz[1]);
+    assert!(hiz.iter().map(|f| f.query_boxes).sum::<u64>() > 0, "hiz tested no box against its pyramid");
 }
 
 #[test]

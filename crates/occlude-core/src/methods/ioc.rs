@@ -267,7 +267,7 @@ impl CullingMethod for IterativeOcclusion {
             backend.traverse(visited);
         }
         let gpu = backend.gpu_culling().expect("checked above");
-        let visible = r.temporal.begin(gpu);
+        let visible = r.temporal.begin(gpu, None);
         gpu.clear_flags(r.node_visible);
         let mut level = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
         for depth in start..=bottom {

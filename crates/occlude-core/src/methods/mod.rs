@@ -9,6 +9,7 @@ pub mod chc;
 pub mod chcpp;
 pub mod debug;
 mod front_to_back;
+pub mod hiz;
 pub mod ioc;
 pub mod om;
 pub mod opt;
@@ -23,12 +24,13 @@ pub use options::{MethodOptions, OptionError, OptionReader};
 
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
+use crate::gpu_culling::GpuCullingUnsupported;
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 8] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"];
+pub const METHOD_NAMES: [&str; 9] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -50,6 +52,21 @@ pub struct BuiltMethod {
     pub params: Vec<(String, String)>,
 }
 
+/// Whether `backend` can run `method`: the GPU-resident culling and the
+/// depth pyramids it needs, or what the device lacks. The bench runner and
+/// the viewer ask before the first frame, so that a method never runs on
+/// its fallback unseen.
+pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> Result<(), GpuCullingUnsupported> {
+    if !method.needs_gpu_culling() {
+        return Ok(());
+    }
+    let gpu = backend.gpu_culling()?;
+    if method.needs_depth_pyramid() {
+        gpu.pyramid_support()?;
+    }
+    Ok(())
+}
+
 /// The method called `name`, freshly constructed (no state from earlier
 /// frames), with its parameters read from `options`.
 pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, MethodError> {
@@ -63,6 +80,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
+        "hiz" => Box::new(hiz::TwoPhaseHiZ::default()),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -86,6 +104,13 @@ pub trait CullingMethod {
     /// ([`Backend::gpu_culling`]); the runner refuses a backend without it
     /// before the first frame.
     fn needs_gpu_culling(&self) -> bool {
+        false
+    }
+
+    /// Whether the method builds depth pyramids on the backend's
+    /// GPU-resident culling ([`GpuCulling::pyramid_support`](crate::GpuCulling::pyramid_support));
+    /// the runner refuses a backend without them before the first frame.
+    fn needs_depth_pyramid(&self) -> bool {
         false
     }
 

@@ -100,9 +100,15 @@ impl TemporalSet {
         }
     }
 
-    /// Step 1 and the start of step 2: draws the occluders and clears this
-    /// frame's flags; returns them, for the frame's tests to set.
-    pub(crate) fn begin(&self, gpu: &mut dyn GpuCulling) -> Flags {
+    /// Step 1 and the start of step 2: draws the occluders (last frame's
+    /// visible instances; with `in_frustum`, only those whose box in it lies
+    /// in the view frustum, the others forgotten) and clears this frame's
+    /// flags; returns them, for the frame's tests to set.
+    pub(crate) fn begin(&self, gpu: &mut dyn GpuCulling, in_frustum: Option<BoxSet>) -> Flags {
+        if let Some(boxes) = in_frustum {
+            gpu.drop_outside_frustum(boxes, self.previous);
+        }
+        gpu.compact(self.previous, None, self.occluders);
         gpu.draw_list(self.occluders);
         gpu.clear_flags(self.visible);
         self.visible
@@ -114,7 +120,6 @@ impl TemporalSet {
             gpu.compact(self.visible, Some(self.previous), self.newly_visible);
             gpu.draw_list(self.newly_visible);
         }
-        gpu.compact(self.visible, None, self.occluders);
         std::mem::swap(&mut self.visible, &mut self.previous);
     }
 }
@@ -174,7 +179,7 @@ impl CullingMethod for RasterOcclusion {
         let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
             return ViewFrustumCulling.render(ctx, backend);
         };
-        let visible = r.temporal.begin(gpu);
+        let visible = r.temporal.begin(gpu, None);
         gpu.test_boxes(r.boxes, r.all, visible);
         r.temporal.finish(gpu, self.params.mode == RocMode::Exact);
     }

@@ -10,7 +10,11 @@
 //! shader writing the flag runs after the early depth test, only there), a
 //! list draw `gpu_indirect_draw_us` per draw inside it plus
 //! its triangles and fragments, a read-back `readback_us` after the GPU is
-//! done. The CPU pays `cpu_dispatch_us` to record each dispatch or indirect
+//! done. A depth pyramid is built by one dispatch per level past level 0,
+//! each costing `gpu_pyramid_texel_ns` per texel it writes, and a box test
+//! against it is one dispatch costing `gpu_hiz_box_ns` per box tested (not
+//! near the eye, not outside the frustum) and `gpu_hiz_texel_ns` per texel
+//! read. The CPU pays `cpu_dispatch_us` to record each dispatch or indirect
 //! draw.
 //!
 //! Results are those of the wgpu backend's compute and raster passes: the
@@ -20,8 +24,12 @@
 
 use super::{charge_gpu_time, GpuOp, SoftBackend};
 use crate::raster::{CommandKind, DepthTest};
+use occlude_core::depth_pyramid::{box_footprint, DepthPyramid};
 use occlude_core::query_box::padded;
-use occlude_core::{Aabb, BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable, RenderState};
+use occlude_core::{
+    Aabb, BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
+    RenderState,
+};
 
 /// The soft backend's "device memory": every resource created so far.
 #[derive(Default)]
@@ -31,6 +39,9 @@ pub(super) struct Device {
     flags: Vec<Vec<bool>>,
     lists: Vec<List>,
     tables: Vec<Table>,
+    pyramids: Vec<DepthPyramid>,
+    /// The depth image a pyramid is built from, reused.
+    depth_scratch: Vec<f32>,
 }
 
 /// An id list and the most ids it may hold.
@@ -74,10 +85,34 @@ impl SoftBackend<'_> {
     /// Charges one compute dispatch over `items` elements, after everything
     /// recorded before it has run.
     fn dispatch(&mut self, items: usize) {
+        self.dispatch_costing(items as f64 * self.model.gpu_compute_item_ns * 1e-3);
+    }
+
+    /// Charges one compute dispatch doing `work_us` of GPU work, after
+    /// everything recorded before it has run.
+    fn dispatch_costing(&mut self, work_us: f64) {
         self.flush();
         self.stats.dispatches += 1;
         self.clock.cpu_work(self.model.cpu_dispatch_us);
-        self.culling_work(self.model.gpu_dispatch_us + items as f64 * self.model.gpu_compute_item_ns * 1e-3);
+        self.culling_work(self.model.gpu_dispatch_us + work_us);
+    }
+
+    /// The box tests' common first step over the boxes of `boxes` named by
+    /// `ids`: sets the flags of those touching the near region and returns
+    /// the others inside the frustum, to be tested.
+    fn boxes_to_test(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) -> Vec<(u32, Aabb)> {
+        let camera = self.camera.expect("a box test outside a frame");
+        let frustum = camera.frustum();
+        let mut rest = Vec::new();
+        for &id in &self.device.lists[ids.0 as usize].ids {
+            let Some(b) = self.device.boxes[boxes.0 as usize][id as usize] else { continue };
+            if camera.box_touches_near_region(&b) {
+                self.device.flags[flags.0 as usize][id as usize] = true;
+            } else if frustum.intersects(&b) {
+                rest.push((id, b));
+            }
+        }
+        rest
     }
 
     /// Puts `us` of occlusion-test work on the GPU time line, issued now
@@ -128,22 +163,11 @@ impl GpuCulling for SoftBackend<'_> {
     }
 
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
-        let camera = self.camera.expect("test_boxes outside a frame");
-        let frustum = camera.frustum();
         let count = self.device.lists[ids.0 as usize].ids.len();
         self.dispatch(count);
         // The dispatch: near boxes are visible untested, boxes outside the
         // frustum hidden, the rest go to the raster list.
-        let mut raster = Vec::new();
-        for k in 0..count {
-            let id = self.device.lists[ids.0 as usize].ids[k];
-            let Some(b) = self.device.boxes[boxes.0 as usize][id as usize] else { continue };
-            if camera.box_touches_near_region(&b) {
-                self.device.flags[flags.0 as usize][id as usize] = true;
-            } else if frustum.intersects(&b) {
-                raster.push((id, b));
-            }
-        }
+        let raster = self.boxes_to_test(boxes, ids, flags);
         // The indirect draw of the raster list, one box per instance.
         self.indirect_draw(RenderState::Query);
         self.culling_work(self.model.gpu_indirect_draw_us);
@@ -168,6 +192,50 @@ impl GpuCulling for SoftBackend<'_> {
                 set[*id as usize] = true;
             }
         }
+    }
+
+    fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
+        Ok(())
+    }
+
+    fn create_pyramid(&mut self) -> Pyramid {
+        self.device.pyramids.push(DepthPyramid::new(self.depth.width(), self.depth.height()));
+        Pyramid(self.device.pyramids.len() as u32 - 1)
+    }
+
+    fn build_pyramid(&mut self, pyramid: Pyramid) {
+        self.flush();
+        self.depth.copy_to(&mut self.device.depth_scratch);
+        let p = &mut self.device.pyramids[pyramid.0 as usize];
+        p.build(&self.device.depth_scratch);
+        let texels: Vec<u64> = p.sizes()[1..].iter().map(|&(w, h)| u64::from(w) * u64::from(h)).collect();
+        for t in texels {
+            self.dispatch_costing(t as f64 * self.model.gpu_pyramid_texel_ns * 1e-3);
+        }
+    }
+
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags) {
+        let count = self.device.lists[ids.0 as usize].ids.len();
+        let tested = self.boxes_to_test(boxes, ids, flags);
+        let (width, height) = (self.depth.width(), self.depth.height());
+        let p = &self.device.pyramids[pyramid.0 as usize];
+        let mut fetched = 0u64;
+        let mut visible = Vec::new();
+        for (id, b) in &tested {
+            let result = p.test(&box_footprint(&self.view_projection, width, height, b));
+            fetched += u64::from(result.fetched);
+            if result.visible {
+                visible.push(*id);
+            }
+        }
+        let set = &mut self.device.flags[flags.0 as usize];
+        visible.into_iter().for_each(|id| set[id as usize] = true);
+        self.stats.query_boxes += tested.len() as u64;
+        let m = &self.model;
+        let work_ns = count as f64 * m.gpu_compute_item_ns
+            + tested.len() as f64 * m.gpu_hiz_box_ns
+            + fetched as f64 * m.gpu_hiz_texel_ns;
+        self.dispatch_costing(work_ns * 1e-3);
     }
 
     fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {

@@ -111,6 +111,22 @@ impl<'s> SoftBackend<'s> {
         &self.model
     }
 
+    /// Replaces the depth buffer's contents with `depth` (`width * height`
+    /// values, row by row from the top) after everything recorded so far
+    /// has run: tests of depth-based culling (the depth pyramid) start from
+    /// depth images of their own. Costs nothing on the clock.
+    ///
+    /// # Panics
+    /// If `depth` has not the buffer's size.
+    pub fn write_depth(&mut self, depth: &[f32]) {
+        self.flush();
+        let width = self.depth.width();
+        assert_eq!(depth.len(), width as usize * self.depth.height() as usize, "a depth image of another size");
+        for (i, &d) in depth.iter().enumerate() {
+            self.depth.set(i as u32 % width, i as u32 / width, d);
+        }
+    }
+
     /// Switches render state if needed, charging a state change.
     fn set_state(&mut self, state: RenderState) {
         if self.state.switch(state) {

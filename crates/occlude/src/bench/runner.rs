@@ -6,7 +6,7 @@ use super::dump::FrameDump;
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
-use occlude_core::methods::{create, BuiltMethod, DrawnSet};
+use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet};
 use occlude_core::{Backend, Camera, CullingMethod, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -212,10 +212,9 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
         .map(|m| Ok(Lane::new(create(m, &config.options)?, renderer.backend(scene, config), config)))
         .collect::<Result<Vec<_>>>()?;
     for lane in &mut lanes {
-        if lane.built.method.needs_gpu_culling() {
-            if let Err(e) = lane.backend.gpu_culling() {
-                return Err(anyhow::Error::new(e).context(format!("method {} cannot run", lane.built.method.name())));
-            }
+        let method = lane.built.method.as_ref();
+        if let Err(e) = check_support(method, lane.backend.as_mut()) {
+            return Err(anyhow::Error::new(e).context(format!("method {} cannot run", method.name())));
         }
     }
     let mut warnings = Vec::new();

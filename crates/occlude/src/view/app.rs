@@ -14,7 +14,7 @@ use crate::bench::config::NEAR_PLANE;
 use crate::bench::runner::{far_plane, load_scene, render_frame};
 use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
-use occlude_core::methods::{create, BuiltMethod, DrawnSet, METHOD_NAMES};
+use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, METHOD_NAMES};
 use occlude_core::{Backend, Camera, Hierarchy, HierarchyKind, Keyframe, Scene};
 use occlude_wgpu::{best_adapter, GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
 use std::sync::Arc;
@@ -138,12 +138,9 @@ impl<'s> Gpu<'s> {
     /// culling is refused, naming what the device lacks (as `bench` refuses
     /// it), rather than left to its view-frustum fallback.
     fn supports(&mut self, method: &BuiltMethod) -> Result<()> {
-        if method.method.needs_gpu_culling() {
-            self.backend
-                .gpu_culling()
-                .map_err(|e| anyhow::Error::new(e).context(format!("{} cannot run here", method.method.name())))?;
-        }
-        Ok(())
+        let method = method.method.as_ref();
+        check_support(method, &mut self.backend)
+            .map_err(|e| anyhow::Error::new(e).context(format!("method {} cannot run", method.name())))
     }
 
     /// Renders from now on at `width` x `height` (a new backend; the

@@ -7,7 +7,7 @@
 
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
-    OracleView, QueryHandle, RangeTable,
+    OracleView, Pyramid, QueryHandle, RangeTable,
 };
 use std::collections::HashMap;
 
@@ -122,6 +122,21 @@ impl<B: Backend> RecordingBackend<B> {
         }
     }
 
+    /// While recording, the ids a box test of `boxes` just tested and the
+    /// outcome each left in `flags`, read back.
+    fn record_test(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
+        if !self.recording {
+            return;
+        }
+        let tested = self.culling().read_list(ids);
+        let set = self.culling().read_flags(flags);
+        let all = &self.box_sets[&boxes];
+        self.tests.push(RecordedBoxTest {
+            boxes: tested.iter().map(|&id| all[id as usize]).collect(),
+            visible: tested.iter().map(|&id| set[id as usize]).collect(),
+        });
+    }
+
     /// The wrapped backend's GPU-resident culling, which the recorder only
     /// offers where the wrapped backend does.
     fn culling(&mut self) -> &mut dyn GpuCulling {
@@ -211,16 +226,24 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
 
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.culling().test_boxes(boxes, ids, flags);
-        if !self.recording {
-            return;
-        }
-        let tested = self.culling().read_list(ids);
-        let set = self.culling().read_flags(flags);
-        let all = &self.box_sets[&boxes];
-        self.tests.push(RecordedBoxTest {
-            boxes: tested.iter().map(|&id| all[id as usize]).collect(),
-            visible: tested.iter().map(|&id| set[id as usize]).collect(),
-        });
+        self.record_test(boxes, ids, flags);
+    }
+
+    fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
+        self.culling().pyramid_support()
+    }
+
+    fn create_pyramid(&mut self) -> Pyramid {
+        self.culling().create_pyramid()
+    }
+
+    fn build_pyramid(&mut self, pyramid: Pyramid) {
+        self.culling().build_pyramid(pyramid);
+    }
+
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags) {
+        self.culling().test_boxes_pyramid(boxes, ids, pyramid, flags);
+        self.record_test(boxes, ids, flags);
     }
 
     fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {

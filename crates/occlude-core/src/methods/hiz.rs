@@ -1,0 +1,93 @@
+//! Two-phase Hi-Z occlusion culling (`hiz`), as GPU-driven renderers ship
+//! it: zeux's niagara (early and late passes against a depth pyramid),
+//! nvpro's `gl_occlusion_culling` in its HiZ mode and Bevy's
+//! `OcclusionCulling` (issue 18, item 1). Where `roc` rasterizes every
+//! object's box against the depth buffer, `hiz` reads a few texels of a
+//! depth pyramid per box in a compute pass, with no draw of the boxes.
+//!
+//! Per frame, on [`GpuCulling`](crate::GpuCulling):
+//!
+//! 1. early pass: draw last frame's visible instances that are still in the
+//!    view frustum;
+//! 2. build a depth pyramid from that depth ([`crate::depth_pyramid`]);
+//! 3. late pass: test every instance's box against the pyramid (boxes
+//!    outside the frustum set nothing, boxes at the eye are visible
+//!    untested), setting this frame's visibility;
+//! 4. draw the instances visible now that were not drawn in step 1, and keep
+//!    the visible set for the next frame.
+//!
+//! Exact: an instance with a pixel in the final image has there a depth no
+//! farther than the early pass's depth (which draws a subset of the scene),
+//! so its box, which contains it and is pulled towards the eye, passes the
+//! full-resolution box test at that pixel; the pyramid test never hides a
+//! box that test finds visible (the proof is `depth_pyramid`'s), so the
+//! instance is drawn in step 1 or 4.
+
+use super::roc::TemporalSet;
+use super::vfc::ViewFrustumCulling;
+use super::{CullingMethod, FrameContext};
+use crate::backend::Backend;
+use crate::gpu_culling::{BoxSet, IdList, Pyramid};
+
+/// The device resources of `hiz`, made on its first frame.
+#[derive(Clone, Copy, Debug)]
+struct Resources {
+    /// Every instance's box.
+    boxes: BoxSet,
+    /// Every instance id.
+    all: IdList,
+    pyramid: Pyramid,
+    temporal: TemporalSet,
+}
+
+/// `hiz`: two-phase occlusion culling against a depth pyramid (module
+/// documentation).
+#[derive(Clone, Debug, Default)]
+pub struct TwoPhaseHiZ {
+    resources: Option<Resources>,
+}
+
+impl CullingMethod for TwoPhaseHiZ {
+    fn name(&self) -> &'static str {
+        "hiz"
+    }
+
+    fn needs_gpu_culling(&self) -> bool {
+        true
+    }
+
+    fn needs_depth_pyramid(&self) -> bool {
+        true
+    }
+
+    fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        if self.resources.is_some() {
+            return;
+        }
+        let Ok(gpu) = backend.gpu_culling() else { return };
+        if gpu.pyramid_support().is_err() {
+            return;
+        }
+        let n = ctx.scene.instances.len() as u32;
+        let boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
+        let all: Vec<u32> = (0..n).collect();
+        self.resources = Some(Resources {
+            boxes: gpu.create_boxes(&boxes),
+            all: gpu.create_list(n, &all),
+            pyramid: gpu.create_pyramid(),
+            temporal: TemporalSet::new(gpu, n),
+        });
+    }
+
+    /// A backend without [`GpuCulling`] or depth pyramids (which the runner
+    /// refuses first) gets view-frustum culling.
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
+            return ViewFrustumCulling.render(ctx, backend);
+        };
+        let visible = r.temporal.begin(gpu, Some(r.boxes));
+        gpu.build_pyramid(r.pyramid);
+        gpu.test_boxes_pyramid(r.boxes, r.all, r.pyramid, visible);
+        r.temporal.finish(gpu, true);
+    }
+}
