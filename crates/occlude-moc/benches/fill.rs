@@ -16,7 +16,7 @@ fn fill_rate(c: &mut Criterion) {
     group.sample_size(10);
     group.warm_up_time(Duration::from_millis(500));
     group.measurement_time(Duration::from_secs(2));
-    for leg in [10u32, 25, 50, 100] {
+    for leg in [10u32, 25, 50, 100, 250, 500] {
         let count = workload::triangles_for_screens(width, height, leg, 2.0);
         let tris = workload::right_triangles(width, height, leg as f32, count);
         group.throughput(Throughput::Elements(count as u64));

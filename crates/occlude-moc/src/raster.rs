@@ -52,7 +52,8 @@ impl Edge {
     fn new(p: DVec3, q: DVec3) -> Self {
         let (a, b) = (p.y - q.y, q.x - p.x);
         let c = -(a * p.x + b * p.y);
-        Edge { a, b, c, on: a > 0.0 || (a == 0.0 && b > 0.0), slope: -b / a, offset: -c / a }
+        let r = 1.0 / a;
+        Edge { a, b, c, on: a > 0.0 || (a == 0.0 && b > 0.0), slope: -b * r, offset: -c * r }
     }
 
     /// Whether the pixel centre (`px`, `py`) is covered by this edge: the
@@ -88,8 +89,8 @@ impl Edge {
         // Pixels x <= below lie wholly on the side x < t; pixels x >= above on
         // the side x > t; those between are decided one by one.
         let (below, above) = if lo.is_finite() && hi.is_finite() {
-            let clamp = |v: f64| v.clamp(f64::from(x0) - 2.0, f64::from(x1) + 2.0) as i32;
-            (clamp(lo.ceil()) - 1, clamp(hi.floor()) + 1)
+            let (min, max) = (f64::from(x0) - 2.0, f64::from(x1) + 2.0);
+            (-floor_in(-lo, -max, -min) - 1, floor_in(hi, min, max) + 1)
         } else {
             (x0 - 1, x1)
         };
@@ -103,6 +104,14 @@ impl Edge {
             (x0, end.clamp(x0, x1))
         }
     }
+}
+
+/// `floor(v)` clamped to `min..=max` (small integers), without a library call.
+#[inline]
+fn floor_in(v: f64, min: f64, max: f64) -> i32 {
+    let v = v.clamp(min, max);
+    let i = v as i32;
+    i - i32::from(f64::from(i) > v)
 }
 
 /// The bits of pixels `lo..hi` of an 8-pixel subtile row starting at `x`.
@@ -368,10 +377,12 @@ fn screen_triangles(clip: [Vec4; 3], cull: CullMode, width: u32, height: u32, ou
         return;
     }
     let (w, h) = (f64::from(width), f64::from(height));
-    let screen = poly.map(|c| {
-        let (x, y, z, cw) = (c.x as f64, c.y as f64, c.z as f64, c.w as f64);
-        DVec3::new((x / cw + 1.0) * 0.5 * w, (1.0 - y / cw) * 0.5 * h, z / cw)
-    });
+    let mut screen = [DVec3::ZERO; 4];
+    for (s, c) in screen.iter_mut().zip(&poly[..n]) {
+        let r = 1.0 / c.w as f64;
+        let (x, y, z) = (c.x as f64 * r, c.y as f64 * r, c.z as f64 * r);
+        *s = DVec3::new((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h, z);
+    }
     for k in 1..n - 1 {
         if let Some(tri) = ScreenTriangle::new([screen[0], screen[k], screen[k + 1]], cull, width, height) {
             out(tri);
