@@ -41,8 +41,9 @@
 //! module: only pixel centres within the intercept's proven rounding band are
 //! tested one by one, so masks are exactly the per-pixel definition above), then
 //! four rows of spans become a subtile's mask by shifts. Inside a rayon pool of
-//! several threads, large triangle sets are set up in parallel chunks and drawn
-//! in parallel bands of subtile rows, each band taking the triangles in order:
+//! several threads, large triangle sets are set up and binned to bands of
+//! subtile rows in parallel chunks, then drawn in parallel bands, each band
+//! taking its triangles in order:
 //! the buffer is the same whatever the threads. There is no AVX2 path yet.
 
 mod buffer;

@@ -291,6 +291,47 @@ impl Band<'_> {
     }
 }
 
+/// A chunk of set-up triangles and, per band, the indices of those touching
+/// it, in order (a counting sort): a band reads only its own triangles.
+struct Binned {
+    tris: Vec<ScreenTriangle>,
+    /// Band `b`'s indices are `order[starts[b]..starts[b + 1]]`.
+    starts: Vec<u32>,
+    order: Vec<u32>,
+}
+
+impl Binned {
+    fn new(tris: Vec<ScreenTriangle>, bands: usize) -> Self {
+        let band_range = |t: &ScreenTriangle| {
+            let (r0, r1) = t.subtile_rows();
+            (r0 as usize / BAND_ROWS)..((r1 as usize - 1) / BAND_ROWS + 1).min(bands)
+        };
+        let mut starts = vec![0u32; bands + 1];
+        for t in &tris {
+            for b in band_range(t) {
+                starts[b + 1] += 1;
+            }
+        }
+        for b in 0..bands {
+            starts[b + 1] += starts[b];
+        }
+        let mut next = starts.clone();
+        let mut order = vec![0u32; starts[bands] as usize];
+        for (i, t) in tris.iter().enumerate() {
+            for b in band_range(t) {
+                order[next[b] as usize] = i as u32;
+                next[b] += 1;
+            }
+        }
+        Binned { tris, starts, order }
+    }
+
+    /// The indices of the triangles touching band `b`, in order.
+    fn in_band(&self, b: usize) -> &[u32] {
+        &self.order[self.starts[b] as usize..self.starts[b + 1] as usize]
+    }
+}
+
 /// Triangles per chunk of the parallel set-up.
 const SETUP_CHUNK: usize = 2048;
 
@@ -324,8 +365,9 @@ impl MaskedBuffer {
     }
 
     /// Renders triangles `0..count`, `clip(i)` giving triangle `i` in clip space:
-    /// one after the other on one thread, or set up in parallel chunks and drawn
-    /// in parallel bands when the current rayon pool has several threads.
+    /// one after the other on one thread, or set up and binned to bands in
+    /// parallel chunks, then drawn in parallel bands, when the current rayon pool
+    /// has several threads.
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) {
         let (width, height) = (self.width, self.height);
         let setup = |i: usize, out: &mut dyn FnMut(ScreenTriangle)| {
@@ -338,19 +380,22 @@ impl MaskedBuffer {
             (0..count).for_each(|i| setup(i, &mut |tri| whole.draw(&tri)));
             return;
         }
-        let chunks: Vec<Vec<ScreenTriangle>> = (0..count.div_ceil(SETUP_CHUNK))
+        let bands = (self.rows as usize).div_ceil(BAND_ROWS);
+        let chunks: Vec<Binned> = (0..count.div_ceil(SETUP_CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut tris = Vec::with_capacity(SETUP_CHUNK);
                 (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count)).for_each(|i| setup(i, &mut |t| tris.push(t)));
-                tris
+                Binned::new(tris, bands)
             })
             .collect();
         let (cols, merge) = (self.cols, self.merge);
         self.subtiles.par_chunks_mut(cols as usize * BAND_ROWS).enumerate().for_each(|(b, subtiles)| {
             let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge };
-            for tri in chunks.iter().flatten() {
-                band.draw(tri);
+            for chunk in &chunks {
+                for &i in chunk.in_band(b) {
+                    band.draw(&chunk.tris[i as usize]);
+                }
             }
         });
     }
