@@ -84,12 +84,15 @@ impl Edge {
             // Horizontal: the whole row is in or out.
             return if self.covers(0.5, py) { (x0, x1) } else { (x0, x0) };
         }
-        let t = self.slope * py + self.offset - 0.5;
+        let (min, max) = (f64::from(x0) - 2.0, f64::from(x1) + 2.0);
+        // An intercept beyond the window x0..x1 moves to half a pixel beyond
+        // min or max: the window's pixels keep their side, and no pixel index
+        // falls in a band narrower than half a pixel around it.
+        let t = (self.slope * py + self.offset - 0.5).clamp(min - 0.5, max + 0.5);
         let (lo, hi) = (t - band, t + band);
         // Pixels x <= below lie wholly on the side x < t; pixels x >= above on
         // the side x > t; those between are decided one by one.
         let (below, above) = if lo.is_finite() && hi.is_finite() {
-            let (min, max) = (f64::from(x0) - 2.0, f64::from(x1) + 2.0);
             (-floor_in(-lo, -max, -min) - 1, floor_in(hi, min, max) + 1)
         } else {
             (x0 - 1, x1)
