@@ -89,10 +89,16 @@ impl Edge {
         // min or max: the window's pixels keep their side, and no pixel index
         // falls in a band narrower than half a pixel around it.
         let t = (self.slope * py + self.offset - 0.5).clamp(min - 0.5, max + 0.5);
-        let (lo, hi) = (t - band, t + band);
         // Pixels x <= below lie wholly on the side x < t; pixels x >= above on
-        // the side x > t; those between are decided one by one.
-        let (below, above) = if lo.is_finite() && hi.is_finite() {
+        // the side x > t; those between are decided one by one. Usually no
+        // pixel index is within the band of t (its fraction, exact, is farther
+        // than the band from 0 and 1), and below and above are neighbours.
+        let k = floor_in(t, min - 1.0, max + 1.0);
+        let fraction = t - f64::from(k);
+        let (lo, hi) = (t - band, t + band);
+        let (below, above) = if fraction > band && 1.0 - fraction > band {
+            (k, k + 1)
+        } else if lo.is_finite() && hi.is_finite() {
             (-floor_in(-lo, -max, -min) - 1, floor_in(hi, min, max) + 1)
         } else {
             (x0 - 1, x1)
