@@ -127,11 +127,7 @@ fn floor_in(v: f64, min: f64, max: f64) -> i32 {
 #[inline]
 fn row_bits(lo: i32, hi: i32, x: i32) -> u32 {
     let (l, h) = ((lo - x).clamp(0, 8), (hi - x).clamp(0, 8));
-    if h > l {
-        (1u32 << h) - (1u32 << l)
-    } else {
-        0
-    }
+    (1u32 << h).saturating_sub(1u32 << l)
 }
 
 /// A triangle's depth plane `z = zx x + zy y + z0` and its farthest vertex depth.
