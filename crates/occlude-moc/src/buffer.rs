@@ -38,6 +38,39 @@ pub(crate) struct Subtile {
     pub reference: f32,
 }
 
+impl Subtile {
+    /// Merges a triangle covering `cover` of this subtile (pixels outside the
+    /// screen included) with its depth bounded by `depth` there.
+    #[inline]
+    pub(crate) fn merge(&mut self, cover: u32, depth: f32, mode: MergeMode) {
+        if depth.is_nan() || depth >= self.reference {
+            return;
+        }
+        if mode == MergeMode::LayerMerge
+            && self.mask != 0
+            && (depth - self.working).abs() > self.reference - self.working
+        {
+            self.mask = 0;
+        }
+        self.working = if self.mask == 0 { depth } else { self.working.max(depth) };
+        self.mask |= cover;
+        if self.mask == u32::MAX {
+            self.reference = self.working;
+            self.mask = 0;
+        }
+    }
+}
+
+/// Mask of the pixels of subtile (`sx`, `sy`) outside a `width` x `height`
+/// screen.
+#[inline]
+pub(crate) fn outside_mask(width: u32, height: u32, sx: u32, sy: u32) -> u32 {
+    let cols = width.saturating_sub(sx * 8).min(8);
+    let rows = height.saturating_sub(sy * 4).min(4);
+    let row = (1u32 << cols) - 1;
+    !(0..rows).fold(0, |m, r| m | row << (8 * r))
+}
+
 const CLEAR: Subtile = Subtile { mask: 0, working: 0.0, reference: 1.0 };
 
 /// A conservative, low-resolution-in-depth occlusion buffer.
@@ -112,41 +145,6 @@ impl MaskedBuffer {
     /// Forgets every occluder: all pixels at the far plane (depth 1).
     pub fn clear(&mut self) {
         self.subtiles.fill(CLEAR);
-    }
-
-    /// Mask of the pixels of subtile (`sx`, `sy`) outside the screen.
-    pub(crate) fn outside_mask(&self, sx: u32, sy: u32) -> u32 {
-        let mut m = 0;
-        for i in 0..32 {
-            let (x, y) = (sx * 8 + i % 8, sy * 4 + i / 8);
-            if x >= self.width || y >= self.height {
-                m |= 1 << i;
-            }
-        }
-        m
-    }
-
-    /// Merges a triangle covering `cover` of subtile (`sx`, `sy`) with its depth
-    /// bounded by `depth` there.
-    pub(crate) fn merge(&mut self, sx: u32, sy: u32, cover: u32, depth: f32) {
-        if cover == 0 {
-            return;
-        }
-        let cover = cover | self.outside_mask(sx, sy);
-        let mode = self.merge;
-        let s = &mut self.subtiles[(sy * self.cols + sx) as usize];
-        if depth.is_nan() || depth >= s.reference {
-            return;
-        }
-        if mode == MergeMode::LayerMerge && s.mask != 0 && (depth - s.working).abs() > s.reference - s.working {
-            s.mask = 0;
-        }
-        s.working = if s.mask == 0 { depth } else { s.working.max(depth) };
-        s.mask |= cover;
-        if s.mask == u32::MAX {
-            s.reference = s.working;
-            s.mask = 0;
-        }
     }
 
     /// The bound on the stored depth of every pixel, row by row (`width * height`

@@ -1,9 +1,19 @@
-//! Occluder rasterization (portable scalar path): per subtile coverage masks from
-//! edge functions at pixel centres, and the triangle's farthest depth there.
+//! Occluder rasterization: per pixel row, each edge's span from its x-intercept,
+//! the spans of four rows turned into a subtile's coverage mask by shifts, and the
+//! triangle's farthest depth over the subtile from one corner.
+//!
+//! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
+//! edge function at the pixel centre, with a tie rule). Along a row that
+//! function is monotone in `x` (every rounded operation is), so an edge's
+//! covered pixels are a half-line; its end is found from the intercept, and only
+//! the pixel centres within the intercept's proven error band ([`Edge::band`])
+//! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
+//! what the pixel-by-pixel definition gives.
 
-use crate::buffer::MaskedBuffer;
+use crate::buffer::{outside_mask, MaskedBuffer, MergeMode, Subtile};
 use crate::clip::clip_near;
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3, Vec4};
+use rayon::prelude::*;
 
 /// Which triangles are drawn, by winding on screen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -16,125 +26,527 @@ pub enum CullMode {
     None,
 }
 
+/// Relative error allowance of the intercept bands: `2^-46`, far above the few
+/// units in the last place (`2^-53`) the few rounded operations can lose.
+const BAND_SCALE: f64 = 1.0 / (1u64 << 46) as f64;
+
+/// One edge of a screen-space triangle: `e(x, y) = a x + b y + c`, positive
+/// inside.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Edge {
+    a: f64,
+    b: f64,
+    c: f64,
+    /// Whether a pixel centre exactly on the edge is covered: for one of the two
+    /// directions of an edge only, so a shared edge leaves no hole and no pixel
+    /// is taken twice.
+    on: bool,
+    /// The intercept `x = slope y + offset` where `e` is zero (`a != 0`).
+    slope: f64,
+    offset: f64,
+}
+
+impl Edge {
+    /// The edge from `p` to `q` of a triangle whose edge functions are positive
+    /// inside.
+    fn new(p: DVec3, q: DVec3) -> Self {
+        let (a, b) = (p.y - q.y, q.x - p.x);
+        let c = -(a * p.x + b * p.y);
+        let r = 1.0 / a;
+        Edge { a, b, c, on: a > 0.0 || (a == 0.0 && b > 0.0), slope: -b * r, offset: -c * r }
+    }
+
+    /// Whether the pixel centre (`px`, `py`) is covered by this edge: the
+    /// definition every mask follows.
+    #[inline]
+    pub(crate) fn covers(&self, px: f64, py: f64) -> bool {
+        let e = self.a * px + self.b * py + self.c;
+        e > 0.0 || (self.on && e == 0.0)
+    }
+
+    /// Half-width, in pixels, of the band around the computed intercept outside
+    /// which [`covers`](Self::covers) is decided by the side of the intercept,
+    /// for pixel centres within `x_max`, `y_max` of the origin: the intercept's
+    /// own rounding plus the edge function's rounding divided by its slope.
+    /// Infinite or NaN when the intercept cannot be trusted.
+    fn band(&self, x_max: f64, y_max: f64) -> f64 {
+        let intercept = self.slope.abs() * y_max + self.offset.abs() + x_max + 1.0;
+        let function = (self.a.abs() * x_max + self.b.abs() * y_max + self.c.abs()) / self.a.abs();
+        BAND_SCALE * (intercept + function)
+    }
+
+    /// The pixels `lo..hi` of row `y` (centre `y + 0.5`), clipped to `x0..x1`,
+    /// covered by this edge, given its `band`.
+    #[inline]
+    fn span(&self, y: i32, x0: i32, x1: i32, band: f64) -> (i32, i32) {
+        let py = f64::from(y) + 0.5;
+        if self.a == 0.0 {
+            // Horizontal: the whole row is in or out.
+            return if self.covers(0.5, py) { (x0, x1) } else { (x0, x0) };
+        }
+        let (min, max) = (f64::from(x0) - 2.0, f64::from(x1) + 2.0);
+        // An intercept beyond the window x0..x1 moves to half a pixel beyond
+        // min or max: the window's pixels keep their side, and no pixel index
+        // falls in a band narrower than half a pixel around it.
+        let t = (self.slope * py + self.offset - 0.5).clamp(min - 0.5, max + 0.5);
+        // Pixels x <= below lie wholly on the side x < t; pixels x >= above on
+        // the side x > t; those between are decided one by one. Usually no
+        // pixel index is within the band of t (its fraction, exact, is farther
+        // than the band from 0 and 1), and below and above are neighbours.
+        let k = floor_in(t, min - 1.0, max + 1.0);
+        let fraction = t - f64::from(k);
+        let (lo, hi) = (t - band, t + band);
+        let (below, above) = if fraction > band && 1.0 - fraction > band {
+            (k, k + 1)
+        } else if lo.is_finite() && hi.is_finite() {
+            (-floor_in(-lo, -max, -min) - 1, floor_in(hi, min, max) + 1)
+        } else {
+            (x0 - 1, x1)
+        };
+        if self.a > 0.0 {
+            // Covered to the right: from the first pixel that is.
+            let first = (below + 1..above).find(|&x| self.covers(f64::from(x) + 0.5, py)).unwrap_or(above);
+            (first.clamp(x0, x1), x1)
+        } else {
+            let end =
+                (below + 1..above).rev().find(|&x| self.covers(f64::from(x) + 0.5, py)).map_or(below + 1, |x| x + 1);
+            (x0, end.clamp(x0, x1))
+        }
+    }
+}
+
+/// `floor(v)` clamped to `min..=max` (small integers), without a library call.
+#[inline]
+fn floor_in(v: f64, min: f64, max: f64) -> i32 {
+    let v = v.clamp(min, max);
+    let i = v as i32;
+    i - i32::from(f64::from(i) > v)
+}
+
+/// The bits of pixels `lo..hi` of an 8-pixel subtile row starting at `x`.
+#[inline]
+fn row_bits(lo: i32, hi: i32, x: i32) -> u32 {
+    let (l, h) = ((lo - x).clamp(0, 8), (hi - x).clamp(0, 8));
+    (1u32 << h).saturating_sub(1u32 << l)
+}
+
+/// A triangle's depth plane `z = zx x + zy y + z0` and its farthest vertex depth.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DepthPlane {
+    zx: f64,
+    zy: f64,
+    z0: f64,
+    zmax: f64,
+}
+
+impl DepthPlane {
+    fn new(t: &[DVec3; 3]) -> Self {
+        let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
+        let n = d1.cross(d2);
+        let (zx, zy) = (-n.x / n.z, -n.y / n.z);
+        DepthPlane { zx, zy, z0: t[0].z - zx * t[0].x - zy * t[0].y, zmax: t[0].z.max(t[1].z).max(t[2].z) }
+    }
+
+    /// The plane at (`x`, `y`), rounded as every bound is.
+    #[inline]
+    pub(crate) fn at(&self, x: f64, y: f64) -> f64 {
+        self.zx * x + self.zy * y + self.z0
+    }
+
+    /// An `f32` bound on the triangle's depth over the 8x4 subtile whose top-left
+    /// corner is (`bx`, `by`): the plane's largest value at the subtile's corners
+    /// (a rounded product and sum are monotone in each coordinate, so that is the
+    /// corner the plane's slopes point to), capped by the farthest vertex, nudged
+    /// farther and rounded up to `f32`.
+    #[inline]
+    pub(crate) fn subtile_bound(&self, bx: f64, by: f64) -> f32 {
+        let x = if self.zx > 0.0 { bx + 8.0 } else { bx };
+        let y = if self.zy > 0.0 { by + 4.0 } else { by };
+        round_far(self.at(x, y).min(self.zmax))
+    }
+}
+
+/// `depth` nudged farther by a relative epsilon, then rounded up to `f32`.
+#[inline]
+pub(crate) fn round_far(depth: f64) -> f32 {
+    let depth = depth + depth.abs() * 1e-9 + 1e-12;
+    let d = depth as f32;
+    if (d as f64) < depth {
+        f32::from_bits(d.to_bits() + if d >= 0.0 { 1 } else { 0 })
+    } else {
+        d
+    }
+}
+
+/// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
+/// depth) with edge functions positive inside, and the pixels whose centres it
+/// may cover.
+pub(crate) struct ScreenTriangle {
+    pub(crate) edges: [Edge; 3],
+    pub(crate) plane: DepthPlane,
+    /// Columns `x0..x1` and rows `y0..y1` of pixels whose centres may be inside.
+    x0: i32,
+    x1: i32,
+    y0: i32,
+    y1: i32,
+    /// Intercept bands of the edges ([`Edge::band`]).
+    bands: [f64; 3],
+}
+
+impl ScreenTriangle {
+    /// The triangle `t` on a `width` x `height` screen, or `None` when it is not
+    /// drawn: a non-finite or negative depth coordinate, zero area, culled by
+    /// winding, or no pixel centre on screen within its bounding box.
+    pub(crate) fn new(mut t: [DVec3; 3], cull: CullMode, width: u32, height: u32) -> Option<Self> {
+        if t.iter().any(|p| !p.is_finite() || p.z < 0.0) {
+            return None;
+        }
+        // Signed area, positive for counter-clockwise in NDC (clockwise on screen).
+        let area = (t[1].x - t[0].x) * (t[2].y - t[0].y) - (t[2].x - t[0].x) * (t[1].y - t[0].y);
+        if area == 0.0 || (cull == CullMode::Back && area > 0.0) || area.abs() < 1e-12 {
+            return None;
+        }
+        if area < 0.0 {
+            t.swap(1, 2);
+        }
+        let (w, h) = (f64::from(width), f64::from(height));
+        let lo_x = t[0].x.min(t[1].x).min(t[2].x).max(0.0);
+        let hi_x = t[0].x.max(t[1].x).max(t[2].x).min(w);
+        let lo_y = t[0].y.min(t[1].y).min(t[2].y).max(0.0);
+        let hi_y = t[0].y.max(t[1].y).max(t[2].y).min(h);
+        if lo_x >= hi_x || lo_y >= hi_y {
+            return None;
+        }
+        let (x0, x1) = ((lo_x - 0.5).ceil().max(0.0) as i32, ((hi_x - 0.5).floor() as i32 + 1).min(width as i32));
+        let (y0, y1) = ((lo_y - 0.5).ceil().max(0.0) as i32, ((hi_y - 0.5).floor() as i32 + 1).min(height as i32));
+        if x0 >= x1 || y0 >= y1 {
+            return None;
+        }
+        let edges = [Edge::new(t[0], t[1]), Edge::new(t[1], t[2]), Edge::new(t[2], t[0])];
+        let bands = edges.map(|e| e.band(w, h));
+        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t), x0, x1, y0, y1, bands })
+    }
+
+    /// The first and one past the last subtile row the triangle touches.
+    fn subtile_rows(&self) -> (u32, u32) {
+        ((self.y0 / 4) as u32, ((self.y1 - 1) / 4 + 1) as u32)
+    }
+}
+
+/// Subtile rows `first..first + subtiles.len() / cols` of a buffer, which a
+/// thread rasterizes on its own.
+struct Band<'a> {
+    subtiles: &'a mut [Subtile],
+    first: u32,
+    cols: u32,
+    width: u32,
+    height: u32,
+    merge: MergeMode,
+}
+
+impl Band<'_> {
+    /// Rasterizes the triangle's subtile rows within the band: per subtile row,
+    /// the four pixel rows' spans, then per subtile in their reach, the mask and
+    /// the depth bound, merged.
+    fn draw(&mut self, tri: &ScreenTriangle) {
+        let (r0, r1) = tri.subtile_rows();
+        let last = self.first + self.subtiles.len() as u32 / self.cols;
+        for sy in r0.max(self.first)..r1.min(last) {
+            let mut spans = [(0i32, 0i32); 4];
+            let (mut left, mut right) = (tri.x1, tri.x0);
+            for (r, span) in spans.iter_mut().enumerate() {
+                let y = (sy * 4) as i32 + r as i32;
+                if y < tri.y0 || y >= tri.y1 {
+                    continue;
+                }
+                let (mut lo, mut hi) = (tri.x0, tri.x1);
+                for (edge, &band) in tri.edges.iter().zip(&tri.bands) {
+                    (lo, hi) = edge.span(y, lo, hi, band);
+                    if lo >= hi {
+                        break;
+                    }
+                }
+                if lo < hi {
+                    *span = (lo, hi);
+                    left = left.min(lo);
+                    right = right.max(hi);
+                }
+            }
+            if left >= right {
+                continue;
+            }
+            let row = ((sy - self.first) * self.cols) as usize;
+            let by = f64::from(sy * 4);
+            let bottom = sy * 4 + 4 > self.height;
+            for sx in (left / 8) as u32..=((right - 1) / 8) as u32 {
+                let bx = (sx * 8) as i32;
+                let cover =
+                    spans.iter().enumerate().fold(0u32, |m, (r, &(lo, hi))| m | row_bits(lo, hi, bx) << (8 * r));
+                if cover != 0 {
+                    let depth = tri.plane.subtile_bound(f64::from(bx), by);
+                    let outside = if bottom || sx * 8 + 8 > self.width {
+                        outside_mask(self.width, self.height, sx, sy)
+                    } else {
+                        0
+                    };
+                    self.subtiles[row + sx as usize].merge(cover | outside, depth, self.merge);
+                }
+            }
+        }
+    }
+}
+
+/// A chunk of set-up triangles and, per band, the indices of those touching
+/// it, in order (a counting sort): a band reads only its own triangles.
+struct Binned {
+    tris: Vec<ScreenTriangle>,
+    /// Band `b`'s indices are `order[starts[b]..starts[b + 1]]`.
+    starts: Vec<u32>,
+    order: Vec<u32>,
+}
+
+impl Binned {
+    fn new(tris: Vec<ScreenTriangle>, bands: usize) -> Self {
+        let band_range = |t: &ScreenTriangle| {
+            let (r0, r1) = t.subtile_rows();
+            (r0 as usize / BAND_ROWS)..((r1 as usize - 1) / BAND_ROWS + 1).min(bands)
+        };
+        let mut starts = vec![0u32; bands + 1];
+        for t in &tris {
+            for b in band_range(t) {
+                starts[b + 1] += 1;
+            }
+        }
+        for b in 0..bands {
+            starts[b + 1] += starts[b];
+        }
+        let mut next = starts.clone();
+        let mut order = vec![0u32; starts[bands] as usize];
+        for (i, t) in tris.iter().enumerate() {
+            for b in band_range(t) {
+                order[next[b] as usize] = i as u32;
+                next[b] += 1;
+            }
+        }
+        Binned { tris, starts, order }
+    }
+
+    /// The indices of the triangles touching band `b`, in order.
+    fn in_band(&self, b: usize) -> &[u32] {
+        &self.order[self.starts[b] as usize..self.starts[b + 1] as usize]
+    }
+}
+
+/// Triangles per chunk of the parallel set-up.
+const SETUP_CHUNK: usize = 2048;
+
+/// Subtile rows per band of the parallel rasterization (two 32x8-pixel tile
+/// rows): small enough for several bands per thread to even out the work.
+const BAND_ROWS: usize = 4;
+
 impl MaskedBuffer {
     /// Renders indexed occluder triangles, `model_to_clip` taking `positions` to
     /// clip space (wgpu conventions). Triangles crossing the near plane are
     /// clipped; index triples with an out-of-range index, NaN vertices and
-    /// zero-area triangles are skipped. Cost: per triangle, the subtiles of its
-    /// bounding box.
+    /// zero-area triangles are skipped. Cost: per triangle, its pixel rows and the
+    /// subtiles its rows touch. Run inside a rayon pool of several threads, large
+    /// sets are set up in parallel and rasterized in parallel over bands of rows;
+    /// the buffer is the same whatever the threads.
     pub fn render_triangles(&mut self, positions: &[Vec3], indices: &[u32], model_to_clip: Mat4, cull: CullMode) {
-        for tri in indices.chunks_exact(3) {
-            let Some(v) = tri.iter().map(|&i| positions.get(i as usize)).collect::<Option<Vec<_>>>() else {
-                continue;
-            };
-            let clip = [v[0], v[1], v[2]].map(|p| model_to_clip * p.extend(1.0));
-            let mut poly = [glam::Vec4::ZERO; 4];
-            let n = clip_near(clip, &mut poly);
-            if n < 3 {
-                continue;
+        let clip = |i: usize| {
+            let tri = &indices[3 * i..3 * i + 3];
+            let v = [tri[0], tri[1], tri[2]].map(|k| positions.get(k as usize).copied());
+            let [Some(a), Some(b), Some(c)] = v else { return None };
+            Some([a, b, c].map(|p| model_to_clip * p.extend(1.0)))
+        };
+        self.render(indices.len() / 3, clip, cull);
+    }
+
+    /// Renders occluder triangles already in clip space (wgpu conventions), as
+    /// [`render_triangles`](Self::render_triangles) does after its transform: for
+    /// callers that transform their own vertices, and the fill-rate benchmark.
+    pub fn render_clip_triangles(&mut self, triangles: &[[Vec4; 3]], cull: CullMode) {
+        self.render(triangles.len(), |i| Some(triangles[i]), cull);
+    }
+
+    /// Renders triangles `0..count`, `clip(i)` giving triangle `i` in clip space:
+    /// one after the other on one thread, or set up and binned to bands in
+    /// parallel chunks, then drawn in parallel bands, when the current rayon pool
+    /// has several threads.
+    fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) {
+        let (width, height) = (self.width, self.height);
+        let setup = |i: usize, out: &mut dyn FnMut(ScreenTriangle)| {
+            if let Some(c) = clip(i) {
+                screen_triangles(c, cull, width, height, out);
             }
-            let (w, h) = (self.width as f64, self.height as f64);
-            let screen: Vec<DVec3> = poly[..n]
-                .iter()
-                .map(|c| {
-                    let (x, y, z, cw) = (c.x as f64, c.y as f64, c.z as f64, c.w as f64);
-                    DVec3::new((x / cw + 1.0) * 0.5 * w, (1.0 - y / cw) * 0.5 * h, z / cw)
-                })
-                .collect();
-            for k in 1..n - 1 {
-                self.draw_screen([screen[0], screen[k], screen[k + 1]], cull);
+        };
+        if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
+            let mut whole = self.whole();
+            (0..count).for_each(|i| setup(i, &mut |tri| whole.draw(&tri)));
+            return;
+        }
+        let bands = (self.rows as usize).div_ceil(BAND_ROWS);
+        let chunks: Vec<Binned> = (0..count.div_ceil(SETUP_CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut tris = Vec::with_capacity(SETUP_CHUNK);
+                (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count)).for_each(|i| setup(i, &mut |t| tris.push(t)));
+                Binned::new(tris, bands)
+            })
+            .collect();
+        let (cols, merge) = (self.cols, self.merge);
+        self.subtiles.par_chunks_mut(cols as usize * BAND_ROWS).enumerate().for_each(|(b, subtiles)| {
+            let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge };
+            for chunk in &chunks {
+                for &i in chunk.in_band(b) {
+                    band.draw(&chunk.tris[i as usize]);
+                }
+            }
+        });
+    }
+
+    /// The whole buffer as one band.
+    fn whole(&mut self) -> Band<'_> {
+        Band {
+            subtiles: &mut self.subtiles,
+            first: 0,
+            cols: self.cols,
+            width: self.width,
+            height: self.height,
+            merge: self.merge,
+        }
+    }
+}
+
+/// Clips a clip-space triangle to the near plane, projects it to a `width` x
+/// `height` screen and hands the drawable triangles of the resulting fan to `out`.
+fn screen_triangles(clip: [Vec4; 3], cull: CullMode, width: u32, height: u32, out: &mut dyn FnMut(ScreenTriangle)) {
+    let mut poly = [Vec4::ZERO; 4];
+    let n = clip_near(clip, &mut poly);
+    if n < 3 {
+        return;
+    }
+    let (w, h) = (f64::from(width), f64::from(height));
+    let mut screen = [DVec3::ZERO; 4];
+    for (s, c) in screen.iter_mut().zip(&poly[..n]) {
+        let r = 1.0 / c.w as f64;
+        let (x, y, z) = (c.x as f64 * r, c.y as f64 * r, c.z as f64 * r);
+        *s = DVec3::new((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h, z);
+    }
+    for k in 1..n - 1 {
+        if let Some(tri) = ScreenTriangle::new([screen[0], screen[k], screen[k + 1]], cull, width, height) {
+            out(tri);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The masks by definition: every pixel centre of the subtile tested against
+    /// every edge.
+    fn reference_draw(buffer: &mut MaskedBuffer, tri: &ScreenTriangle) {
+        let mode = buffer.merge;
+        for sy in 0..buffer.rows {
+            for sx in 0..buffer.cols {
+                let mut cover = 0;
+                for i in 0..32u32 {
+                    let (x, y) = (sx * 8 + i % 8, sy * 4 + i / 8);
+                    let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    if x < buffer.width && y < buffer.height && tri.edges.iter().all(|e| e.covers(px, py)) {
+                        cover |= 1 << i;
+                    }
+                }
+                if cover != 0 {
+                    let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
+                    let (bx, by) = (f64::from(sx * 8), f64::from(sy * 4));
+                    let far = corners.iter().map(|&(dx, dy)| tri.plane.at(bx + dx, by + dy)).fold(f64::MIN, f64::max);
+                    let outside = outside_mask(buffer.width, buffer.height, sx, sy);
+                    let s = &mut buffer.subtiles[(sy * buffer.cols + sx) as usize];
+                    s.merge(cover | outside, round_far(far.min(tri.plane.zmax)), mode);
+                }
             }
         }
     }
 
-    /// Rasterizes one triangle in screen space (pixels, y down; z = NDC depth).
-    fn draw_screen(&mut self, mut t: [DVec3; 3], cull: CullMode) {
-        if t.iter().any(|p| !p.is_finite() || p.z < 0.0) {
-            return;
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
         }
-        // Signed area, positive for counter-clockwise in NDC (clockwise on screen).
-        let area = (t[1].x - t[0].x) * (t[2].y - t[0].y) - (t[2].x - t[0].x) * (t[1].y - t[0].y);
-        if area == 0.0 || (cull == CullMode::Back && area > 0.0) {
-            return;
+    }
+
+    fn assert_same(a: &MaskedBuffer, b: &MaskedBuffer, what: &str) {
+        for (i, (s, r)) in a.subtiles.iter().zip(&b.subtiles).enumerate() {
+            assert!(
+                s.mask == r.mask && s.working.to_bits() == r.working.to_bits() && s.reference == r.reference,
+                "{what}: subtile {i}: {s:?} vs {r:?}"
+            );
         }
-        // Edge functions below are positive inside for a positive area.
-        if area < 0.0 {
-            t.swap(1, 2);
-        }
-        let area = area.abs();
-        // Edge i: e(p) > 0 inside; a pixel centre on the edge counts on one side
-        // only (for one of two triangles sharing the edge, by the edge's direction),
-        // so that a shared edge leaves no hole. Both inclusions are pixels whose
-        // centre the triangle covers (its closure).
-        let edges: Vec<(f64, f64, f64, bool)> = (0..3)
-            .map(|i| {
-                let (a, b) = (t[i], t[(i + 1) % 3]);
-                let (ex, ey) = (a.y - b.y, b.x - a.x);
-                (ex, ey, -(ex * a.x + ey * a.y), ex > 0.0 || (ex == 0.0 && ey > 0.0))
-            })
-            .collect();
-        // Depth plane z = zx * x + zy * y + z0 (cofactors of the vertex matrix).
-        let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
-        let n = d1.cross(d2);
-        let (zx, zy) = (-n.x / n.z, -n.y / n.z);
-        let z0 = t[0].z - zx * t[0].x - zy * t[0].y;
-        let zmax = t[0].z.max(t[1].z).max(t[2].z);
-        let lo_x = t.iter().map(|p| p.x).fold(f64::INFINITY, f64::min).max(0.0);
-        let hi_x = t.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max).min(self.width as f64);
-        let lo_y = t.iter().map(|p| p.y).fold(f64::INFINITY, f64::min).max(0.0);
-        let hi_y = t.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max).min(self.height as f64);
-        if lo_x >= hi_x || lo_y >= hi_y || area < 1e-12 {
-            return;
-        }
-        let (sx0, sx1) = ((lo_x / 8.0) as u32, ((hi_x / 8.0).ceil() as u32).min(self.cols));
-        let (sy0, sy1) = ((lo_y / 4.0) as u32, ((hi_y / 4.0).ceil() as u32).min(self.rows));
-        for sy in sy0..sy1 {
-            for sx in sx0..sx1 {
-                let (bx, by) = ((sx * 8) as f64, (sy * 4) as f64);
-                // Edge functions are affine: over the subtile's pixel centres they
-                // are extreme at the four corner centres. All positive for an edge
-                // means every centre passes it; all negative, none does.
-                let centres = [(bx + 0.5, by + 0.5), (bx + 7.5, by + 0.5), (bx + 0.5, by + 3.5), (bx + 7.5, by + 3.5)];
-                let extremes = edges.iter().map(|&(a, b, c, _)| {
-                    centres
-                        .iter()
-                        .map(|&(x, y)| a * x + b * y + c)
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| (lo.min(e), hi.max(e)))
-                });
-                let mut all_inside = true;
-                let mut none = false;
-                for (lo, hi) in extremes {
-                    all_inside &= lo > 0.0;
-                    none |= hi < 0.0;
-                }
-                if none {
-                    continue;
-                }
-                let mut cover = if all_inside { u32::MAX } else { 0 };
-                for i in (0..32u32).filter(|_| !all_inside) {
-                    let (px, py) = (bx + (i % 8) as f64 + 0.5, by + (i / 8) as f64 + 0.5);
-                    if edges.iter().all(|&(a, b, c, on)| {
-                        let e = a * px + b * py + c;
-                        e > 0.0 || (on && e == 0.0)
-                    }) {
-                        cover |= 1 << i;
+    }
+
+    #[test]
+    fn spans_give_the_masks_of_the_per_pixel_definition() {
+        let mut rng = Lcg(3);
+        let (w, h) = (83u32, 45u32);
+        let mut covered = 0;
+        for round in 0..400 {
+            let mut fast = MaskedBuffer::new(w, h).unwrap();
+            let mut slow = fast.clone();
+            for _ in 0..1 + round % 6 {
+                let size = [2.0, 15.0, 120.0][round % 3];
+                let c = DVec3::new(rng.unit() * 100.0 - 10.0, rng.unit() * 60.0 - 8.0, 0.0);
+                let mut t = [0; 3].map(|_| c + DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, 0.0) * size);
+                for p in &mut t {
+                    p.z = rng.unit();
+                    // Snapped to half pixels in some rounds: centres on edges, shared
+                    // and horizontal edges.
+                    if round % 4 == 0 {
+                        (p.x, p.y) = ((p.x * 2.0).round() / 2.0, (p.y * 2.0).round() / 2.0);
                     }
                 }
-                if cover == 0 {
-                    continue;
+                if round % 5 == 0 {
+                    t[1].y = t[0].y;
                 }
-                let corner_max = [(bx, by), (bx + 8.0, by), (bx, by + 4.0), (bx + 8.0, by + 4.0)]
-                    .iter()
-                    .map(|&(x, y)| zx * x + zy * y + z0)
-                    .fold(f64::NEG_INFINITY, f64::max);
-                let depth = corner_max.min(zmax);
-                // Round farther: the f64 bound nudged up, then up to the next f32.
-                let depth = depth + depth.abs() * 1e-9 + 1e-12;
-                let mut d = depth as f32;
-                if (d as f64) < depth {
-                    d = f32::from_bits(d.to_bits() + if d >= 0.0 { 1 } else { 0 });
+                let tris = [t, [t[0], t[2], t[1]]].into_iter();
+                for tri in tris.filter_map(|t| ScreenTriangle::new(t, CullMode::None, w, h)) {
+                    fast.whole().draw(&tri);
+                    reference_draw(&mut slow, &tri);
                 }
-                self.merge(sx, sy, cover, d);
+            }
+            covered += fast.subtiles.iter().filter(|s| s.mask != 0 || s.reference < 1.0).count();
+            assert_same(&fast, &slow, &format!("round {round}"));
+        }
+        assert!(covered > 2000, "{covered}");
+    }
+
+    #[test]
+    fn threads_give_the_buffer_of_one_thread() {
+        let (w, h) = (300u32, 200u32);
+        let mut rng = Lcg(9);
+        let tris: Vec<[Vec4; 3]> = (0..3 * SETUP_CHUNK + 17)
+            .map(|_| {
+                let c = Vec4::new(rng.unit() as f32 * 2.2 - 1.1, rng.unit() as f32 * 2.2 - 1.1, 0.0, 1.0);
+                [0; 3].map(|_| {
+                    let d = Vec4::new(rng.unit() as f32 - 0.5, rng.unit() as f32 - 0.5, 0.0, 0.0) * 0.3;
+                    c + d + Vec4::new(0.0, 0.0, rng.unit() as f32 * 1.1 - 0.1, 0.0)
+                })
+            })
+            .collect();
+        let run = |threads: usize, mode: MergeMode| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut buffer = MaskedBuffer::new(w, h).unwrap();
+            buffer.merge = mode;
+            pool.install(|| buffer.render_clip_triangles(&tris, CullMode::Back));
+            buffer
+        };
+        for mode in [MergeMode::LayerMerge, MergeMode::QuickMask] {
+            let one = run(1, mode);
+            assert!(one.subtiles.iter().filter(|s| s.reference < 1.0).count() > 500);
+            for threads in [2, 3] {
+                assert_same(&run(threads, mode), &one, &format!("{threads} threads, {mode:?}"));
             }
         }
     }

@@ -9,7 +9,8 @@
 //!   the passing fragments or only asking whether any passes; in queries per second.
 //!
 //! The workloads come from [`occlude_soft::workload`]. Each measured configuration is
-//! a [`RasterBackend`]: the soft rasterizer on each thread count ([`SoftRaster`]) and,
+//! a [`RasterBackend`]: the soft rasterizer on each thread count ([`SoftRaster`]), the
+//! masked occlusion buffer of `occlude-moc` ([`MocRaster`], fill rate only) and,
 //! when a GPU adapter opens (lavapipe counts), the wgpu backend ([`WgpuRaster`]), all
 //! in the same run so that their ratios are measured side by side. Adding another
 //! backend's rows is implementing that trait and listing the backend in [`run`].
@@ -21,6 +22,7 @@ use std::time::Instant;
 use anyhow::{anyhow, Context, Result};
 use glam::Vec4;
 use indicatif::ProgressBar;
+use occlude_moc::{CullMode, MaskedBuffer};
 use occlude_soft::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
 use occlude_soft::workload;
 use occlude_wgpu::{DepthRaster, GpuContext};
@@ -83,7 +85,7 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
 pub struct FillRow {
     /// Leg length of the triangles, in pixels.
     pub n: u32,
-    /// Backend name: `soft` or `wgpu`.
+    /// Backend name: `soft`, `moc` or `wgpu`.
     pub backend: String,
     /// Threads the backend ran on (0 for the GPU).
     pub threads: u32,
@@ -244,6 +246,59 @@ impl RasterBackend for SoftRaster {
         let (pool, rasterizer, depth) = (&self.pool, &mut self.rasterizer, &mut self.depth);
         let (triangles, commands) = (&self.triangles, &self.commands);
         Ok(Some(pool.install(|| timed(|| drop(rasterizer.execute(depth, triangles, commands))))))
+    }
+}
+
+/// The masked occlusion buffer (`occlude_moc::MaskedBuffer`) on a rayon pool of
+/// a given number of threads: the fill-rate rows of the coarse CPU buffer,
+/// beside the exact rasterizer's. Its tests answer boxes, not fragment counts of
+/// triangles, so it has no query rows.
+pub struct MocRaster {
+    pool: rayon::ThreadPool,
+    threads: u32,
+    buffer: Option<MaskedBuffer>,
+}
+
+impl MocRaster {
+    /// The masked buffer on `threads` threads; its size is set by the first draw.
+    pub fn new(threads: u32) -> Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads as usize)
+            .build()
+            .context("cannot start the thread pool")?;
+        Ok(Self { pool, threads, buffer: None })
+    }
+}
+
+impl RasterBackend for MocRaster {
+    fn name(&self) -> String {
+        "moc".into()
+    }
+
+    fn threads(&self) -> u32 {
+        self.threads
+    }
+
+    fn draw(&mut self, width: u32, height: u32, triangles: &[[Vec4; 3]]) -> Result<f64> {
+        let buffer = match &mut self.buffer {
+            Some(b) if (b.width(), b.height()) == (width, height) => {
+                b.clear();
+                b
+            }
+            slot => slot.insert(MaskedBuffer::new(width, height)?),
+        };
+        Ok(self.pool.install(|| timed(|| buffer.render_clip_triangles(triangles, CullMode::None))))
+    }
+
+    fn queries(
+        &mut self,
+        _width: u32,
+        _height: u32,
+        _occluder: &[[Vec4; 3]],
+        _boxes: &[[[Vec4; 3]; 12]],
+        _mode: QueryMode,
+    ) -> Result<Option<f64>> {
+        Ok(None)
     }
 }
 
@@ -524,6 +579,9 @@ pub fn run(args: &RasterBenchArgs) -> Result<()> {
     for &threads in &args.threads {
         backends.push(Box::new(SoftRaster::new(threads)?));
     }
+    for &threads in &args.threads {
+        backends.push(Box::new(MocRaster::new(threads)?));
+    }
     if args.gpu != GpuChoice::Off {
         match GpuContext::new() {
             Ok(ctx) => backends.push(Box::new(WgpuRaster::new(Arc::new(ctx)))),
@@ -588,8 +646,11 @@ mod tests {
         };
         let mut backends: Vec<Box<dyn RasterBackend>> =
             args.threads.iter().map(|&t| Box::new(SoftRaster::new(t).unwrap()) as Box<dyn RasterBackend>).collect();
+        backends.extend(args.threads.iter().map(|&t| Box::new(MocRaster::new(t).unwrap()) as Box<dyn RasterBackend>));
         let report = measure(&args, &mut backends, &ProgressBar::hidden()).unwrap();
-        assert_eq!(report.rows.len(), 4);
+        assert_eq!(report.rows.len(), 8);
+        let moc: Vec<_> = report.rows.iter().filter(|r| r.backend == "moc").map(|r| (r.n, r.threads)).collect();
+        assert_eq!(moc, [(10, 1), (10, 2), (50, 1), (50, 2)]);
         assert_eq!(report.queries.len(), 2 * QUERY_COVERAGES.len() * 2 * 2);
         assert!(report.rows.iter().all(|r| r.mtris_per_s > 0.0 && r.gpixels_per_s > 0.0));
         // GPix/s = MTris/s * N^2 / 2 / 1000.
@@ -599,5 +660,6 @@ mod tests {
         }
         let text = render(&report, &args);
         assert_eq!(text.lines().filter(|l| l.contains("soft")).count(), 4 + 24);
+        assert_eq!(text.lines().filter(|l| l.contains("moc")).count(), 4);
     }
 }

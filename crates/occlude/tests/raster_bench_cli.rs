@@ -33,12 +33,14 @@ fn tiny_run_prints_tables_and_writes_json() {
 
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = report["rows"].as_array().expect("rows");
-    // Two sizes, threads 1 and 2, in order.
-    let keys: Vec<(u64, u64)> =
-        rows.iter().map(|r| (r["n"].as_u64().unwrap(), r["threads"].as_u64().unwrap())).collect();
-    assert_eq!(keys, [(10, 1), (10, 2), (50, 1), (50, 2)]);
+    // Two sizes, the soft rasterizer then the masked buffer, threads 1 and 2, in order.
+    let keys: Vec<(u64, &str, u64)> = rows
+        .iter()
+        .map(|r| (r["n"].as_u64().unwrap(), r["backend"].as_str().unwrap(), r["threads"].as_u64().unwrap()))
+        .collect();
+    let per_size = |n| [(n, "soft", 1), (n, "soft", 2), (n, "moc", 1), (n, "moc", 2)];
+    assert_eq!(keys, [per_size(10), per_size(50)].concat());
     for r in rows {
-        assert_eq!(r["backend"], "soft");
         let (mtris, gpix) = (r["mtris_per_s"].as_f64().unwrap(), r["gpixels_per_s"].as_f64().unwrap());
         let n = r["n"].as_f64().unwrap();
         assert!(mtris > 0.0);
@@ -92,11 +94,11 @@ fn wgpu_rows_run_beside_the_soft_ones_when_an_adapter_opens() {
     let Some(adapter) = report["adapter"].as_str() else {
         assert!(!require, "OCCLUDE_REQUIRE_GPU=1 but no wgpu rows");
         eprintln!("skipping the wgpu rows: no GPU adapter");
-        assert_eq!(keys, [("soft", 2)]);
+        assert_eq!(keys, [("soft", 2), ("moc", 2)]);
         return;
     };
     assert!(!adapter.is_empty() && stdout.contains(adapter), "{stdout}");
-    assert_eq!(keys, [("soft", 2), ("wgpu", 0)]);
+    assert_eq!(keys, [("soft", 2), ("moc", 2), ("wgpu", 0)]);
     for r in report["rows"].as_array().unwrap() {
         assert!(r["mtris_per_s"].as_f64().unwrap() > 0.0, "{r}");
     }
