@@ -1,9 +1,9 @@
 //! The depth pyramid's proof on the exact rasterizer: on random depth
 //! images at odd sizes (1x1, 1023x767, 641x479 and small random ones) and
 //! random boxes, reading 1x1 to 8x8 texels a box, whenever the
-//! full-resolution box test
-//! (`GpuCulling::test_boxes`) finds a visible pixel of a box, the pyramid
-//! test (`GpuCulling::test_boxes_pyramid`) says visible; and over all cases
+//! full-resolution box test (`GpuCulling::test_boxes`) finds a visible pixel
+//! of a box, the pyramid test (`GpuCulling::test_boxes_pyramid`) says
+//! visible; and over all cases
 //! the pyramid hides boxes the frustum keeps, so the property is not met
 //! by calling everything visible.
 
