@@ -38,8 +38,10 @@
 //! `(x0 >> k, y0 >> k)` to `(x1 >> k, y1 >> k)`: by the construction their
 //! pixels include the whole range, so their maximum is at least the depth of
 //! every pixel the box covers. The level chosen is the finest at which that
-//! is at most 2x2 texels (`(x1 >> k) - (x0 >> k) <= 1`, the same in `y`);
-//! it exists because the last level is 1x1. Fetching by index rather than
+//! is at most `reach` x `reach` texels (`(x1 >> k) - (x0 >> k) < reach`, the
+//! same in `y`; `reach` 2 is the field's usual 2x2, larger ones read more
+//! texels of a finer level and cull more); it exists because the last level
+//! is 1x1. Fetching by index rather than
 //! by a sampler's footprint is what makes a too-fine level impossible: a
 //! finer level only costs more texels, never a missed one.
 //!
@@ -134,10 +136,11 @@ pub fn box_footprint(view_projection: &Mat4, width: u32, height: u32, b: &Aabb) 
     })
 }
 
-/// The finest level at which `rect` spans at most 2x2 texels.
-pub fn select_level(rect: &ScreenRect) -> u32 {
+/// The finest level at which `rect` spans at most `reach` x `reach` texels
+/// (`reach` >= 1).
+pub fn select_level(rect: &ScreenRect, reach: u32) -> u32 {
     let mut k = 0;
-    while (rect.x1 >> k) - (rect.x0 >> k) > 1 || (rect.y1 >> k) - (rect.y0 >> k) > 1 {
+    while (rect.x1 >> k) - (rect.x0 >> k) >= reach || (rect.y1 >> k) - (rect.y0 >> k) >= reach {
         k += 1;
     }
     k
@@ -148,7 +151,7 @@ pub fn select_level(rect: &ScreenRect) -> u32 {
 pub struct PyramidTest {
     /// The box may have a visible pixel.
     pub visible: bool,
-    /// Texels read (1 to 4).
+    /// Texels read (1 to `reach` squared).
     pub fetched: u32,
 }
 
@@ -207,15 +210,16 @@ impl DepthPyramid {
         self.sizes[1..].iter().map(|&(w, h)| u64::from(w) * u64::from(h)).sum()
     }
 
-    /// Tests a box's footprint against the pyramid (module documentation).
-    /// An `Empty` footprint is hidden and a `Near` one visible, untested.
-    pub fn test(&self, footprint: &Footprint) -> PyramidTest {
+    /// Tests a box's footprint against the pyramid, reading at most `reach`
+    /// x `reach` texels (module documentation). An `Empty` footprint is
+    /// hidden and a `Near` one visible, untested.
+    pub fn test(&self, footprint: &Footprint, reach: u32) -> PyramidTest {
         let rect = match footprint {
             Footprint::Near => return PyramidTest { visible: true, fetched: 0 },
             Footprint::Empty => return PyramidTest { visible: false, fetched: 0 },
             Footprint::Rect(r) => r,
         };
-        let k = select_level(rect);
+        let k = select_level(rect, reach);
         let (w, texels) = (self.sizes[k as usize].0, &self.levels[k as usize]);
         let (mut farthest, mut fetched) = (0.0f32, 0);
         for y in rect.y0 >> k..=rect.y1 >> k {
@@ -263,18 +267,18 @@ mod tests {
             }
         }
 
-        /// The selected level spans at most 2x2 texels, and the level above
-        /// it more (it is the finest such level).
+        /// The selected level spans at most `reach` x `reach` texels, and
+        /// the level above it more (it is the finest such level).
         #[test]
-        fn the_selected_level_is_the_finest_of_at_most_two_by_two(
-            x0 in 0u32..2000, y0 in 0u32..2000, dx in 0u32..2000, dy in 0u32..2000,
+        fn the_selected_level_is_the_finest_within_reach(
+            x0 in 0u32..2000, y0 in 0u32..2000, dx in 0u32..2000, dy in 0u32..2000, reach in 1u32..9,
         ) {
             let r = ScreenRect { x0, y0, x1: x0 + dx, y1: y0 + dy, depth: 0.5 };
-            let k = select_level(&r);
+            let k = select_level(&r, reach);
             let span = |k: u32| ((r.x1 >> k) - (r.x0 >> k), (r.y1 >> k) - (r.y0 >> k));
-            prop_assert!(span(k).0 <= 1 && span(k).1 <= 1);
+            prop_assert!(span(k).0 < reach && span(k).1 < reach);
             if k > 0 {
-                prop_assert!(span(k - 1).0 > 1 || span(k - 1).1 > 1);
+                prop_assert!(span(k - 1).0 >= reach || span(k - 1).1 >= reach);
             }
         }
     }
@@ -297,9 +301,9 @@ mod tests {
         let Footprint::Rect(r) = box_footprint(&vp, 64, 64, &ahead) else { panic!("a box ahead has a rectangle") };
         assert!(r.x0 > 0 && r.x1 < 63 && r.x0 < r.x1 && r.depth > 0.9 && r.depth < 1.0, "{r:?}");
         let mut p = DepthPyramid::new(64, 64);
-        assert!(p.test(&Footprint::Rect(r)).visible, "nothing in front of it");
+        assert!(p.test(&Footprint::Rect(r), 2).visible, "nothing in front of it");
         p.build(&vec![0.5; 64 * 64]);
-        assert!(!p.test(&Footprint::Rect(r)).visible, "a wall in front of it");
-        assert!(p.test(&Footprint::Near).visible && !p.test(&Footprint::Empty).visible);
+        assert!(!p.test(&Footprint::Rect(r), 2).visible, "a wall in front of it");
+        assert!(p.test(&Footprint::Near, 2).visible && !p.test(&Footprint::Empty, 2).visible);
     }
 }

@@ -133,12 +133,13 @@ pub trait GpuCulling {
 
     /// [`Self::test_boxes`] against `pyramid` instead of the depth buffer:
     /// the same frustum and near-region rules, then each remaining box's
-    /// footprint tested against the pyramid
+    /// footprint tested against the pyramid, reading at most `reach` x
+    /// `reach` texels
     /// ([`DepthPyramid::test`](crate::depth_pyramid::DepthPyramid::test)),
     /// setting `flags[id]` to 1 where it may be visible. Never hides a box
     /// that [`Self::test_boxes`] against the depth the pyramid was built
     /// from would find visible. One dispatch, no draw.
-    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags);
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags);
 
     /// For each id of `src` whose flag in `filter` is set, the items of its
     /// range in `table`, into `into` (one dispatch).

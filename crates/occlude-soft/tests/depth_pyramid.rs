@@ -1,8 +1,9 @@
 //! The depth pyramid's proof on the exact rasterizer: on random depth
 //! images at odd sizes (1x1, 1023x767, 641x479 and small random ones) and
-//! random boxes, whenever the full-resolution box test
-//! (`GpuCulling::test_boxes`) finds a visible pixel of a box, the pyramid
-//! test (`GpuCulling::test_boxes_pyramid`) says visible; and over all cases
+//! random boxes, reading 1x1 to 8x8 texels a box, whenever the
+//! full-resolution box test (`GpuCulling::test_boxes`) finds a visible pixel
+//! of a box, the pyramid test (`GpuCulling::test_boxes_pyramid`) says
+//! visible; and over all cases
 //! the pyramid hides boxes the frustum keeps, so the property is not met
 //! by calling everything visible.
 
@@ -63,7 +64,7 @@ struct Outcome {
 
 /// Runs both tests on one depth image and set of boxes; fails when the
 /// full-resolution test finds a box visible that the pyramid test hides.
-fn check(width: u32, height: u32, seed: u64) -> Result<Outcome, TestCaseError> {
+fn check(width: u32, height: u32, reach: u32, seed: u64) -> Result<Outcome, TestCaseError> {
     let mut rng = Rng::new(seed, 18);
     let camera = Camera {
         position: Vec3::ZERO,
@@ -87,11 +88,19 @@ fn check(width: u32, height: u32, seed: u64) -> Result<Outcome, TestCaseError> {
     let (exact, pyramid_flags, scratch) = (gpu.create_flags(n), gpu.create_flags(n), gpu.create_list(n, &[]));
     let pyramid = gpu.create_pyramid();
     gpu.build_pyramid(pyramid);
-    gpu.test_boxes_pyramid(set, all, pyramid, pyramid_flags);
+    gpu.test_boxes_pyramid(set, all, pyramid, reach, pyramid_flags);
     gpu.test_boxes(set, all, exact);
     gpu.compact(exact, Some(pyramid_flags), scratch);
     let missed = gpu.read_count(scratch);
-    prop_assert_eq!(missed, 0, "{}x{} seed {}: the pyramid hid boxes the exact test sees", width, height, seed);
+    prop_assert_eq!(
+        missed,
+        0,
+        "{}x{} reach {} seed {}: the pyramid hid boxes the exact test sees",
+        width,
+        height,
+        reach,
+        seed
+    );
     gpu.compact(pyramid_flags, None, scratch);
     let pyramid_visible = gpu.read_count(scratch);
     let frustum = camera.frustum();
@@ -112,8 +121,8 @@ fn the_pyramid_never_hides_what_the_full_resolution_test_sees() {
     ];
     let mut runner = TestRunner::new(Config { cases: 200, failure_persistence: None, ..Config::default() });
     runner
-        .run(&(sizes, any::<u64>()), |((w, h), seed)| {
-            let o = check(w, h, seed)?;
+        .run(&(sizes, 1u32..9, any::<u64>()), |((w, h), reach, seed)| {
+            let o = check(w, h, reach, seed)?;
             in_view.set(in_view.get() + o.in_view);
             hid.set(hid.get() + o.pyramid_hid);
             Ok(())

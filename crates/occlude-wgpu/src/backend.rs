@@ -757,7 +757,7 @@ impl GpuCulling for WgpuBackend<'_> {
         unreachable!("build_pyramid where pyramid_support is an error")
     }
 
-    fn test_boxes_pyramid(&mut self, _: BoxSet, _: IdList, _: Pyramid, _: Flags) {
+    fn test_boxes_pyramid(&mut self, _: BoxSet, _: IdList, _: Pyramid, _: u32, _: Flags) {
         unreachable!("test_boxes_pyramid where pyramid_support is an error")
     }
 

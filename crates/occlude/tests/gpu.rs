@@ -135,6 +135,16 @@ fn without_a_vulkan_driver_other_apis_are_refused_or_absent_with_exit_code_2() {
 }
 
 #[test]
+fn hiz_is_refused_on_the_gpu_until_it_has_a_depth_pyramid() {
+    if GpuContext::for_test("hiz_is_refused_on_the_gpu_until_it_has_a_depth_pyramid").is_none() {
+        return;
+    }
+    let cfg = BenchConfig { methods: vec!["hiz".into()], ..config("teapots", HierarchyKind::Bvh, 1) };
+    let err = run_scene(&small("teapots"), &cfg, &ProgressBar::hidden()).err().expect("hiz on wgpu is refused");
+    assert!(format!("{err:#}").contains("method hiz cannot run: the wgpu backend builds no depth pyramid"), "{err:#}");
+}
+
+#[test]
 fn wgpu_bench_writes_measured_times_and_the_adapter() {
     if GpuContext::for_test("wgpu_bench_writes_measured_times_and_the_adapter").is_none() {
         return;

@@ -67,12 +67,15 @@ fn roc_ioc_and_hiz_match_vfc_on_every_frame_and_cull() {
 fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
     let scene = small("city");
     for resolution in [(1024, 768), (1920, 1080), (1366, 768), (1023, 767), (641, 479), (1, 1)] {
-        let cfg = BenchConfig { frames: 6, resolution, ..config("city", HierarchyKind::Bvh, &["vfc", "hiz"], &[]) };
-        let r = run(&scene, &cfg);
-        assert_exact(&r, &format!("city/hiz at {resolution:?}"));
-        let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
-        if resolution.0 > 1 {
-            assert!(drawn(1) < drawn(0), "city/hiz at {resolution:?} culled nothing");
+        // The field's 2x2 texels a box, and more texels of a finer level.
+        for texels in ["hiz.texels=2", "hiz.texels=8"] {
+            let cfg = config("city", HierarchyKind::Bvh, &["vfc", "hiz"], &[texels]);
+            let r = run(&scene, &BenchConfig { frames: 6, resolution, ..cfg });
+            assert_exact(&r, &format!("city/{texels} at {resolution:?}"));
+            let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+            if resolution.0 > 1 {
+                assert!(drawn(1) < drawn(0), "city/{texels} at {resolution:?} culled nothing");
+            }
         }
     }
 }

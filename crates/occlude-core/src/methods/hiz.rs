@@ -10,9 +10,11 @@
 //! 1. early pass: draw last frame's visible instances that are still in the
 //!    view frustum;
 //! 2. build a depth pyramid from that depth ([`crate::depth_pyramid`]);
-//! 3. late pass: test every instance's box against the pyramid (boxes
-//!    outside the frustum set nothing, boxes at the eye are visible
-//!    untested), setting this frame's visibility;
+//! 3. late pass: test every instance's box against the pyramid, reading
+//!    at most `hiz.texels` x `hiz.texels` texels of the finest level that
+//!    fits (default 2, the field's 2x2; boxes outside the frustum set
+//!    nothing, boxes at the eye are visible untested), setting this frame's
+//!    visibility;
 //! 4. draw the instances visible now that were not drawn in step 1, and keep
 //!    the visible set for the next frame.
 //!
@@ -25,9 +27,24 @@
 
 use super::roc::TemporalSet;
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext};
+use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
 use crate::gpu_culling::{BoxSet, IdList, Pyramid};
+
+/// Parameters of `hiz`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HizParams {
+    /// `hiz.texels`: most texels per axis a box test reads, 1 to 16
+    /// (default 2).
+    pub texels: u32,
+}
+
+impl HizParams {
+    /// Reads `hiz.texels`.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        Ok(Self { texels: r.get("texels", 2, "an integer from 1 to 16", |t| (1..=16).contains(&t))? })
+    }
+}
 
 /// The device resources of `hiz`, made on its first frame.
 #[derive(Clone, Copy, Debug)]
@@ -42,9 +59,17 @@ struct Resources {
 
 /// `hiz`: two-phase occlusion culling against a depth pyramid (module
 /// documentation).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct TwoPhaseHiZ {
+    params: HizParams,
     resources: Option<Resources>,
+}
+
+impl TwoPhaseHiZ {
+    /// A fresh `hiz` (nothing visible yet).
+    pub fn new(params: HizParams) -> Self {
+        Self { params, resources: None }
+    }
 }
 
 impl CullingMethod for TwoPhaseHiZ {
@@ -87,7 +112,22 @@ impl CullingMethod for TwoPhaseHiZ {
         };
         let visible = r.temporal.begin(gpu, Some(r.boxes));
         gpu.build_pyramid(r.pyramid);
-        gpu.test_boxes_pyramid(r.boxes, r.all, r.pyramid, visible);
+        gpu.test_boxes_pyramid(r.boxes, r.all, r.pyramid, self.params.texels, visible);
         r.temporal.finish(gpu, true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::MethodOptions;
+
+    #[test]
+    fn texels_default_to_two_and_stay_in_range() {
+        let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
+        assert_eq!(read(&[]), Ok(HizParams { texels: 2 }));
+        assert_eq!(read(&["hiz.texels=8"]), Ok(HizParams { texels: 8 }));
+        let err = read(&["hiz.texels=0"]).unwrap_err();
+        assert!(err.to_string().contains("hiz.texels = 0: expected an integer from 1 to 16"), "{err}");
     }
 }

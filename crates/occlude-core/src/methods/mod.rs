@@ -80,7 +80,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
-        "hiz" => Box::new(hiz::TwoPhaseHiZ::default()),
+        "hiz" => Box::new(hiz::TwoPhaseHiZ::new(hiz::HizParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })

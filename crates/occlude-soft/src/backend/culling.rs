@@ -214,7 +214,7 @@ impl GpuCulling for SoftBackend<'_> {
         }
     }
 
-    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags) {
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags) {
         let count = self.device.lists[ids.0 as usize].ids.len();
         let tested = self.boxes_to_test(boxes, ids, flags);
         let (width, height) = (self.depth.width(), self.depth.height());
@@ -222,7 +222,7 @@ impl GpuCulling for SoftBackend<'_> {
         let mut fetched = 0u64;
         let mut visible = Vec::new();
         for (id, b) in &tested {
-            let result = p.test(&box_footprint(&self.view_projection, width, height, b));
+            let result = p.test(&box_footprint(&self.view_projection, width, height, b), reach);
             fetched += u64::from(result.fetched);
             if result.visible {
                 visible.push(*id);
