@@ -25,6 +25,6 @@ pub use gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupport
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
 pub use methods::{CullingMethod, FrameContext};
 
-pub use path::{CameraPath, Keyframe};
+pub use path::{CameraPath, Keyframe, Sampling};
 pub use scene::{Instance, Mesh, Scene, SceneError};
 pub use stats::FrameStats;
