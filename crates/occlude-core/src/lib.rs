@@ -28,6 +28,6 @@ pub use gpu_culling::{
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
 pub use methods::{CullingMethod, FrameContext};
 
-pub use path::{CameraPath, Keyframe};
+pub use path::{CameraPath, Keyframe, Sampling};
 pub use scene::{Instance, Mesh, Scene, SceneError};
 pub use stats::FrameStats;

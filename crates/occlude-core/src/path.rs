@@ -1,5 +1,5 @@
-//! Camera paths: keyframes with smooth (Catmull-Rom) interpolation, sampled to
-//! a fixed number of frames so every method sees the same walkthrough.
+//! Camera paths: keyframes with smooth (Catmull-Rom) interpolation, sampled
+//! into frames ([`Sampling`]) so every method sees the same walkthrough.
 
 use crate::camera::Camera;
 use glam::Vec3;
@@ -33,6 +33,24 @@ fn catmull_rom(p0: Vec3, p1: Vec3, p2: Vec3, p3: Vec3, t: f32) -> Vec3 {
         + (p2 - p0) * t
         + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
         + (3.0 * p1 - p0 - 3.0 * p2 + p3) * t3)
+}
+
+/// How a walkthrough is cut into frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sampling {
+    /// This many frames spread evenly over the whole path, its first and last
+    /// keyframes included, however long the path.
+    Spread(usize),
+    /// One frame every `1 / fps` seconds of walkthrough time from the path's
+    /// start to its end (as the papers render their walkthroughs, at a frame
+    /// rate, so consecutive frames are as coherent as the motion allows),
+    /// at most `limit` of them: the first ones.
+    Rate {
+        /// Frames per second of walkthrough time.
+        fps: f32,
+        /// The most frames taken from the start (`None`: the whole path).
+        limit: Option<usize>,
+    },
 }
 
 impl CameraPath {
@@ -78,15 +96,37 @@ impl CameraPath {
         })
     }
 
-    /// `frames` cameras evenly spaced in time over the whole path.
-    pub fn sample(&self, frames: usize, aspect: f32, near: f32, far: f32) -> Vec<Camera> {
-        let start = self.keyframes.first().map_or(0.0, |k| k.time);
+    /// The walkthrough times (seconds, from the first keyframe's) of the
+    /// frames `sampling` asks for; empty for a path without keyframes.
+    pub fn frame_times(&self, sampling: Sampling) -> Vec<f32> {
+        let Some(start) = self.keyframes.first().map(|k| k.time) else { return Vec::new() };
         let span = self.duration();
-        (0..frames)
-            .filter_map(|f| {
-                let t = if frames > 1 { start + span * f as f32 / (frames - 1) as f32 } else { start };
-                self.at(t)
-            })
+        match sampling {
+            Sampling::Spread(frames) => (0..frames)
+                .map(|f| if frames > 1 { start + span * f as f32 / (frames - 1) as f32 } else { start })
+                .collect(),
+            Sampling::Rate { fps, limit } => {
+                // Every frame whose time lies on the path; the small margin
+                // keeps a path of whole frames from losing its last one to
+                // rounding.
+                let whole = (f64::from(span) * f64::from(fps) + 1e-6).floor() as usize + 1;
+                let count = limit.map_or(whole, |l| l.min(whole));
+                (0..count).map(|f| start + (f as f64 / f64::from(fps)) as f32).collect()
+            }
+        }
+    }
+
+    /// `frames` cameras evenly spaced in time over the whole path
+    /// ([`Sampling::Spread`]).
+    pub fn sample(&self, frames: usize, aspect: f32, near: f32, far: f32) -> Vec<Camera> {
+        self.sample_with(Sampling::Spread(frames), aspect, near, far)
+    }
+
+    /// The cameras of the frames `sampling` asks for.
+    pub fn sample_with(&self, sampling: Sampling, aspect: f32, near: f32, far: f32) -> Vec<Camera> {
+        self.frame_times(sampling)
+            .into_iter()
+            .filter_map(|t| self.at(t))
             .map(|k| Camera {
                 position: k.position,
                 target: k.target,
@@ -125,5 +165,28 @@ mod tests {
     #[test]
     fn empty_path_samples_nothing() {
         assert!(CameraPath::default().sample(10, 1.0, 0.1, 1.0).is_empty());
+        assert!(CameraPath::default().frame_times(Sampling::Rate { fps: 30.0, limit: None }).is_empty());
+    }
+
+    #[test]
+    fn a_frame_rate_covers_the_whole_path_or_its_first_frames() {
+        let mut path = CameraPath::through([(Vec3::ZERO, Vec3::X), (Vec3::X, Vec3::X * 2.0)], 60.0);
+        path.keyframes[1].time = 2.0;
+        let all = path.frame_times(Sampling::Rate { fps: 30.0, limit: None });
+        // 2 s at 30 fps: frames at 0, 1/30, ..., 60/30 s.
+        assert_eq!(all.len(), 61);
+        assert_eq!(all[0], 0.0);
+        assert!((all[1] - 1.0 / 30.0).abs() < 1e-7);
+        assert_eq!(*all.last().unwrap(), 2.0);
+        let first = path.frame_times(Sampling::Rate { fps: 30.0, limit: Some(10) });
+        assert_eq!(first, all[..10]);
+        // A limit past the path's end takes the whole path, no more.
+        assert_eq!(path.frame_times(Sampling::Rate { fps: 30.0, limit: Some(1000) }), all);
+        // A rate that does not divide the path stops at the last whole frame.
+        let sparse = path.frame_times(Sampling::Rate { fps: 0.75, limit: None });
+        assert_eq!(sparse, vec![0.0, 4.0 / 3.0]);
+        let cams = path.sample_with(Sampling::Rate { fps: 30.0, limit: None }, 1.0, 0.1, 10.0);
+        assert_eq!(cams.len(), 61);
+        assert_eq!(cams[60].position, Vec3::X);
     }
 }

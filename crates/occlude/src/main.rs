@@ -6,7 +6,10 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
-use occlude::bench::config::{load_camera_path, parse_resolution, BackendKind, DEFAULT_METHODS};
+use occlude::bench::config::{
+    load_camera_path, parse_frames, parse_resolution, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES,
+    DEFAULT_METHODS, DEFAULT_RESOLUTION,
+};
 use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, BenchConfig};
 use occlude::output_path::parse_output_path;
@@ -73,9 +76,10 @@ struct SceneArgs {
     /// {"keyframes":[{"time":0,"position":[x,y,z],"target":[x,y,z],"fov_y_deg":60}, ...]}.
     #[arg(long, value_name = "FILE")]
     camera_path: Option<PathBuf>,
-    /// Scene size: small, medium or paper.
-    #[arg(long, default_value = "small")]
-    size: String,
+    /// Scene size: small, medium or paper [default: small; paper with
+    /// bench --paper].
+    #[arg(long)]
+    size: Option<String>,
     /// Seed of the procedural generator.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -98,7 +102,7 @@ impl SceneArgs {
         SceneSource::resolve(&self.scene).map_err(|e| usage(e.into()))?;
         Ok(BenchConfig {
             scene: self.scene.clone(),
-            size: self.size.parse::<Size>().map_err(|e| usage(e.into()))?,
+            size: self.size.as_deref().unwrap_or("small").parse::<Size>().map_err(|e| usage(e.into()))?,
             seed: self.seed,
             hierarchy: self.hierarchy,
             build: BuildOptions { leaf_size: self.leaf_size, ..BuildOptions::default() },
@@ -117,12 +121,18 @@ struct BenchArgs {
     /// Comma-separated methods, in table order.
     #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from))]
     methods: Vec<String>,
-    /// Frames sampled along the walkthrough.
-    #[arg(long, default_value_t = 300)]
-    frames: usize,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
-    resolution: (u32, u32),
+    /// Frames: the first N of the walkthrough sampled at --fps, or all
+    /// [default: 300, the first 10 s at 30 fps; with --paper: all].
+    #[arg(long, value_name = "N|all", value_parser = parse_frames)]
+    frames: Option<usize>,
+    /// Frame rate the walkthrough is sampled at, frames per second of
+    /// walkthrough time.
+    #[arg(long, default_value_t = DEFAULT_FPS)]
+    fps: f32,
+    /// Image size, WIDTHxHEIGHT [default: 1024x768; 800x600 with --paper
+    /// om, the paper's].
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
     /// Backend: soft (exact CPU rasterizer, simulated GPU clock) or wgpu (a
     /// real GPU; times measured).
     #[arg(long, default_value = "soft")]
@@ -274,12 +284,20 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     let usage = Failure::Usage;
     let config = BenchConfig {
         methods: args.methods.iter().map(|m| m.trim().to_string()).collect(),
-        frames: args.frames,
-        resolution: args.resolution,
+        frames: args.frames.unwrap_or(if args.paper.is_some() { ALL_FRAMES } else { DEFAULT_FRAMES }),
+        fps: Some(args.fps),
+        resolution: args
+            .resolution
+            .or(args.paper.as_deref().and_then(bench::paper::default_resolution))
+            .unwrap_or(DEFAULT_RESOLUTION),
         backend: args.backend,
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
         ..args.scene.config()?
+    };
+    let config = match (&args.paper, &args.scene.size) {
+        (Some(_), None) => BenchConfig { size: bench::paper::DEFAULT_SIZE, ..config },
+        _ => config,
     };
     config.validate().map_err(usage)?;
     if let Some(paper) = &args.paper {
@@ -313,13 +331,13 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
 }
 
 fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
-    let progress = occlude::progress::bar(config.frames as u64, "frames");
+    let progress = occlude::progress::bar(0, "frames");
     if let Some(paper) = &args.paper {
         let result = bench::paper::run(paper, config, &progress)?;
         progress.finish_and_clear();
         print!("{}", result.text);
         if let Some(path) = &args.json {
-            bench::output::write_json(&result.reports, path)?;
+            bench::output::write_json(&result.tables, path)?;
             eprintln!("wrote {}", path.display());
         }
         return Ok(());

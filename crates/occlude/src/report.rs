@@ -1,5 +1,6 @@
-//! `occlude report`: bench JSON files (one [`BenchReport`] each, or an array of
-//! them as `occlude bench --paper --json` writes) turned into one
+//! `occlude report`: bench JSON files (one [`BenchReport`] each, an array of
+//! them, or a paper's tables with their reports as `occlude bench --paper
+//! --json` writes) turned into one
 //! self-contained HTML page, and optionally the same content as Markdown.
 //!
 //! Each report gets a heading with its setup, the scene statistics, the
@@ -46,6 +47,10 @@ pub fn load(path: &Path) -> Result<Vec<BenchReport>> {
     let value: Value = serde_json::from_str(&text).with_context(|| format!("{name} is not valid JSON"))?;
     let (items, in_array) = match value {
         Value::Array(items) => (items, true),
+        Value::Object(mut tables) if tables.contains_key("tables") => match tables.remove("reports") {
+            Some(Value::Array(items)) => (items, true),
+            _ => bail!("{name}: a paper's tables without the array of their reports (\"reports\")"),
+        },
         object @ Value::Object(_) => (vec![object], false),
         other => {
             bail!("{name}: expected a bench report (a JSON object) or an array of them, found {}", json_kind(&other))
@@ -341,6 +346,7 @@ mod tests {
             scene: scene.into(),
             size: "small".into(),
             frames: 10,
+            fps: None,
             resolution: [160, 120],
             backend: "soft".into(),
             adapter: None,
@@ -463,6 +469,16 @@ mod tests {
         assert!(e.contains("item.json: item 1 of the array") && e.contains("missing field `methods`"), "{e}");
         let e = error("number.json", "42");
         assert!(e.contains("number.json: expected a bench report") && e.contains("found a number"), "{e}");
+        let tables = dir.join("tables.json");
+        let paper = crate::bench::paper_tables::PaperTables {
+            paper: "chc".into(),
+            tables: Vec::new(),
+            reports: vec![report("city"), report("plant")],
+        };
+        std::fs::write(&tables, serde_json::to_string(&paper).unwrap()).unwrap();
+        assert_eq!(load(&tables).unwrap(), paper.reports, "a paper's tables are read as their reports");
+        let e = error("bare.json", r#"{"paper": "chc", "tables": []}"#);
+        assert!(e.contains("bare.json: a paper's tables without"), "{e}");
         let e = error("empty.json", "[]");
         assert!(e.contains("empty.json: the array holds no bench reports"), "{e}");
         let e = error("text.json", "scene: city");

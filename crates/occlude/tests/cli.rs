@@ -21,6 +21,8 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--size", "huge"], "huge");
     assert_usage_error(&["bench", "--methods", "vfc,magic"], "magic");
     assert_usage_error(&["bench", "--frames", "0"], "frames");
+    assert_usage_error(&["bench", "--frames", "some"], "'some' is not a frame count");
+    assert_usage_error(&["bench", "--fps", "0"], "--fps 0 is out of range");
     assert_usage_error(&["bench", "--resolution", "12by4"], "12by4");
     assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
     assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
@@ -103,6 +105,7 @@ fn short_run_prints_table_and_writes_json_and_csv() {
     }
     assert_eq!(v["scene"], "city");
     assert_eq!(v["frames"], 5);
+    assert_eq!(v["fps"], 30.0, "the default frame rate");
     let methods = v["methods"].as_array().unwrap();
     assert_eq!(methods.len(), 4);
     for m in methods {

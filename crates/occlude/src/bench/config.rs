@@ -1,15 +1,32 @@
 //! What a benchmark run is asked to do, checked before any work starts.
 
+use super::ideal::{IDEAL, SOURCE};
 use anyhow::{bail, Context, Result};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
-use occlude_core::{CameraPath, HierarchyKind};
+use occlude_core::{CameraPath, HierarchyKind, Sampling};
 use occlude_scenes::{ImportOptions, Size};
 use occlude_soft::GpuModel;
 use std::path::Path;
 
 /// Near clipping distance of every walkthrough camera, metres.
 pub const NEAR_PLANE: f32 = 0.25;
+
+/// Frame rate at which `occlude bench` samples a walkthrough unless told
+/// otherwise (`--fps`).
+pub const DEFAULT_FPS: f32 = 30.0;
+
+/// Frames `occlude bench` renders unless told otherwise (`--frames`): the
+/// first 10 s of the walkthrough at [`DEFAULT_FPS`]; a paper's run takes
+/// the whole walkthrough.
+pub const DEFAULT_FRAMES: usize = 300;
+
+/// Image size of `occlude bench` unless told otherwise (`--resolution`).
+pub const DEFAULT_RESOLUTION: (u32, u32) = (1024, 768);
+
+/// [`BenchConfig::frames`] with a frame rate: every frame of the walkthrough
+/// (`--frames all`).
+pub const ALL_FRAMES: usize = usize::MAX;
 
 /// Methods `occlude bench` compares when none are named.
 pub const DEFAULT_METHODS: [&str; 4] = ["vfc", "sw", "chc", "opt"];
@@ -55,8 +72,13 @@ pub struct BenchConfig {
     pub seed: u64,
     /// Methods to compare, in table order.
     pub methods: Vec<String>,
-    /// Frames sampled along the walkthrough.
+    /// Frames of the walkthrough: with [`Self::fps`], the first this many
+    /// ([`ALL_FRAMES`]: all of them); without, this many spread evenly over
+    /// the whole walkthrough.
     pub frames: usize,
+    /// The frame rate the walkthrough is sampled at, frames per second of
+    /// walkthrough time (`None`: [`Self::frames`] spread over it).
+    pub fps: Option<f32>,
     /// Image size in pixels.
     pub resolution: (u32, u32),
     /// Hierarchy builder.
@@ -85,8 +107,9 @@ impl Default for BenchConfig {
             size: Size::Small,
             seed: 1,
             methods: DEFAULT_METHODS.iter().map(|s| s.to_string()).collect(),
-            frames: 300,
-            resolution: (1024, 768),
+            frames: DEFAULT_FRAMES,
+            fps: None,
+            resolution: DEFAULT_RESOLUTION,
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions::default(),
             backend: BackendKind::Soft,
@@ -106,8 +129,14 @@ impl BenchConfig {
         if self.methods.is_empty() {
             bail!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
         }
-        for m in &self.methods {
+        for m in self.methods.iter().filter(|m| m.as_str() != IDEAL) {
             create(m, &self.options)?;
+        }
+        if let Some(i) = self.methods.iter().position(|m| m == IDEAL) {
+            if !self.methods[..i].iter().any(|m| m == SOURCE) {
+                bail!("method {IDEAL} renders {SOURCE}'s visible set without queries: list {SOURCE} before it (e.g. --methods vfc,{SOURCE},{IDEAL})");
+            }
+            self.options.for_method(IDEAL).finish()?;
         }
         self.options.check_methods(&self.methods)?;
         if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
@@ -115,6 +144,12 @@ impl BenchConfig {
         }
         if self.frames == 0 {
             bail!("--frames must be at least 1");
+        }
+        if self.fps.is_some_and(|f| !(f > 0.0 && f <= MAX_FPS)) {
+            bail!(
+                "--fps {} is out of range: expected a frame rate above 0 and at most {MAX_FPS}",
+                self.fps.unwrap_or(0.0)
+            );
         }
         if let Some(k) = self.dump_frame.filter(|&k| k >= self.frames) {
             bail!("--dump-frame {k} is past the last frame: frames are numbered 0 to {}", self.frames - 1);
@@ -127,6 +162,28 @@ impl BenchConfig {
             bail!("--leaf-size must be at least 1");
         }
         Ok(())
+    }
+}
+
+/// The highest frame rate `--fps` accepts.
+const MAX_FPS: f32 = 1000.0;
+
+impl BenchConfig {
+    /// How the walkthrough is cut into frames: [`Self::fps`] and
+    /// [`Self::frames`] as the path sampler takes them.
+    pub fn sampling(&self) -> Sampling {
+        match self.fps {
+            Some(fps) => Sampling::Rate { fps, limit: (self.frames != ALL_FRAMES).then_some(self.frames) },
+            None => Sampling::Spread(self.frames),
+        }
+    }
+}
+
+/// Parses `--frames`: a count of at least 1, or `all` ([`ALL_FRAMES`]).
+pub fn parse_frames(s: &str) -> Result<usize, String> {
+    match s.trim() {
+        "all" => Ok(ALL_FRAMES),
+        n => n.parse::<usize>().map_err(|_| format!("'{s}' is not a frame count (a whole number, or 'all')")),
     }
 }
 
@@ -171,6 +228,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn frames_parse_as_a_count_or_all_and_set_the_sampling() {
+        assert_eq!(parse_frames("12"), Ok(12));
+        assert_eq!(parse_frames("all"), Ok(ALL_FRAMES));
+        assert!(parse_frames("-1").unwrap_err().contains("'-1'"));
+        let c = BenchConfig { frames: 12, fps: Some(30.0), ..BenchConfig::default() };
+        assert_eq!(c.sampling(), Sampling::Rate { fps: 30.0, limit: Some(12) });
+        let c = BenchConfig { frames: ALL_FRAMES, ..c };
+        assert_eq!(c.sampling(), Sampling::Rate { fps: 30.0, limit: None });
+        let c = BenchConfig { fps: None, frames: 12, ..c };
+        assert_eq!(c.sampling(), Sampling::Spread(12));
+    }
+
+    #[test]
     fn resolution_parses_and_rejects() {
         assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
         assert!(parse_resolution("640").is_err());
@@ -188,6 +258,16 @@ mod tests {
         c = BenchConfig { resolution: (0, 10), ..BenchConfig::default() };
         assert!(c.validate().unwrap_err().to_string().contains("0x10"));
         c = BenchConfig { frames: 0, ..BenchConfig::default() };
+        assert!(c.validate().is_err());
+        c = BenchConfig { methods: vec!["vfc".into(), "ideal".into(), "sw".into()], ..BenchConfig::default() };
+        assert!(c.validate().unwrap_err().to_string().contains("list sw before it"));
+        c.methods = vec!["vfc".into(), "sw".into(), "ideal".into()];
+        c.validate().unwrap();
+        c.options = MethodOptions::parse(&["ideal.x=1"]).unwrap();
+        assert!(c.validate().unwrap_err().to_string().contains("takes no parameters"));
+        c = BenchConfig { fps: Some(0.0), ..BenchConfig::default() };
+        assert!(c.validate().unwrap_err().to_string().contains("--fps 0"));
+        c = BenchConfig { fps: Some(f32::NAN), ..BenchConfig::default() };
         assert!(c.validate().is_err());
         c = BenchConfig { frames: 5, dump_frame: Some(4), ..BenchConfig::default() };
         c.validate().unwrap();

@@ -4,9 +4,12 @@
 
 pub mod config;
 pub mod dump;
+pub mod ideal;
 pub mod output;
 pub mod paper;
+pub mod paper_tables;
 pub mod plot;
+pub mod published;
 pub mod runner;
 pub mod summary;
 pub mod table;

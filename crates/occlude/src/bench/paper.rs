@@ -1,14 +1,19 @@
-//! `occlude bench --paper chc|chcpp`: a paper's experiments on our teapots,
-//! city and plant scenes, printed in the shape of its tables.
+//! `occlude bench --paper chc|chcpp|om|ioc`: a paper's experiments on our
+//! teapots, city and plant scenes (`paper` size unless told otherwise, the
+//! whole walkthrough at the frame rate), printed in the shape of its tables,
+//! each of our rows beside the published figures (`published.toml`) with
+//! whether the order of the methods agrees ([`super::paper_tables`]).
 //!
 //! - `chc` (Bittner et al. 2004, section 6): kD-tree, `gpu-2004`; Table 1
-//!   (VFC, S&W, CHC, ideal) and Table 2 (influence of `tav` and `nvp`).
+//!   (VFC, S&W, CHC and the paper's ideal, S&W's visible set without queries
+//!   ([`super::ideal`]), with `opt` beside them) and Table 2 (CHC with
+//!   `tav` = 2, and with `tav` = 2 and `nvp` = 25).
 //! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
-//!   comparison of VFC, S&W, CHC, CHC++ and OPT, and an ablation of CHC++'s
-//!   components.
-//! - `om` (Staneker, Bartz, Straßer): city and plant, BVH, `gpu-2004`; single
-//!   queries (`sw`) against multiple queries without occupancy-map grouping
-//!   and `om`.
+//!   comparison of VFC, S&W, CHC, CHC++, the ideal (the paper's OPT) and
+//!   `opt`, and an ablation of CHC++'s components.
+//! - `om` (Staneker, Bartz, Straßer): city and plant, BVH, `gpu-2004`, 800 x
+//!   600 (the paper's); single queries (`sw`) against multiple queries
+//!   without occupancy-map grouping and `om`.
 //! - `ioc` (the IOC poster, section 3): rooms, downtown and figures, BVH with
 //!   one object per leaf (the poster's node counts), the `--gpu-model` given
 //!   (default `modern`; the result hangs on what a box test costs, which
@@ -19,6 +24,9 @@
 //!   its NOCULL has no method here).
 
 use super::config::BenchConfig;
+use super::ideal::IDEAL;
+use super::paper_tables::{PaperTables, Row, Table};
+use super::published;
 use super::runner::run_scene;
 use super::summary::BenchReport;
 use anyhow::Result;
@@ -26,6 +34,7 @@ use indicatif::ProgressBar;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
+use occlude_scenes::Size;
 use occlude_soft::GpuModel;
 use std::fmt::Write;
 
@@ -37,41 +46,43 @@ const CHC_SCENES: &[&str] = &["teapots", "city", "plant"];
 
 /// One paper's setting.
 struct Experiment {
+    /// The paper, as `--paper` names it.
+    paper: &'static str,
     title: &'static str,
     scenes: &'static [&'static str],
     hierarchy: HierarchyKind,
     gpu_model: fn() -> GpuModel,
     methods: &'static [&'static str],
+    /// The names of the two tables: methods compared, and variants of one
+    /// method (as the paper names them where it published them).
+    tables: [&'static str; 2],
     /// The method whose options the second table varies, and the variants
-    /// (each a list of `method.key=value`, labelled by the list).
+    /// (each a list of `method.key=value`; the first, the defaults, is the
+    /// first table's row of the method).
     varied: &'static str,
     variants: &'static [&'static [&'static str]],
 }
 
 const CHC: Experiment = Experiment {
+    paper: "chc",
     title: "CHC paper (kD-tree, gpu-2004)",
     scenes: CHC_SCENES,
     hierarchy: HierarchyKind::KdTree,
     gpu_model: GpuModel::gpu_2004,
-    methods: &["vfc", "sw", "chc", "opt"],
+    methods: &["vfc", "sw", "chc", IDEAL, "opt"],
+    tables: ["Table 1", "Table 2"],
     varied: "chc",
-    variants: &[
-        &[],
-        &["chc.tav=2"],
-        &["chc.tav=5"],
-        &["chc.tav=10"],
-        &["chc.nvp=10"],
-        &["chc.nvp=25"],
-        &["chc.nvp=50"],
-    ],
+    variants: &[&[], &["chc.tav=2"], &["chc.tav=2", "chc.nvp=25"]],
 };
 
 const CHCPP: Experiment = Experiment {
+    paper: "chcpp",
     title: "CHC++ paper (BVH, modern)",
     scenes: CHC_SCENES,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::modern,
-    methods: &["vfc", "sw", "chc", "chcpp", "opt"],
+    methods: &["vfc", "sw", "chc", "chcpp", IDEAL, "opt"],
+    tables: ["methods compared", "ablation"],
     varied: "chcpp",
     variants: &[
         &[],
@@ -86,11 +97,13 @@ const CHCPP: Experiment = Experiment {
 };
 
 const OM: Experiment = Experiment {
+    paper: "om",
     title: "Occupancy-map paper (BVH, gpu-2004)",
     scenes: &["city", "plant"],
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "om", "opt"],
+    tables: ["methods compared", "variants"],
     varied: "om",
     variants: &[&[], &["om.grouping=off"]],
 };
@@ -99,8 +112,19 @@ const OM: Experiment = Experiment {
 pub struct PaperResult {
     /// The printed tables.
     pub text: String,
-    /// Every run's report, for `--json`.
-    pub reports: Vec<BenchReport>,
+    /// The tables and every run's report, for `--json`.
+    pub tables: PaperTables,
+}
+
+/// The size `--paper` runs at unless told otherwise: the papers' scenes
+/// have millions of triangles.
+pub const DEFAULT_SIZE: Size = Size::Paper;
+
+/// The image size of `paper`'s runs unless told otherwise: the occupancy-map
+/// paper's 800 x 600 (its section 5); the CHC papers state none, so the
+/// default 1024 x 768 stays.
+pub fn default_resolution(paper: &str) -> Option<(u32, u32)> {
+    (paper == "om").then_some((800, 600))
 }
 
 /// Runs the experiments of `paper` with the size, seed, frames and
@@ -118,16 +142,8 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
 }
 
 fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
-    let mut comparison = format!(
-        "{} — methods compared (times simulated)\n\
-         scene     method  queries  wait ms  states  rendered triangles  frame ms  speedup  ratio opt\n",
-        e.title
-    );
-    let mut variants = format!(
-        "{} — {} variants\n\
-         scene     variant                 queries  states  frame ms  missing px/frame\n",
-        e.title, e.varied
-    );
+    let published = e.tables.map(|name| published::table(e.paper, name));
+    let (mut compared, mut varied) = (Vec::new(), Vec::new());
     let mut reports = Vec::new();
     for &scene_name in e.scenes {
         let config = BenchConfig {
@@ -141,43 +157,32 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
         let report = run_labelled(&scene, &config, progress, "methods")?;
-        for m in &report.methods {
-            let _ = writeln!(
-                comparison,
-                "{:<9} {:<6} {:>8.0} {:>8.2} {:>7.0} {:>19.0} {:>9.3} {:>8.2} {:>10}",
-                scene_name,
-                m.name,
-                m.queries_per_frame,
-                m.wait_ms_per_frame,
-                m.state_changes_per_frame,
-                m.triangles_per_frame,
-                m.mean_frame_ms,
-                m.speedup_vs_vfc,
-                m.ratio_to_opt.map_or("-".into(), |r| format!("{r:.2}")),
-            );
-        }
+        compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published[0])));
+        let defaults = report.methods.iter().find(|m| m.name == e.varied).cloned();
         reports.push(report);
         for opts in e.variants {
-            let config =
-                BenchConfig { methods: vec![e.varied.into()], options: MethodOptions::parse(opts)?, ..config.clone() };
-            let label = if opts.is_empty() { "all defaults".to_string() } else { opts.join(" ") };
-            let report = run_labelled(&scene, &config, progress, &label)?;
-            let m = &report.methods[0];
-            let _ = writeln!(
-                variants,
-                "{:<9} {:<23} {:>7.0} {:>7.0} {:>9.3} {:>17.0}{}",
-                scene_name,
-                label,
-                m.queries_per_frame,
-                m.state_changes_per_frame,
-                m.mean_frame_ms,
-                m.missing_pixels as f64 / report.frames.max(1) as f64,
-                m.counters_per_frame.iter().map(|(k, v)| format!("  {k} {v:.1}")).collect::<String>()
-            );
-            reports.push(report);
+            let options = opts.join(" ");
+            let summary = match (&defaults, opts.is_empty()) {
+                (Some(m), true) => m.clone(),
+                _ => {
+                    let config = BenchConfig {
+                        methods: vec![e.varied.into()],
+                        options: MethodOptions::parse(opts)?,
+                        ..config.clone()
+                    };
+                    let label = if opts.is_empty() { "defaults" } else { options.as_str() };
+                    let report = run_labelled(&scene, &config, progress, label)?;
+                    let m = report.methods[0].clone();
+                    reports.push(report);
+                    m
+                }
+            };
+            varied.push(Row::new(scene_name, &summary, &options, published[1]));
         }
     }
-    Ok(PaperResult { text: format!("{comparison}\n{variants}"), reports })
+    let tables = vec![Table::new(e.tables[0], published[0], compared), Table::new(e.tables[1], published[1], varied)];
+    let text = tables.iter().map(|t| t.render(e.title)).collect::<Vec<_>>().join("\n");
+    Ok(PaperResult { text, tables: PaperTables { paper: e.paper.to_string(), tables, reports } })
 }
 
 /// The IOC poster's scenes, as its tables name them.
@@ -243,7 +248,10 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
         }
         reports.push(report);
     }
-    Ok(PaperResult { text: format!("{table}\n{figure}"), reports })
+    // The poster's tables stay text: their published figures are GPU times
+    // of parts of the frame, not the rows of [`Table`].
+    let tables = PaperTables { paper: "ioc".into(), tables: Vec::new(), reports };
+    Ok(PaperResult { text: format!("{table}\n{figure}"), tables })
 }
 
 fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {
@@ -256,11 +264,57 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_chc_tables_set_every_row_beside_the_papers_and_write_its_json_shape() {
+        let base = BenchConfig { frames: 4, resolution: (96, 64), ..BenchConfig::default() };
+        let result = run("chc", &base, &ProgressBar::hidden()).unwrap();
+        let [t1, t2] = &result.tables.tables[..] else { panic!("two tables: {:?}", result.tables.tables) };
+        assert_eq!((t1.name.as_str(), t1.rows.len()), ("Table 1", 15), "3 scenes x vfc, sw, chc, ideal, opt");
+        assert_eq!((t2.name.as_str(), t2.rows.len()), ("Table 2", 9), "3 scenes x the paper's 3 rows");
+        // Each of the paper's rows has its figure beside ours; opt has none.
+        for r in &t1.rows {
+            assert_eq!(r.published_frame_ms.is_some(), r.method != "opt", "{r:?}");
+            assert!(r.frame_ms > 0.0 && r.speedup > 0.0 && r.speedup_of_means > 0.0, "{r:?}");
+            assert_eq!(r.missing_pixels, 0, "{r:?}");
+        }
+        fn row<'t>(t: &'t Table, scene: &str, method: &str) -> Option<&'t Row> {
+            t.rows.iter().find(|r| r.scene == scene && r.method == method)
+        }
+        // The ideal is S&W's visible set without queries: S&W's triangles.
+        for scene in CHC_SCENES {
+            let (sw, ideal) = (row(t1, scene, "sw").unwrap(), row(t1, scene, IDEAL).unwrap());
+            assert_eq!(ideal.triangles, sw.triangles, "{scene}");
+            assert_eq!(ideal.queries, 0.0, "{scene}");
+        }
+        assert_eq!(row(t1, "teapots", "chc").unwrap().published_speedup, Some(4.6));
+        let combined = t2.rows.iter().find(|r| r.scene == "city" && r.options == "chc.tav=2 chc.nvp=25").unwrap();
+        assert_eq!((combined.published_queries, combined.published_frame_ms), (Some(181.0), Some(6.11)));
+        // The defaults' row of Table 2 is Table 1's CHC, not a second run.
+        assert_eq!(t2.rows[0].frame_ms, row(t1, "teapots", "chc").unwrap().frame_ms);
+        assert_eq!(result.tables.reports.len(), 3 * 3);
+        for t in [t1, t2] {
+            assert!(t.ordering_agrees.is_some(), "{} has published figures to order", t.name);
+            assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
+        }
+        assert!(result.text.contains("310.42") && result.text.contains("order of methods"), "{}", result.text);
+
+        let v = serde_json::to_value(&result.tables).unwrap();
+        assert_eq!(v["paper"], "chc");
+        assert_eq!(v["tables"][0]["name"], "Table 1");
+        assert!(v["tables"][1]["ordering_agrees"].is_boolean());
+        let first = &v["tables"][0]["rows"][0];
+        for key in ["scene", "method", "frame_ms", "published_frame_ms", "queries", "published_queries", "speedup"] {
+            assert!(first.get(key).is_some(), "row lacks {key}: {first}");
+        }
+        assert_eq!((first["scene"].as_str(), first["method"].as_str()), (Some("teapots"), Some("vfc")));
+        assert_eq!(first["published_frame_ms"], 310.42);
+    }
+
+    #[test]
     fn the_ioc_tables_set_every_scene_beside_the_posters_figures() {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
         let result = run("ioc", &base, &ProgressBar::hidden()).unwrap();
-        assert_eq!(result.reports.len(), 3);
-        for (report, (scene, label)) in result.reports.iter().zip(IOC_SCENES) {
+        assert_eq!(result.tables.reports.len(), 3);
+        for (report, (scene, label)) in result.tables.reports.iter().zip(IOC_SCENES) {
             assert_eq!(report.scene, scene);
             assert_eq!(report.hierarchy, "bvh");
             // One object per leaf: a binary tree of 2n - 1 nodes.

@@ -319,6 +319,7 @@ mod tests {
             scene: "city".into(),
             size: "small".into(),
             frames,
+            fps: None,
             resolution: [64, 48],
             backend: "soft".into(),
             adapter: None,

@@ -3,6 +3,7 @@
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
+use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL};
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
@@ -11,6 +12,7 @@ use occlude_core::{Backend, Camera, CullingMethod, FrameContext, FrameStats, Hie
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::collections::BTreeMap;
+use std::rc::Rc;
 use std::sync::Arc;
 
 /// Everything a run measured, before summarising.
@@ -93,14 +95,8 @@ struct Lane<'s> {
 }
 
 impl<'s> Lane<'s> {
-    fn new(built: BuiltMethod, backend: Box<dyn Backend + 's>, config: &BenchConfig) -> Self {
-        Self {
-            built,
-            backend,
-            drawn: DrawnSet::default(),
-            frames: Vec::with_capacity(config.frames),
-            counters: BTreeMap::new(),
-        }
+    fn new(built: BuiltMethod, backend: Box<dyn Backend + 's>) -> Self {
+        Self { built, backend, drawn: DrawnSet::default(), frames: Vec::new(), counters: BTreeMap::new() }
     }
 
     /// The lane's measurements.
@@ -148,10 +144,11 @@ pub fn far_plane(scene: &Scene) -> f32 {
     (scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0)
 }
 
-/// The walkthrough's cameras for `scene` at the configured resolution.
+/// The walkthrough's cameras for `scene` at the configured resolution,
+/// sampled as configured ([`BenchConfig::sampling`]).
 pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
     let (w, h) = config.resolution;
-    scene.path.sample(config.frames, w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
+    scene.path.sample_with(config.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
 }
 
 /// Generates or imports the scene (an import error stays an
@@ -204,12 +201,27 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
     let renderer = Renderer::new(config.backend, scene)?;
-    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config), config);
+    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config));
+    // `ideal` replays the draw calls `sw` (listed before it) made in the frame.
+    let replayed = config.methods.iter().any(|m| m == IDEAL);
+    let calls = DrawCalls::default();
     let mut lanes = config
         .methods
         .iter()
         .filter(|m| m.as_str() != "vfc")
-        .map(|m| Ok(Lane::new(create(m, &config.options)?, renderer.backend(scene, config), config)))
+        .map(|m| {
+            let backend = renderer.backend(scene, config);
+            Ok(match m.as_str() {
+                IDEAL => {
+                    let built = BuiltMethod { method: Box::new(Ideal::new(Rc::clone(&calls))), params: Vec::new() };
+                    Lane::new(built, backend)
+                }
+                ideal::SOURCE if replayed => {
+                    Lane::new(create(m, &config.options)?, Box::new(DrawLog::new(backend, Rc::clone(&calls))))
+                }
+                _ => Lane::new(create(m, &config.options)?, backend),
+            })
+        })
         .collect::<Result<Vec<_>>>()?;
     for lane in &mut lanes {
         let method = lane.built.method.as_ref();

@@ -73,6 +73,10 @@ pub struct MethodSummary {
     pub missing_pixels: u64,
     /// Mean `vfc` frame time over this method's.
     pub speedup_vs_vfc: f64,
+    /// Speedup over `vfc` as the papers average it: the mean over frames of
+    /// `vfc`'s frame time over this method's.
+    #[serde(default)]
+    pub mean_speedup_vs_vfc: f64,
     /// This method's mean frame time over `opt`'s (`null` when `opt` was not run).
     pub ratio_to_opt: Option<f64>,
     /// Mean CPU busy time per frame (waits excluded), ms.
@@ -117,6 +121,10 @@ pub struct BenchReport {
     pub size: String,
     /// Frames in the walkthrough.
     pub frames: usize,
+    /// The frame rate the walkthrough was sampled at (`null`: its frames
+    /// were spread evenly over it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f32>,
     /// Image width and height.
     pub resolution: [u32; 2],
     /// `soft` (simulated clock) or `wgpu`.
@@ -145,6 +153,14 @@ fn mean(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
         return 0.0;
     }
     frames.iter().map(f).sum::<f64>() / frames.len() as f64
+}
+
+/// The mean over frames of `reference`'s frame time over `frames`' (frames
+/// of no time left out).
+fn mean_ratio(reference: &[FrameStats], frames: &[FrameStats]) -> f64 {
+    let ratios: Vec<f64> =
+        reference.iter().zip(frames).filter(|(_, f)| f.frame_ms > 0.0).map(|(r, f)| r.frame_ms / f.frame_ms).collect();
+    ratios.iter().sum::<f64>() / ratios.len().max(1) as f64
 }
 
 /// The 95th percentile (nearest rank) of the frame times.
@@ -179,6 +195,7 @@ impl BenchReport {
                     visible_objects_per_frame: mean(frames, |f| f.visible_objects as f64),
                     missing_pixels: frames.iter().map(|f| f.missing_pixels).sum(),
                     speedup_vs_vfc: if frame_ms > 0.0 { vfc_ms / frame_ms } else { 0.0 },
+                    mean_speedup_vs_vfc: mean_ratio(&run.reference, frames),
                     ratio_to_opt: opt_ms.filter(|&o| o > 0.0).map(|o| frame_ms / o),
                     cpu_ms_per_frame: mean(frames, |f| f.cpu_ms),
                     gpu_ms_per_frame: mean(frames, |f| f.gpu_ms),
@@ -202,6 +219,7 @@ impl BenchReport {
             scene: config.scene.clone(),
             size: config.size.to_string(),
             frames: run.scene.frames,
+            fps: config.fps,
             resolution: [config.resolution.0, config.resolution.1],
             backend: config.backend.to_string(),
             adapter: run.adapter.clone(),
@@ -221,6 +239,17 @@ impl BenchReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mean_of_ratios_is_not_the_ratio_of_means() {
+        let times =
+            |t: &[f64]| t.iter().map(|&frame_ms| FrameStats { frame_ms, ..Default::default() }).collect::<Vec<_>>();
+        let (vfc, method) = (times(&[10.0, 10.0]), times(&[1.0, 10.0]));
+        // Ratios 10 and 1: their mean is 5.5, the ratio of the means 20 / 11.
+        assert_eq!(mean_ratio(&vfc, &method), 5.5);
+        assert_eq!(mean_ratio(&vfc, &times(&[0.0, 5.0])), 2.0);
+        assert_eq!(mean_ratio(&[], &[]), 0.0);
+    }
 
     #[test]
     fn p95_is_nearest_rank() {

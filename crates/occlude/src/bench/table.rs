@@ -10,7 +10,7 @@ pub fn render(report: &BenchReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves, built in {:.1} ms), {} frames at {}x{}, backend {}, GPU model {}",
+        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves, built in {:.1} ms), {} frames{} at {}x{}, backend {}, GPU model {}",
         report.scene,
         report.size,
         report.seed,
@@ -21,6 +21,7 @@ pub fn render(report: &BenchReport) -> String {
         s.leaves,
         s.build_wall_ms,
         report.frames,
+        report.fps.map_or(String::new(), |f| format!(" ({f} fps)")),
         report.resolution[0],
         report.resolution[1],
         report.backend,

@@ -115,7 +115,7 @@ impl Playback {
     }
 
     /// Frame `k` of `frames` sampled evenly over the whole path, first and
-    /// last keyframes included (as `bench` samples it).
+    /// last keyframes included (as `CameraPath::sample` spreads them).
     pub fn sampled(path: &CameraPath, k: usize, frames: usize) -> Self {
         let elapsed = if frames > 1 { path.duration() * k as f32 / (frames - 1) as f32 } else { 0.0 };
         Self { elapsed }

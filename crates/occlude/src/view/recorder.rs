@@ -241,8 +241,8 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
         self.culling().build_pyramid(pyramid);
     }
 
-    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, flags: Flags) {
-        self.culling().test_boxes_pyramid(boxes, ids, pyramid, flags);
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags) {
+        self.culling().test_boxes_pyramid(boxes, ids, pyramid, reach, flags);
         self.record_test(boxes, ids, flags);
     }
 
