@@ -5,6 +5,18 @@ use crate::buffer::MaskedBuffer;
 use crate::clip::clip_near;
 use glam::{DVec3, Mat4, Vec3};
 
+/// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
+/// its cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderWork {
+    /// Triangles set up after near-plane clipping (a clipped triangle may
+    /// become two), before back-face and empty-area rejection.
+    pub triangles: u64,
+    /// 32x8-pixel tiles overlapped by the screen bounding boxes of the
+    /// triangles that were rasterized.
+    pub tiles: u64,
+}
+
 /// Which triangles are drawn, by winding on screen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CullMode {
@@ -21,8 +33,16 @@ impl MaskedBuffer {
     /// clip space (wgpu conventions). Triangles crossing the near plane are
     /// clipped; index triples with an out-of-range index, NaN vertices and
     /// zero-area triangles are skipped. Cost: per triangle, the subtiles of its
-    /// bounding box.
-    pub fn render_triangles(&mut self, positions: &[Vec3], indices: &[u32], model_to_clip: Mat4, cull: CullMode) {
+    /// bounding box. Returns the work done, for callers that account for it
+    /// (a simulated clock).
+    pub fn render_triangles(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[u32],
+        model_to_clip: Mat4,
+        cull: CullMode,
+    ) -> RenderWork {
+        let mut work = RenderWork::default();
         for tri in indices.chunks_exact(3) {
             let Some(v) = tri.iter().map(|&i| positions.get(i as usize)).collect::<Option<Vec<_>>>() else {
                 continue;
@@ -42,20 +62,24 @@ impl MaskedBuffer {
                 })
                 .collect();
             for k in 1..n - 1 {
-                self.draw_screen([screen[0], screen[k], screen[k + 1]], cull);
+                work.tiles += self.draw_screen([screen[0], screen[k], screen[k + 1]], cull);
+                work.triangles += 1;
             }
         }
+        work
     }
 
-    /// Rasterizes one triangle in screen space (pixels, y down; z = NDC depth).
-    fn draw_screen(&mut self, mut t: [DVec3; 3], cull: CullMode) {
+    /// Rasterizes one triangle in screen space (pixels, y down; z = NDC depth);
+    /// returns how many 32x8-pixel tiles its clipped bounding box overlaps (0
+    /// when it is skipped).
+    fn draw_screen(&mut self, mut t: [DVec3; 3], cull: CullMode) -> u64 {
         if t.iter().any(|p| !p.is_finite() || p.z < 0.0) {
-            return;
+            return 0;
         }
         // Signed area, positive for counter-clockwise in NDC (clockwise on screen).
         let area = (t[1].x - t[0].x) * (t[2].y - t[0].y) - (t[2].x - t[0].x) * (t[1].y - t[0].y);
         if area == 0.0 || (cull == CullMode::Back && area > 0.0) {
-            return;
+            return 0;
         }
         // Edge functions below are positive inside for a positive area.
         if area < 0.0 {
@@ -84,10 +108,11 @@ impl MaskedBuffer {
         let lo_y = t.iter().map(|p| p.y).fold(f64::INFINITY, f64::min).max(0.0);
         let hi_y = t.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max).min(self.height as f64);
         if lo_x >= hi_x || lo_y >= hi_y || area < 1e-12 {
-            return;
+            return 0;
         }
         let (sx0, sx1) = ((lo_x / 8.0) as u32, ((hi_x / 8.0).ceil() as u32).min(self.cols));
         let (sy0, sy1) = ((lo_y / 4.0) as u32, ((hi_y / 4.0).ceil() as u32).min(self.rows));
+        let tiles = u64::from(sx1.div_ceil(4) - sx0 / 4) * u64::from(sy1.div_ceil(2) - sy0 / 2);
         for sy in sy0..sy1 {
             for sx in sx0..sx1 {
                 let (bx, by) = ((sx * 8) as f64, (sy * 4) as f64);
@@ -137,5 +162,6 @@ impl MaskedBuffer {
                 self.merge(sx, sy, cover, d);
             }
         }
+        tiles
     }
 }

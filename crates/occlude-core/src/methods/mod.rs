@@ -10,6 +10,7 @@ pub mod chcpp;
 pub mod debug;
 mod front_to_back;
 pub mod ioc;
+pub mod moc;
 pub mod om;
 pub mod opt;
 pub mod options;
@@ -28,7 +29,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 8] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"];
+pub const METHOD_NAMES: [&str; 9] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "moc", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -63,6 +64,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
+        "moc" => Box::new(moc::MaskedOcclusion::new(moc::MocParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -206,6 +208,23 @@ impl<'a> FrameContext<'a> {
     /// how many were drawn.
     pub fn draw_leaf(&mut self, backend: &mut dyn Backend, node: NodeId) -> usize {
         self.draw_leaves(backend, &[node], false)
+    }
+
+    /// Draws those of `instances` not yet drawn this frame, in one batch;
+    /// returns them (valid until the next draw through this context).
+    pub fn draw_instances(&mut self, backend: &mut dyn Backend, instances: &[u32]) -> &[u32] {
+        let d = &mut *self.drawn;
+        d.batch.clear();
+        for &i in instances {
+            if d.stamp[i as usize] != d.frame {
+                d.stamp[i as usize] = d.frame;
+                d.batch.push(i);
+            }
+        }
+        if !d.batch.is_empty() {
+            backend.draw(&d.batch);
+        }
+        &d.batch
     }
 
     /// Draws the instances of `leaves` not yet drawn this frame, in one

@@ -9,7 +9,7 @@ use winit::keyboard::KeyCode;
 /// A one-shot command bound to a key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    /// 1 to 8 (one digit per method of `METHOD_NAMES`): the method at this
+    /// 1 to 9 (one digit per method of `METHOD_NAMES`): the method at this
     /// index.
     Method(usize),
     /// M: the next method.
@@ -94,12 +94,12 @@ mod tests {
     #[test]
     fn keys_map_to_actions_and_movement() {
         assert_eq!(action(KeyCode::Digit4), Some(Action::Method(3)));
-        // Every method has a digit (roc and ioc are 6 and 7), and no digit
-        // names a method that is not there.
-        assert_eq!(METHOD_NAMES[5..7], ["roc", "ioc"]);
+        // Every method has a digit (roc, ioc and moc are 6, 7 and 8).
+        assert_eq!(METHOD_NAMES[5..8], ["roc", "ioc", "moc"]);
         assert_eq!(action(KeyCode::Digit7), Some(Action::Method(6)));
         assert_eq!(action(KeyCode::Digit8), Some(Action::Method(7)));
-        assert_eq!(action(KeyCode::Digit9), None);
+        assert_eq!(action(KeyCode::Digit9), Some(Action::Method(8)));
+        assert_eq!(action(KeyCode::Digit0), None);
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
         assert_eq!(action(KeyCode::KeyW), None);
         let mut held = HeldKeys::default();

@@ -115,6 +115,14 @@ impl<B: Backend> Backend for RecordingBackend<B> {
         self.inner.traverse(nodes);
     }
 
+    fn resolution(&self) -> (u32, u32) {
+        self.inner.resolution()
+    }
+
+    fn cpu_culling(&mut self, work: occlude_core::CpuCullingWork) {
+        self.inner.cpu_culling(work);
+    }
+
     fn end_frame(&mut self) -> FrameStats {
         self.inner.end_frame()
     }
