@@ -182,6 +182,18 @@ impl DrawnSet {
     pub fn contains(&self, instance: u32) -> bool {
         self.stamp[instance as usize] == self.frame
     }
+
+    /// Replaces the batch with those of `instances` not drawn yet this
+    /// frame (each once), marking them drawn.
+    fn batch_new(&mut self, instances: impl Iterator<Item = u32>) {
+        self.batch.clear();
+        for i in instances {
+            if self.stamp[i as usize] != self.frame {
+                self.stamp[i as usize] = self.frame;
+                self.batch.push(i);
+            }
+        }
+    }
 }
 
 /// Everything a method sees of one frame.
@@ -214,13 +226,7 @@ impl<'a> FrameContext<'a> {
     /// returns them (valid until the next draw through this context).
     pub fn draw_instances(&mut self, backend: &mut dyn Backend, instances: &[u32]) -> &[u32] {
         let d = &mut *self.drawn;
-        d.batch.clear();
-        for &i in instances {
-            if d.stamp[i as usize] != d.frame {
-                d.stamp[i as usize] = d.frame;
-                d.batch.push(i);
-            }
-        }
+        d.batch_new(instances.iter().copied());
         if !d.batch.is_empty() {
             backend.draw(&d.batch);
         }
@@ -233,15 +239,8 @@ impl<'a> FrameContext<'a> {
     /// section 4.3). Returns how many instances were drawn.
     pub fn draw_leaves(&mut self, backend: &mut dyn Backend, leaves: &[NodeId], sort_by_material: bool) -> usize {
         let d = &mut *self.drawn;
-        d.batch.clear();
-        for &leaf in leaves {
-            for &i in self.hierarchy.instances(leaf) {
-                if d.stamp[i as usize] != d.frame {
-                    d.stamp[i as usize] = d.frame;
-                    d.batch.push(i);
-                }
-            }
-        }
+        let h = self.hierarchy;
+        d.batch_new(leaves.iter().flat_map(|&leaf| h.instances(leaf).iter().copied()));
         if sort_by_material {
             let instances = &self.scene.instances;
             d.batch.sort_by_key(|&i| instances[i as usize].material);
