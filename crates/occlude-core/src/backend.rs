@@ -41,6 +41,16 @@ pub trait Backend {
     /// Charges the CPU cost of visiting `nodes` hierarchy nodes.
     fn traverse(&mut self, nodes: u64);
 
+    /// Width and height of the images the backend renders, in pixels: the
+    /// resolution a method's own screen-space buffers must have.
+    fn resolution(&self) -> (u32, u32);
+
+    /// Charges CPU work a method did itself on a software occlusion buffer
+    /// (`moc`). A backend whose CPU time is measured (wgpu) has already seen
+    /// it pass and does nothing; the soft backend's simulated clock charges it
+    /// from its cost model.
+    fn cpu_culling(&mut self, _work: CpuCullingWork) {}
+
     /// Ends the frame and returns its statistics.
     fn end_frame(&mut self) -> FrameStats;
 
@@ -73,6 +83,18 @@ pub trait Backend {
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         Err(GpuCullingUnsupported("this backend has no GPU-resident culling".into()))
     }
+}
+
+/// CPU work on a masked software occlusion buffer, the measure its cost is
+/// simulated from ([`Backend::cpu_culling`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CpuCullingWork {
+    /// Occluder triangles set up (after near-plane clipping).
+    pub triangles: u64,
+    /// 32x8-pixel tiles the occluder triangles' bounding boxes overlap.
+    pub tiles: u64,
+    /// Boxes tested against the buffer.
+    pub boxes: u64,
 }
 
 /// The render state a command needs: a material for draws, the query state

@@ -52,7 +52,7 @@ mod raster;
 mod test;
 
 pub use buffer::{Error, MaskedBuffer, MergeMode};
-pub use raster::CullMode;
+pub use raster::{CullMode, RenderWork};
 pub use test::Visibility;
 
 /// Subtile width in pixels.

@@ -12,8 +12,28 @@
 
 use crate::buffer::{outside_mask, MaskedBuffer, MergeMode, Subtile};
 use crate::clip::clip_near;
+use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 use rayon::prelude::*;
+
+/// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
+/// its cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderWork {
+    /// Triangles set up after near-plane clipping (a clipped triangle may
+    /// become two), before back-face and empty-area rejection.
+    pub triangles: u64,
+    /// 32x8-pixel tiles overlapped by the pixel-centre ranges of the
+    /// triangles that were rasterized.
+    pub tiles: u64,
+}
+
+impl std::ops::AddAssign for RenderWork {
+    fn add_assign(&mut self, other: Self) {
+        self.triangles += other.triangles;
+        self.tiles += other.tiles;
+    }
+}
 
 /// Which triangles are drawn, by winding on screen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -227,6 +247,13 @@ impl ScreenTriangle {
         Some(ScreenTriangle { edges, plane: DepthPlane::new(&t), x0, x1, y0, y1, bands })
     }
 
+    /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
+    fn tiles(&self) -> u64 {
+        // A tile is 4 x 2 subtiles.
+        let (tx, ty) = (4 * SUBTILE_W as i32, 2 * SUBTILE_H as i32);
+        ((self.x1 - 1) / tx - self.x0 / tx + 1) as u64 * ((self.y1 - 1) / ty - self.y0 / ty + 1) as u64
+    }
+
     /// The first and one past the last subtile row the triangle touches.
     fn subtile_rows(&self) -> (u32, u32) {
         ((self.y0 / 4) as u32, ((self.y1 - 1) / 4 + 1) as u32)
@@ -351,58 +378,72 @@ impl MaskedBuffer {
     /// zero-area triangles are skipped. Cost: per triangle, its pixel rows and the
     /// subtiles its rows touch. Run inside a rayon pool of several threads, large
     /// sets are set up in parallel and rasterized in parallel over bands of rows;
-    /// the buffer is the same whatever the threads.
-    pub fn render_triangles(&mut self, positions: &[Vec3], indices: &[u32], model_to_clip: Mat4, cull: CullMode) {
+    /// the buffer is the same whatever the threads. Returns the work done, for
+    /// callers that account for it (a simulated clock).
+    pub fn render_triangles(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[u32],
+        model_to_clip: Mat4,
+        cull: CullMode,
+    ) -> RenderWork {
         let clip = |i: usize| {
             let tri = &indices[3 * i..3 * i + 3];
             let v = [tri[0], tri[1], tri[2]].map(|k| positions.get(k as usize).copied());
             let [Some(a), Some(b), Some(c)] = v else { return None };
             Some([a, b, c].map(|p| model_to_clip * p.extend(1.0)))
         };
-        self.render(indices.len() / 3, clip, cull);
+        self.render(indices.len() / 3, clip, cull)
     }
 
     /// Renders occluder triangles already in clip space (wgpu conventions), as
     /// [`render_triangles`](Self::render_triangles) does after its transform: for
     /// callers that transform their own vertices, and the fill-rate benchmark.
-    pub fn render_clip_triangles(&mut self, triangles: &[[Vec4; 3]], cull: CullMode) {
-        self.render(triangles.len(), |i| Some(triangles[i]), cull);
+    pub fn render_clip_triangles(&mut self, triangles: &[[Vec4; 3]], cull: CullMode) -> RenderWork {
+        self.render(triangles.len(), |i| Some(triangles[i]), cull)
     }
 
     /// Renders triangles `0..count`, `clip(i)` giving triangle `i` in clip space:
     /// one after the other on one thread, or set up and binned to bands in
     /// parallel chunks, then drawn in parallel bands, when the current rayon pool
     /// has several threads.
-    fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) {
+    fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
         let (width, height) = (self.width, self.height);
-        let setup = |i: usize, out: &mut dyn FnMut(ScreenTriangle)| {
+        let setup = |i: usize, work: &mut RenderWork, out: &mut dyn FnMut(ScreenTriangle)| {
             if let Some(c) = clip(i) {
-                screen_triangles(c, cull, width, height, out);
+                work.triangles += screen_triangles(c, cull, width, height, &mut |tri| {
+                    work.tiles += tri.tiles();
+                    out(tri)
+                });
             }
         };
+        let mut work = RenderWork::default();
         if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
             let mut whole = self.whole();
-            (0..count).for_each(|i| setup(i, &mut |tri| whole.draw(&tri)));
-            return;
+            (0..count).for_each(|i| setup(i, &mut work, &mut |tri| whole.draw(&tri)));
+            return work;
         }
         let bands = (self.rows as usize).div_ceil(BAND_ROWS);
-        let chunks: Vec<Binned> = (0..count.div_ceil(SETUP_CHUNK))
+        let chunks: Vec<(Binned, RenderWork)> = (0..count.div_ceil(SETUP_CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut tris = Vec::with_capacity(SETUP_CHUNK);
-                (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count)).for_each(|i| setup(i, &mut |t| tris.push(t)));
-                Binned::new(tris, bands)
+                let (mut tris, mut work) = (Vec::with_capacity(SETUP_CHUNK), RenderWork::default());
+                (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count))
+                    .for_each(|i| setup(i, &mut work, &mut |t| tris.push(t)));
+                (Binned::new(tris, bands), work)
             })
             .collect();
+        chunks.iter().for_each(|(_, w)| work += *w);
         let (cols, merge) = (self.cols, self.merge);
         self.subtiles.par_chunks_mut(cols as usize * BAND_ROWS).enumerate().for_each(|(b, subtiles)| {
             let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge };
-            for chunk in &chunks {
+            for (chunk, _) in &chunks {
                 for &i in chunk.in_band(b) {
                     band.draw(&chunk.tris[i as usize]);
                 }
             }
         });
+        work
     }
 
     /// The whole buffer as one band.
@@ -419,12 +460,19 @@ impl MaskedBuffer {
 }
 
 /// Clips a clip-space triangle to the near plane, projects it to a `width` x
-/// `height` screen and hands the drawable triangles of the resulting fan to `out`.
-fn screen_triangles(clip: [Vec4; 3], cull: CullMode, width: u32, height: u32, out: &mut dyn FnMut(ScreenTriangle)) {
+/// `height` screen and hands the drawable triangles of the resulting fan to
+/// `out`; returns how many triangles the fan has (drawable or not).
+fn screen_triangles(
+    clip: [Vec4; 3],
+    cull: CullMode,
+    width: u32,
+    height: u32,
+    out: &mut dyn FnMut(ScreenTriangle),
+) -> u64 {
     let mut poly = [Vec4::ZERO; 4];
     let n = clip_near(clip, &mut poly);
     if n < 3 {
-        return;
+        return 0;
     }
     let (w, h) = (f64::from(width), f64::from(height));
     let mut screen = [DVec3::ZERO; 4];
@@ -438,6 +486,7 @@ fn screen_triangles(clip: [Vec4; 3], cull: CullMode, width: u32, height: u32, ou
             out(tri);
         }
     }
+    n as u64 - 2
 }
 
 #[cfg(test)]

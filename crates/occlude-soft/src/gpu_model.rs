@@ -69,7 +69,44 @@ pub struct GpuModel {
     /// Time from the GPU finishing the commands before a read-back until
     /// the CPU can read the buffer, µs.
     pub readback_us: f64,
+    /// CPU time to set up one occluder triangle in the masked occlusion
+    /// buffer (`moc`: transform, near-plane clip, projection, edges), ns.
+    #[serde(default = "MocCosts::triangle_ns")]
+    pub cpu_moc_triangle_ns: f64,
+    /// CPU time per 32x8-pixel tile an occluder triangle's bounding box
+    /// overlaps in the masked buffer (coverage masks and merges), ns.
+    #[serde(default = "MocCosts::tile_ns")]
+    pub cpu_moc_tile_ns: f64,
+    /// CPU time to test one box against the masked buffer (corners,
+    /// projection, the subtiles of its rectangle), ns.
+    #[serde(default = "MocCosts::box_ns")]
+    pub cpu_moc_box_ns: f64,
 }
+
+/// The masked occlusion buffer's CPU costs, the same in every preset (the
+/// scalar build of `occlude-moc` measured on the development machine by its
+/// `moc_costs` example, docs/gpu-models.md), and the defaults of model files
+/// that predate them.
+struct MocCosts;
+
+impl MocCosts {
+    fn triangle_ns() -> f64 {
+        MOC_TRIANGLE_NS
+    }
+    fn tile_ns() -> f64 {
+        MOC_TILE_NS
+    }
+    fn box_ns() -> f64 {
+        MOC_BOX_NS
+    }
+}
+
+/// See [`GpuModel::cpu_moc_triangle_ns`].
+const MOC_TRIANGLE_NS: f64 = 704.0;
+/// See [`GpuModel::cpu_moc_tile_ns`].
+const MOC_TILE_NS: f64 = 1022.0;
+/// See [`GpuModel::cpu_moc_box_ns`].
+const MOC_BOX_NS: f64 = 6487.0;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
@@ -126,6 +163,9 @@ impl GpuModel {
             gpu_hiz_texel_ns: 0.6,
             gpu_indirect_draw_us: 1.5,
             readback_us: 12.0,
+            cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
+            cpu_moc_tile_ns: MOC_TILE_NS,
+            cpu_moc_box_ns: MOC_BOX_NS,
         }
     }
 
@@ -156,6 +196,9 @@ impl GpuModel {
             gpu_hiz_texel_ns: 0.02,
             gpu_indirect_draw_us: 0.1,
             readback_us: 30.0,
+            cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
+            cpu_moc_tile_ns: MOC_TILE_NS,
+            cpu_moc_box_ns: MOC_BOX_NS,
         }
     }
 
@@ -224,6 +267,9 @@ impl GpuModel {
             ("gpu_hiz_texel_ns", self.gpu_hiz_texel_ns),
             ("gpu_indirect_draw_us", self.gpu_indirect_draw_us),
             ("readback_us", self.readback_us),
+            ("cpu_moc_triangle_ns", self.cpu_moc_triangle_ns),
+            ("cpu_moc_tile_ns", self.cpu_moc_tile_ns),
+            ("cpu_moc_box_ns", self.cpu_moc_box_ns),
         ];
         match costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
             Some((name, v)) => Err(format!("{name} = {v}: costs must be finite and >= 0")),

@@ -642,6 +642,10 @@ impl Backend for WgpuBackend<'_> {
         self.stats.traversal_steps += nodes;
     }
 
+    fn resolution(&self) -> (u32, u32) {
+        self.size()
+    }
+
     fn end_frame(&mut self) -> FrameStats {
         self.flush();
         let cpu_end = self.frame_start.elapsed();

@@ -175,7 +175,7 @@ struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// The method shown first: vfc, sw, chc, chcpp, om, roc, ioc, hiz or opt
-    /// (keys 1-9 switch to them in that order, M to the next).
+    /// (keys 1-9 and 0 switch to them in that order, M to the next).
     #[arg(long, default_value = occlude::view::DEFAULT_METHOD)]
     method: String,
     /// Window size, WIDTHxHEIGHT (the screenshot's size).

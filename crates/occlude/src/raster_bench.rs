@@ -287,7 +287,11 @@ impl RasterBackend for MocRaster {
             }
             slot => slot.insert(MaskedBuffer::new(width, height)?),
         };
-        Ok(self.pool.install(|| timed(|| buffer.render_clip_triangles(triangles, CullMode::None))))
+        Ok(self.pool.install(|| {
+            timed(|| {
+                buffer.render_clip_triangles(triangles, CullMode::None);
+            })
+        }))
     }
 
     fn queries(

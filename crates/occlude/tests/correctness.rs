@@ -18,7 +18,7 @@ use std::collections::HashSet;
 fn config(scene: &str, hierarchy: HierarchyKind) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "chcpp", "opt"].map(String::from).to_vec(),
+        methods: ["vfc", "sw", "chc", "chcpp", "opt", "moc"].map(String::from).to_vec(),
         frames: 90,
         resolution: (480, 360),
         hierarchy,
@@ -173,6 +173,32 @@ fn chcpp_is_exact_with_every_component_on_and_off() {
                     ..config(name, hierarchy)
                 };
                 exact_run(&scene, &cfg);
+            }
+        }
+    }
+}
+
+/// `moc` with the other choices of occluders and the quick-mask merge (the
+/// default is in the test above): exact on every frame of every small scene,
+/// both hierarchies, and culling something (fewer triangles than view-frustum
+/// culling) with each.
+#[test]
+fn moc_is_exact_with_every_occluder_choice() {
+    let variants: [&[&str]; 3] =
+        [&["moc.occluders=last"], &["moc.occluders=largest", "moc.count=8"], &["moc.merge=quick"]];
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            for opts in variants {
+                let cfg = BenchConfig {
+                    methods: vec!["vfc".into(), "moc".into()],
+                    options: MethodOptions::parse(opts).unwrap(),
+                    frames: 45,
+                    ..config(name, hierarchy)
+                };
+                let run = exact_run(&scene, &cfg);
+                let triangles = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+                assert!(triangles(1) < triangles(0), "{name}/{hierarchy}/{opts:?}: moc culled nothing");
             }
         }
     }

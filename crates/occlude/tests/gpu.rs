@@ -17,7 +17,7 @@ use std::sync::Arc;
 fn config(scene: &str, hierarchy: HierarchyKind, frames: usize) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"].map(String::from).to_vec(),
+        methods: ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "moc", "opt"].map(String::from).to_vec(),
         frames,
         resolution: (320, 240),
         hierarchy,

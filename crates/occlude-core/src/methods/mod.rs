@@ -11,6 +11,7 @@ pub mod debug;
 mod front_to_back;
 pub mod hiz;
 pub mod ioc;
+pub mod moc;
 pub mod om;
 pub mod opt;
 pub mod options;
@@ -30,7 +31,7 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 9] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "opt"];
+pub const METHOD_NAMES: [&str; 10] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -81,6 +82,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
         "hiz" => Box::new(hiz::TwoPhaseHiZ::new(hiz::HizParams::read(&mut reader)?)),
+        "moc" => Box::new(moc::MaskedOcclusion::new(moc::MocParams::read(&mut reader)?)),
         _ => return Err(MethodError::Unknown(name.to_string())),
     };
     Ok(BuiltMethod { method, params: reader.finish()? })
@@ -205,6 +207,18 @@ impl DrawnSet {
     pub fn contains(&self, instance: u32) -> bool {
         self.stamp[instance as usize] == self.frame
     }
+
+    /// Replaces the batch with those of `instances` not drawn yet this
+    /// frame (each once), marking them drawn.
+    fn batch_new(&mut self, instances: impl Iterator<Item = u32>) {
+        self.batch.clear();
+        for i in instances {
+            if self.stamp[i as usize] != self.frame {
+                self.stamp[i as usize] = self.frame;
+                self.batch.push(i);
+            }
+        }
+    }
 }
 
 /// Everything a method sees of one frame.
@@ -233,21 +247,25 @@ impl<'a> FrameContext<'a> {
         self.draw_leaves(backend, &[node], false)
     }
 
+    /// Draws those of `instances` not yet drawn this frame, in one batch;
+    /// returns them (valid until the next draw through this context).
+    pub fn draw_instances(&mut self, backend: &mut dyn Backend, instances: &[u32]) -> &[u32] {
+        let d = &mut *self.drawn;
+        d.batch_new(instances.iter().copied());
+        if !d.batch.is_empty() {
+            backend.draw(&d.batch);
+        }
+        &d.batch
+    }
+
     /// Draws the instances of `leaves` not yet drawn this frame, in one
     /// batch; with `sort_by_material` the batch is ordered by material so
     /// that each material costs one state change (the CHC++ render queue,
     /// section 4.3). Returns how many instances were drawn.
     pub fn draw_leaves(&mut self, backend: &mut dyn Backend, leaves: &[NodeId], sort_by_material: bool) -> usize {
         let d = &mut *self.drawn;
-        d.batch.clear();
-        for &leaf in leaves {
-            for &i in self.hierarchy.instances(leaf) {
-                if d.stamp[i as usize] != d.frame {
-                    d.stamp[i as usize] = d.frame;
-                    d.batch.push(i);
-                }
-            }
-        }
+        let h = self.hierarchy;
+        d.batch_new(leaves.iter().flat_map(|&leaf| h.instances(leaf).iter().copied()));
         if sort_by_material {
             let instances = &self.scene.instances;
             d.batch.sort_by_key(|&i| instances[i as usize].material);

@@ -18,8 +18,8 @@ use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest,
 use glam::{Mat4, Vec4};
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, Camera, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView, QueryHandle, RenderState, Scene,
-    StateTracker,
+    Aabb, Backend, Camera, CpuCullingWork, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView, QueryHandle,
+    RenderState, Scene, StateTracker,
 };
 use std::time::Instant;
 
@@ -295,6 +295,18 @@ impl Backend for SoftBackend<'_> {
     fn traverse(&mut self, nodes: u64) {
         self.stats.traversal_steps += nodes;
         self.clock.cpu_work(nodes as f64 * self.model.cpu_node_us);
+    }
+
+    fn resolution(&self) -> (u32, u32) {
+        (self.depth.width(), self.depth.height())
+    }
+
+    fn cpu_culling(&mut self, work: CpuCullingWork) {
+        let m = &self.model;
+        let ns = work.triangles as f64 * m.cpu_moc_triangle_ns
+            + work.tiles as f64 * m.cpu_moc_tile_ns
+            + work.boxes as f64 * m.cpu_moc_box_ns;
+        self.clock.cpu_work(ns * 1e-3);
     }
 
     fn end_frame(&mut self) -> FrameStats {

@@ -12,8 +12,8 @@
 //! it.
 
 use occlude_core::{
-    Aabb, Backend, Camera, CullingMethod, FrameContext, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView,
-    QueryHandle,
+    Aabb, Backend, Camera, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling, GpuCullingUnsupported,
+    OracleView, QueryHandle,
 };
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -62,6 +62,12 @@ impl Backend for DrawLog<'_> {
     }
     fn traverse(&mut self, nodes: u64) {
         self.inner.traverse(nodes);
+    }
+    fn resolution(&self) -> (u32, u32) {
+        self.inner.resolution()
+    }
+    fn cpu_culling(&mut self, work: CpuCullingWork) {
+        self.inner.cpu_culling(work);
     }
     fn end_frame(&mut self) -> FrameStats {
         self.inner.end_frame()

@@ -9,7 +9,7 @@ use winit::keyboard::KeyCode;
 /// A one-shot command bound to a key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    /// 1 to 9 (one digit per method of `METHOD_NAMES`): the method at this
+    /// 1 to 9, then 0 (one digit per method of `METHOD_NAMES`): the method at this
     /// index.
     Method(usize),
     /// M: the next method.
@@ -31,7 +31,7 @@ pub enum Action {
 
 /// The command bound to `key`, if any.
 pub fn action(key: KeyCode) -> Option<Action> {
-    const DIGITS: [KeyCode; 9] = [
+    const DIGITS: [KeyCode; 10] = [
         KeyCode::Digit1,
         KeyCode::Digit2,
         KeyCode::Digit3,
@@ -41,6 +41,7 @@ pub fn action(key: KeyCode) -> Option<Action> {
         KeyCode::Digit7,
         KeyCode::Digit8,
         KeyCode::Digit9,
+        KeyCode::Digit0,
     ];
     if let Some(i) = DIGITS.iter().take(METHOD_NAMES.len()).position(|&d| d == key) {
         return Some(Action::Method(i));
@@ -98,11 +99,12 @@ mod tests {
     #[test]
     fn keys_map_to_actions_and_movement() {
         assert_eq!(action(KeyCode::Digit4), Some(Action::Method(3)));
-        // Every method has a digit (roc, ioc and hiz are 6, 7 and 8).
-        assert_eq!(METHOD_NAMES[5..8], ["roc", "ioc", "hiz"]);
+        // Every method has a digit, 0 the tenth (roc, ioc, hiz and moc are 6 to 9).
+        assert_eq!(METHOD_NAMES[5..9], ["roc", "ioc", "hiz", "moc"]);
         assert_eq!(action(KeyCode::Digit7), Some(Action::Method(6)));
+        assert_eq!(action(KeyCode::Digit8), Some(Action::Method(7)));
         assert_eq!(action(KeyCode::Digit9), Some(Action::Method(8)));
-        assert_eq!(action(KeyCode::Digit0), None);
+        assert_eq!(action(KeyCode::Digit0), Some(Action::Method(9)));
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
         assert_eq!(action(KeyCode::KeyL), Some(Action::NextBoxTest));
         assert_eq!(action(KeyCode::KeyW), None);

@@ -6,8 +6,8 @@
 //! any method knowing.
 
 use occlude_core::{
-    Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
-    OracleView, Pyramid, QueryHandle, RangeTable,
+    Aabb, Backend, BoxSet, Camera, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported,
+    IdList, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable,
 };
 use std::collections::HashMap;
 
@@ -177,6 +177,14 @@ impl<B: Backend> Backend for RecordingBackend<B> {
 
     fn traverse(&mut self, nodes: u64) {
         self.inner.traverse(nodes);
+    }
+
+    fn resolution(&self) -> (u32, u32) {
+        self.inner.resolution()
+    }
+
+    fn cpu_culling(&mut self, work: CpuCullingWork) {
+        self.inner.cpu_culling(work);
     }
 
     fn end_frame(&mut self) -> FrameStats {

@@ -1,0 +1,323 @@
+//! Masked software occlusion culling (`moc`), after Hasselgren, Andersson and
+//! Akenine-Möller, "Masked Software Occlusion Culling" (HPG 2016): occluders
+//! are rasterized on the CPU into a coarse masked depth buffer
+//! ([`occlude_moc::MaskedBuffer`]; the buffer is the paper's section 3, its
+//! layer merge section 3.1), then the hierarchy is walked front to back and
+//! each node's box is tested against that buffer on the CPU (section 4,
+//! "occlusion queries": the box's screen rectangle at its nearest depth).
+//! Survivors are drawn with no occlusion query, so no result ever comes back
+//! from the GPU.
+//!
+//! # Occluders (`moc.occluders`)
+//!
+//! - `drawn` (the default): each object is rendered into the buffer right
+//!   after it is drawn. The walk is front to back, so everything drawn in
+//!   front of a node is in the buffer before the node is tested: the coarse
+//!   analogue of stop-and-wait's exact depth buffer, with no state between
+//!   frames and no first frame drawn without occlusion. It is the default
+//!   because it culls nearly what `sw` culls (docs/benchmarks.md), at the price
+//!   of rasterizing every drawn triangle on the CPU.
+//! - `last`: the objects drawn in the previous frame, rendered before the walk
+//!   (the paper's usage with last frame's visible set); nothing is added
+//!   during the walk. Fewer CPU triangles where much is drawn but little
+//!   occludes; the first frame and disocclusions cull less.
+//! - `largest`: the `moc.count` objects in the frustum whose boxes look
+//!   largest from the eye (size over distance), rendered before the walk:
+//!   designated occluders without temporal state.
+//!
+//! # Why it never culls a visible object
+//!
+//! A node is culled only when the buffer answers
+//! [`Occluded`](occlude_moc::Visibility::Occluded) for its box (or the box is
+//! wholly outside a frustum plane). Let an object inside the node own pixel
+//! `p` of view-frustum culling's image. Then `p` lies in the object's screen
+//! footprint and its depth there is below every occluder's depth at `p` (or no
+//! occluder covers `p`). The test cannot answer occluded:
+//!
+//! - The box tested is the occlusion queries' proxy
+//!   ([`query_box::padded`]) pulled towards the eye by
+//!   [`QUERY_DEPTH_BIAS`], so geometry on its faces never rounds in front of
+//!   it, exactly as for the query methods. The buffer rounds the box's screen
+//!   rectangle outward by a pixel and lowers its nearest depth by a relative
+//!   1e-6, more than the rounding of either backend's interpolated depth.
+//! - Depth precision: the buffer's bound at `p` is at least the occluder's
+//!   depth plane anywhere in `p`'s 8x4-pixel subtile (its maximum over the
+//!   subtile's corners, computed in `f64`, rounded up to `f32`), so also at
+//!   the position a backend samples after snapping vertices to its sub-pixel
+//!   grid; the test compares strictly (`nearest < bound` is visible), so ties
+//!   are visible.
+//! - Near-plane clipping: occluders are clipped to the near plane in clip space
+//!   before the divide; a box reaching the camera's near region
+//!   ([`Camera::box_touches_near_region`], which includes a camera inside the
+//!   box) or with a corner behind the near plane is visible untested.
+//! - Coverage: the buffer counts a pixel covered when its centre is inside an
+//!   occluder triangle in `f64` (top-left-like rule on edges, so a mesh's shared
+//!   edges leave no holes). The backends snap vertices to 1/256 pixel first;
+//!   where an occluder's outer edge passes within that distance of a pixel
+//!   centre, the two may disagree. A hidden object is culled through such a
+//!   pixel only if its whole subtile is covered in the buffer, which at an
+//!   outer edge needs another occluder abutting it exactly; the every-frame
+//!   tests (both backends, every small scene) have found no such pixel. This is
+//!   the one step that rests on the scenes rather than on a bound.
+//!
+//! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region
+//! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS
+//! [`query_box::padded`]: crate::query_box::padded
+
+use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use crate::backend::{Backend, CpuCullingWork};
+use crate::geometry::Aabb;
+use crate::query_box::{padded, QUERY_DEPTH_BIAS};
+use glam::Mat4;
+use occlude_moc::{CullMode, MaskedBuffer, MergeMode, Visibility};
+use std::fmt;
+use std::str::FromStr;
+
+/// Which objects are rendered into the masked buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Occluders {
+    /// Every object drawn, right after it is drawn (front to back).
+    Drawn,
+    /// The objects drawn in the previous frame, before the walk.
+    Last,
+    /// The `moc.count` objects in view with the largest boxes over distance.
+    Largest,
+}
+
+impl fmt::Display for Occluders {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Occluders::Drawn => "drawn",
+            Occluders::Last => "last",
+            Occluders::Largest => "largest",
+        })
+    }
+}
+
+impl FromStr for Occluders {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        match s {
+            "drawn" => Ok(Occluders::Drawn),
+            "last" => Ok(Occluders::Last),
+            "largest" => Ok(Occluders::Largest),
+            _ => Err(()),
+        }
+    }
+}
+
+/// `moc.merge`: the buffer's merge rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Merge(MergeMode);
+
+impl fmt::Display for Merge {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self.0 {
+            MergeMode::LayerMerge => "layer",
+            MergeMode::QuickMask => "quick",
+        })
+    }
+}
+
+impl FromStr for Merge {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        match s {
+            "layer" => Ok(Merge(MergeMode::LayerMerge)),
+            "quick" => Ok(Merge(MergeMode::QuickMask)),
+            _ => Err(()),
+        }
+    }
+}
+
+/// Parameters of `moc`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MocParams {
+    /// `moc.occluders`: `drawn` (default), `last` or `largest`.
+    pub occluders: Occluders,
+    /// `moc.count` [64]: how many objects `largest` renders.
+    pub count: u32,
+    /// `moc.merge`: `layer` (the paper's heuristic, default) or `quick`.
+    pub merge: MergeMode,
+}
+
+impl MocParams {
+    /// Reads `moc.occluders`, `moc.count` and `moc.merge`.
+    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        let occluders = r.get("occluders", Occluders::Drawn, "drawn, last or largest", |_| true)?;
+        let count = r.get("count", 64u32, "an integer from 1 to 65536", |v| (1..=65536).contains(&v))?;
+        let Merge(merge) = r.get("merge", Merge(MergeMode::LayerMerge), "layer or quick", |_| true)?;
+        Ok(Self { occluders, count, merge })
+    }
+}
+
+/// `moc`: hierarchical culling against a masked occlusion buffer on the CPU.
+#[derive(Debug)]
+pub struct MaskedOcclusion {
+    params: MocParams,
+    buffer: Option<MaskedBuffer>,
+    /// Instances drawn this frame (the next frame's `last` occluders).
+    drawn: Vec<u32>,
+    /// This frame's work, reported by [`CullingMethod::counters`].
+    work: CpuCullingWork,
+}
+
+impl MaskedOcclusion {
+    /// A method with no state from earlier frames.
+    pub fn new(params: MocParams) -> Self {
+        Self { params, buffer: None, drawn: Vec::new(), work: CpuCullingWork::default() }
+    }
+
+    /// The masked buffer as it stood at the end of the last frame, if any.
+    pub fn buffer(&self) -> Option<&MaskedBuffer> {
+        self.buffer.as_ref()
+    }
+
+    /// The occluders rendered before the walk.
+    fn occluders_before_walk(&self, ctx: &FrameContext<'_>, backend: &mut dyn Backend) -> Vec<u32> {
+        match self.params.occluders {
+            Occluders::Drawn => Vec::new(),
+            Occluders::Last => self.drawn.clone(),
+            Occluders::Largest => {
+                let instances = &ctx.scene.instances;
+                backend.traverse(instances.len() as u64);
+                let eye = ctx.camera.position;
+                let mut scored: Vec<(f32, u32)> = (0..instances.len() as u32)
+                    .filter(|&i| ctx.frustum.intersects(&instances[i as usize].bounds))
+                    .map(|i| {
+                        let b = &instances[i as usize].bounds;
+                        (b.extent().length_squared() / b.distance_squared(eye).max(1e-12), i)
+                    })
+                    .collect();
+                let count = (self.params.count as usize).min(scored.len());
+                if count > 0 && count < scored.len() {
+                    scored.select_nth_unstable_by(count - 1, |a, b| b.0.total_cmp(&a.0));
+                }
+                scored[..count].iter().map(|&(_, i)| i).collect()
+            }
+        }
+    }
+}
+
+/// Renders `instances` into `buffer` seen through `view_projection`; returns
+/// the work done.
+fn render_occluders(
+    buffer: &mut MaskedBuffer,
+    ctx: &FrameContext<'_>,
+    view_projection: Mat4,
+    instances: &[u32],
+) -> CpuCullingWork {
+    let mut work = CpuCullingWork::default();
+    for &i in instances {
+        let inst = &ctx.scene.instances[i as usize];
+        let mesh = &ctx.scene.meshes[inst.mesh as usize];
+        let done =
+            buffer.render_triangles(&mesh.positions, &mesh.indices, view_projection * inst.transform, CullMode::Back);
+        work.triangles += done.triangles;
+        work.tiles += done.tiles;
+    }
+    work
+}
+
+/// `view_projection` with clip-space depth pulled towards the eye by
+/// [`QUERY_DEPTH_BIAS`] (`z - bias * w`), as query boxes are drawn.
+fn biased(view_projection: Mat4) -> Mat4 {
+    let mut m = view_projection;
+    for c in [&mut m.x_axis, &mut m.y_axis, &mut m.z_axis, &mut m.w_axis] {
+        c.z -= QUERY_DEPTH_BIAS * c.w;
+    }
+    m
+}
+
+impl CullingMethod for MaskedOcclusion {
+    fn name(&self) -> &'static str {
+        "moc"
+    }
+
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let before = self.occluders_before_walk(ctx, backend);
+        let (width, height) = backend.resolution();
+        let buffer = match &mut self.buffer {
+            Some(b) if (b.width(), b.height()) == (width, height) => b,
+            slot => slot.insert(match MaskedBuffer::new(width, height) {
+                Ok(b) => b,
+                // No pixels: nothing can be seen, nothing to cull against.
+                Err(_) => return,
+            }),
+        };
+        buffer.merge = self.params.merge;
+        buffer.clear();
+        let view_projection = ctx.camera.view_projection();
+        let box_projection = biased(view_projection);
+
+        let occluder_work = render_occluders(buffer, ctx, view_projection, &before);
+        backend.cpu_culling(occluder_work);
+        self.work = occluder_work;
+        self.drawn.clear();
+
+        let h = ctx.hierarchy;
+        let eye = ctx.camera.position;
+        let mut queue = FrontToBack::new();
+        if ctx.in_frustum(h.root()) {
+            queue.push_node(h, h.root(), eye);
+        }
+        let mut candidates = Vec::new();
+        while let Some(node) = queue.pop() {
+            backend.traverse(1);
+            let visible = box_may_be_visible(buffer, ctx, box_projection, h.bounds(node));
+            backend.cpu_culling(CpuCullingWork { boxes: 1, ..Default::default() });
+            self.work.boxes += 1;
+            if !visible {
+                continue;
+            }
+            if h.is_leaf(node) {
+                // A leaf of several objects tests each object's own box.
+                candidates.clear();
+                for &i in h.instances(node) {
+                    if ctx.was_drawn(i) {
+                        continue;
+                    }
+                    let alone = h.instances(node).len() == 1;
+                    if alone || box_may_be_visible(buffer, ctx, box_projection, &ctx.scene.instances[i as usize].bounds)
+                    {
+                        candidates.push(i);
+                    }
+                    if !alone {
+                        backend.cpu_culling(CpuCullingWork { boxes: 1, ..Default::default() });
+                        self.work.boxes += 1;
+                    }
+                }
+                let drawn = ctx.draw_instances(backend, &candidates);
+                self.drawn.extend_from_slice(drawn);
+                if self.params.occluders == Occluders::Drawn {
+                    let work = render_occluders(buffer, ctx, view_projection, &candidates);
+                    backend.cpu_culling(work);
+                    self.work.triangles += work.triangles;
+                    self.work.tiles += work.tiles;
+                }
+            } else {
+                for &c in h.children(node) {
+                    if ctx.in_frustum(c) {
+                        queue.push_node(h, c, eye);
+                    }
+                }
+            }
+        }
+    }
+
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("occluder_triangles", self.work.triangles as f64),
+            ("occluder_tiles", self.work.tiles as f64),
+            ("tested_boxes", self.work.boxes as f64),
+        ]
+    }
+}
+
+/// Whether something inside `bounds` may have a visible pixel: its padded box
+/// touches the near region or the buffer does not answer occluded for it (a
+/// box wholly outside a frustum plane counts as hidden).
+fn box_may_be_visible(buffer: &MaskedBuffer, ctx: &FrameContext<'_>, box_projection: Mat4, bounds: &Aabb) -> bool {
+    let b = padded(bounds);
+    ctx.camera.box_touches_near_region(&b) || buffer.test_aabb(b.min, b.max, box_projection) == Visibility::Visible
+}

@@ -1,0 +1,122 @@
+//! Measures the masked buffer's CPU costs that the soft backend's simulated
+//! clock charges for `moc` (`cpu_moc_triangle_ns`, `cpu_moc_tile_ns`,
+//! `cpu_moc_box_ns` in docs/gpu-models.md): occluder triangles of several
+//! sizes are rendered and the time per call is fitted as
+//! `a * triangles + b * tiles` by least squares; boxes of several sizes are
+//! tested against a filled buffer and the mean time per box is printed.
+//!
+//! `cargo run --release -p occlude-moc --example moc_costs`
+
+use glam::{Mat4, Vec3};
+use occlude_moc::{CullMode, MaskedBuffer};
+use std::time::Instant;
+
+const WIDTH: u32 = 1024;
+const HEIGHT: u32 = 768;
+
+/// A small deterministic generator (xorshift), so runs are repeatable.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// `count` counter-clockwise right triangles with legs of `legs` pixels at
+/// random places and depths, as NDC positions and indices.
+fn triangles(count: usize, legs: f32, rng: &mut Rng) -> (Vec<Vec3>, Vec<u32>) {
+    let (sx, sy) = (2.0 * legs / WIDTH as f32, 2.0 * legs / HEIGHT as f32);
+    let mut positions = Vec::with_capacity(count * 3);
+    for _ in 0..count {
+        let (x, y, z) = (rng.next() * (2.0 - sx) - 1.0, rng.next() * (2.0 - sy) - 1.0, 0.1 + 0.8 * rng.next());
+        positions.extend([Vec3::new(x, y, z), Vec3::new(x + sx, y, z), Vec3::new(x, y + sy, z)]);
+    }
+    let indices = (0..positions.len() as u32).collect();
+    (positions, indices)
+}
+
+/// The fastest of `runs` timings of `f`, in ns.
+fn fastest(runs: usize, mut f: impl FnMut()) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e9
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut buffer = MaskedBuffer::new(WIDTH, HEIGHT).unwrap();
+    // Rows of (triangles, tiles, ns) per call.
+    let mut rows = Vec::new();
+    println!("legs px  triangles  tiles/tri  ns/triangle");
+    for legs in [2.0f32, 5.0, 10.0, 25.0, 50.0, 100.0, 250.0] {
+        let count = (200_000.0 / (legs * legs)).clamp(200.0, 20_000.0) as usize;
+        let (positions, indices) = triangles(count, legs, &mut rng);
+        let mut work = Default::default();
+        let ns = fastest(5, || {
+            buffer.clear();
+            work = buffer.render_triangles(&positions, &indices, Mat4::IDENTITY, CullMode::Back);
+        });
+        let clear_ns = fastest(5, || buffer.clear());
+        let ns = ns - clear_ns;
+        println!(
+            "{legs:7}  {:9}  {:9.2}  {:11.1}",
+            work.triangles,
+            work.tiles as f64 / work.triangles as f64,
+            ns / work.triangles as f64
+        );
+        rows.push((work.triangles as f64, work.tiles as f64, ns));
+    }
+    // Least squares for ns = a * triangles + b * tiles (normal equations).
+    let (mut tt, mut tl, mut ll, mut ty, mut ly) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(t, l, y) in &rows {
+        tt += t * t;
+        tl += t * l;
+        ll += l * l;
+        ty += t * y;
+        ly += l * y;
+    }
+    let det = tt * ll - tl * tl;
+    let a = (ty * ll - ly * tl) / det;
+    let b = (ly * tt - ty * tl) / det;
+    println!("fit: {a:.1} ns per triangle + {b:.1} ns per 32x8 tile");
+
+    // Boxes against a buffer full of mid-sized occluders at mid depth.
+    let (positions, indices) = triangles(20_000, 50.0, &mut rng);
+    buffer.clear();
+    buffer.render_triangles(&positions, &indices, Mat4::IDENTITY, CullMode::Back);
+    println!("box px  ns/box (hidden)  ns/box (in front)");
+    let mut all = Vec::new();
+    for size in [4.0, 16.0, 64.0, 256.0] {
+        let (dx, dy) = (2.0 * size / WIDTH as f32, 2.0 * size / HEIGHT as f32);
+        let boxes: Vec<(Vec3, Vec3)> = (0..2000)
+            .map(|_| {
+                let (x, y) = (rng.next() * (2.0 - dx) - 1.0, rng.next() * (2.0 - dy) - 1.0);
+                (Vec3::new(x, y, 0.0), Vec3::new(x + dx, y + dy, 0.0))
+            })
+            .collect();
+        let mut per_depth = [0.0; 2];
+        for (k, z) in [0.95f32, 0.05].into_iter().enumerate() {
+            let ns = fastest(5, || {
+                for (lo, hi) in &boxes {
+                    std::hint::black_box(buffer.test_aabb(
+                        Vec3::new(lo.x, lo.y, z),
+                        Vec3::new(hi.x, hi.y, z + 0.01),
+                        Mat4::IDENTITY,
+                    ));
+                }
+            });
+            per_depth[k] = ns / boxes.len() as f64;
+            all.push(per_depth[k]);
+        }
+        println!("{size:6}  {:15.1}  {:17.1}", per_depth[0], per_depth[1]);
+    }
+    println!("mean over these boxes: {:.1} ns per box", all.iter().sum::<f64>() / all.len() as f64);
+}
