@@ -1,5 +1,5 @@
 //! The visibility-backend interface that hierarchical methods are written
-//! against (DESIGN.md, "The backend interface").
+//! against (`docs/architecture.md`, "The backend interface").
 //!
 //! A backend owns the scene's geometry, a depth buffer and a clock. Methods
 //! issue draws and occlusion queries in order; the backend answers queries as a
@@ -45,7 +45,7 @@ pub trait Backend {
     fn end_frame(&mut self) -> FrameStats;
 
     /// Writes the depth image of the last finished frame, row by row, into
-    /// `out` (replacing what it held), for the correctness rule (DESIGN.md).
+    /// `out` (replacing what it held), for the correctness rule (`docs/design.md`).
     /// Costs nothing on the frame's clock; `out`'s memory is reused, so that a
     /// run comparing every frame's image allocates none.
     fn depth_image(&mut self, out: &mut Vec<f32>);

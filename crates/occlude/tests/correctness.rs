@@ -1,4 +1,4 @@
-//! The correctness rule of DESIGN.md on every frame of every `small` scene
+//! The correctness rule of `docs/design.md` on every frame of every `small` scene
 //! and of an imported building, for both hierarchies: conservative methods
 //! produce view-frustum culling's depth image bit for bit, and `opt` draws
 //! exactly the leaves holding an instance that the oracle sees.

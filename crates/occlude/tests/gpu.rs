@@ -1,6 +1,6 @@
 //! The wgpu backend on a real adapter (lavapipe in CI, with
 //! `OCCLUDE_REQUIRE_GPU=1`; skipped with a message where no adapter exists):
-//! the correctness rule of DESIGN.md with depth images read back from the
+//! the correctness rule of `docs/design.md` with depth images read back from the
 //! GPU, and a cross-check of what the GPU and the soft rasterizer see.
 
 use indicatif::ProgressBar;

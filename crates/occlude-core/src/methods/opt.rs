@@ -1,4 +1,4 @@
-//! The ideal visible set (DESIGN.md, "opt"; the CHC++ paper's OPT): draw
+//! The ideal visible set (`docs/design.md`; the CHC++ paper's OPT): draw
 //! exactly the hierarchy leaves that have at least one visible pixel, with no
 //! query. The set comes from an oracle pass run before the frame's clock
 //! starts, so `opt` is the fastest any query-based method can be on the same

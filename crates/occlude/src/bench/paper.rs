@@ -1,5 +1,5 @@
-//! `occlude bench --paper chc|chcpp`: a paper's experiments on our teapots,
-//! city and plant scenes, printed in the shape of its tables.
+//! `occlude bench --paper chc|chcpp|om|ioc`: a paper's experiments on our
+//! scenes, printed in the shape of its tables.
 //!
 //! - `chc` (Bittner et al. 2004, section 6): kD-tree, `gpu-2004`; Table 1
 //!   (VFC, S&W, CHC, ideal) and Table 2 (influence of `tav` and `nvp`).
