@@ -18,7 +18,7 @@ pub mod rng;
 pub mod scene;
 pub mod stats;
 
-pub use backend::{Backend, OracleView, QueryHandle, RenderState, StateTracker};
+pub use backend::{Backend, FrameCounter, OracleView, QueryHandle, RenderState, StateTracker};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
 pub use gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, RangeTable};

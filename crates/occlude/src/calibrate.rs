@@ -224,6 +224,7 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
         aspect: w as f32 / h as f32,
         near: 0.25,
         far: 100.0,
+        matrices: None,
     };
     let repeats = config.repeats.max(1);
     let pixels = f64::from(w) * f64::from(h);

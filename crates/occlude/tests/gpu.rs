@@ -7,6 +7,7 @@ use indicatif::ProgressBar;
 use occlude::bench::config::BackendKind;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
+use occlude_core::methods::METHOD_NAMES;
 use occlude_core::{Backend, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -17,7 +18,7 @@ use std::sync::Arc;
 fn config(scene: &str, hierarchy: HierarchyKind, frames: usize) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"].map(String::from).to_vec(),
+        methods: METHOD_NAMES.map(String::from).to_vec(),
         frames,
         resolution: (320, 240),
         hierarchy,
