@@ -1,5 +1,5 @@
 //! The visibility-backend interface that hierarchical methods are written
-//! against (DESIGN.md, "The backend interface").
+//! against (`docs/architecture.md`, "The backend interface").
 //!
 //! A backend owns the scene's geometry, a depth buffer and a clock. Methods
 //! issue draws and occlusion queries in order; the backend answers queries as a
@@ -55,7 +55,7 @@ pub trait Backend {
     fn end_frame(&mut self) -> FrameStats;
 
     /// Writes the depth image of the last finished frame, row by row, into
-    /// `out` (replacing what it held), for the correctness rule (DESIGN.md).
+    /// `out` (replacing what it held), for the correctness rule (`docs/design.md`).
     /// Costs nothing on the frame's clock; `out`'s memory is reused, so that a
     /// run comparing every frame's image allocates none.
     fn depth_image(&mut self, out: &mut Vec<f32>);
@@ -123,6 +123,78 @@ impl StateTracker {
         let changed = self.0.is_some_and(|s| s != state);
         self.0 = Some(state);
         changed
+    }
+}
+
+/// The counts every backend keeps by the same rules while it records a
+/// frame: draw calls, triangles, distinct instances drawn, render-state
+/// changes, queries and their boxes, indirect draws and traversal steps. A
+/// backend adds its own figures (times, fragments, dispatches) to
+/// [`FrameCounter::stats`].
+#[derive(Clone, Debug, Default)]
+pub struct FrameCounter {
+    /// The frame's statistics so far.
+    pub stats: FrameStats,
+    state: StateTracker,
+    drawn: Vec<bool>,
+}
+
+impl FrameCounter {
+    /// A counter for a scene of `instances` instances.
+    pub fn new(instances: usize) -> Self {
+        Self { drawn: vec![false; instances], ..Self::default() }
+    }
+
+    /// Starts a frame: every count zero, no render state, nothing drawn.
+    pub fn begin_frame(&mut self) {
+        self.stats = FrameStats::default();
+        self.state = StateTracker::default();
+        self.drawn.fill(false);
+    }
+
+    /// Moves to render state `state`; true (and counted) when that is a
+    /// change.
+    pub fn set_state(&mut self, state: RenderState) -> bool {
+        let changed = self.state.switch(state);
+        self.stats.state_changes += u64::from(changed);
+        changed
+    }
+
+    /// Counts one draw call of instance `instance`, of `triangles`
+    /// triangles (a visible object the first time in the frame).
+    pub fn draw(&mut self, instance: u32, triangles: u64) {
+        self.stats.draw_calls += 1;
+        self.stats.triangles += triangles;
+        if !std::mem::replace(&mut self.drawn[instance as usize], true) {
+            self.stats.visible_objects += 1;
+        }
+    }
+
+    /// True when instance `instance` has been drawn this frame.
+    pub fn was_drawn(&self, instance: usize) -> bool {
+        self.drawn[instance]
+    }
+
+    /// Counts an occlusion query over `boxes` boxes, in render state
+    /// [`RenderState::Query`]; true when that state is a change.
+    pub fn query(&mut self, boxes: usize) -> bool {
+        let changed = self.set_state(RenderState::Query);
+        self.stats.queries += 1;
+        self.stats.query_boxes += boxes as u64;
+        changed
+    }
+
+    /// Counts an indirect multi-draw in render state `state`; true when that
+    /// state is a change.
+    pub fn indirect_draw(&mut self, state: RenderState) -> bool {
+        let changed = self.set_state(state);
+        self.stats.indirect_draws += 1;
+        changed
+    }
+
+    /// Counts `nodes` hierarchy nodes visited.
+    pub fn traverse(&mut self, nodes: u64) {
+        self.stats.traversal_steps += nodes;
     }
 }
 

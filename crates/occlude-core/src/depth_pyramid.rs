@@ -293,6 +293,7 @@ mod tests {
             aspect: 1.0,
             near: 0.25,
             far: 100.0,
+            matrices: None,
         };
         let vp = camera.view_projection();
         let through_eye_plane = Aabb::new(glam::Vec3::new(5.0, -1.0, -10.0), glam::Vec3::new(6.0, 1.0, 10.0));

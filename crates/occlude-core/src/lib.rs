@@ -19,7 +19,7 @@ pub mod rng;
 pub mod scene;
 pub mod stats;
 
-pub use backend::{Backend, CpuCullingWork, OracleView, QueryHandle, RenderState, StateTracker};
+pub use backend::{Backend, CpuCullingWork, FrameCounter, OracleView, QueryHandle, RenderState, StateTracker};
 pub use camera::{Camera, Frustum, Visibility};
 pub use geometry::Aabb;
 pub use gpu_culling::{

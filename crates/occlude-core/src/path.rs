@@ -18,6 +18,23 @@ pub struct Keyframe {
     pub fov_y_deg: f32,
 }
 
+impl Keyframe {
+    /// The look-at camera of this keyframe (y up), with the given image
+    /// aspect and clipping distances.
+    pub fn camera(&self, aspect: f32, near: f32, far: f32) -> Camera {
+        Camera {
+            position: self.position,
+            target: self.target,
+            up: Vec3::Y,
+            fov_y_deg: self.fov_y_deg,
+            aspect,
+            near,
+            far,
+            matrices: None,
+        }
+    }
+}
+
 /// A walkthrough: keyframes in time order.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CameraPath {
@@ -124,19 +141,7 @@ impl CameraPath {
 
     /// The cameras of the frames `sampling` asks for.
     pub fn sample_with(&self, sampling: Sampling, aspect: f32, near: f32, far: f32) -> Vec<Camera> {
-        self.frame_times(sampling)
-            .into_iter()
-            .filter_map(|t| self.at(t))
-            .map(|k| Camera {
-                position: k.position,
-                target: k.target,
-                up: Vec3::Y,
-                fov_y_deg: k.fov_y_deg,
-                aspect,
-                near,
-                far,
-            })
-            .collect()
+        self.frame_times(sampling).into_iter().filter_map(|t| self.at(t)).map(|k| k.camera(aspect, near, far)).collect()
     }
 }
 

@@ -75,6 +75,7 @@ mod tests {
             aspect: 1.0,
             near: 0.25,
             far: 100.0,
+            matrices: None,
         };
         let far = Aabb::new(Vec3::new(-1.0, -1.0, -11.0), Vec3::new(1.0, 1.0, -10.0));
         let around_eye = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));

@@ -1,4 +1,4 @@
-//! The two clocks of the simulated GPU (DESIGN.md): the CPU advances by the
+//! The two clocks of the simulated GPU (`docs/design.md`): the CPU advances by the
 //! cost of each call; the GPU runs commands in order, each starting at
 //! max(issue time, GPU free); a blocking read moves the CPU forward (wait time).
 

@@ -1,4 +1,4 @@
-//! Cost parameters of the simulated GPU clock (DESIGN.md, "The simulated GPU
+//! Cost parameters of the simulated GPU clock (`docs/design.md`, "The simulated GPU
 //! clock"), with presets and TOML overrides.
 //!
 //! Where the defaults come from is documented in `docs/gpu-models.md`.

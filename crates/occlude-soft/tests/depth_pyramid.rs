@@ -74,6 +74,7 @@ fn check(width: u32, height: u32, reach: u32, seed: u64) -> Result<Outcome, Test
         aspect: width as f32 / height as f32,
         near: 0.25,
         far: 200.0,
+        matrices: None,
     };
     let depth = depth_image(&mut rng, width, height);
     let boxes = boxes(&mut rng, 48);

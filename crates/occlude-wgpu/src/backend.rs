@@ -16,12 +16,12 @@ use crate::queries::{
     encode_resolve, read_values, GpuTimes, PassKind, PassTimer, QueryPool, Readback, QUERIES_PER_SET,
 };
 use crate::readback::Mapping;
-use crate::scene_buffers::GpuScene;
+use crate::scene_buffers::{GpuScene, BOX_INDEX_COUNT};
 use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported, IdList, ItemRange,
-    OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene, StateTracker,
+    Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
+    IdList, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
 };
 use std::ops::Range;
 use std::sync::Arc;
@@ -30,8 +30,17 @@ use std::time::{Duration, Instant};
 /// Background of the colour image.
 const CLEAR_COLOR: wgpu::Color = wgpu::Color { r: 0.62, g: 0.74, b: 0.86, a: 1.0 };
 
-/// Bytes of one query box in the box buffer (min, a slot, max, padding).
-const BOX_BYTES: u64 = 32;
+/// Bytes of one query box in the box buffer (min, a slot, max, padding), as
+/// `QueryBox` in `shader.wgsl` and `Box` in `cull.wgsl`.
+pub(crate) const BOX_BYTES: u64 = 32;
+
+/// Floats of the camera uniform, `Camera` in `shader.wgsl`: the
+/// view-projection matrix (16) and the query depth bias (padded to a vec4).
+const CAMERA_UNIFORM_FLOATS: usize = 16 + 4;
+
+/// The box buffer's first size: room for a few boxes; it grows to the next
+/// power of two of what a submission needs.
+const INITIAL_BOX_BUFFER_BYTES: u64 = 8 * BOX_BYTES;
 
 /// A recorded command, waiting for the next submission.
 #[derive(Clone, Debug)]
@@ -173,9 +182,7 @@ pub struct WgpuBackend<'s> {
     queries: Vec<QueryState>,
     batches: Vec<Batch>,
     cleared: bool,
-    state: StateTracker,
-    stats: FrameStats,
-    drawn: Vec<bool>,
+    count: FrameCounter,
     frame_start: Instant,
     wait: Duration,
     /// GPU-resident culling's resources, made by the first `create_*`.
@@ -189,11 +196,11 @@ impl<'s> WgpuBackend<'s> {
         let ctx = Arc::clone(&gpu.ctx);
         let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
-            size: 80,
+            size: (CAMERA_UNIFORM_FLOATS * std::mem::size_of::<f32>()) as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let box_buffer = box_buffer(&ctx, 256);
+        let box_buffer = box_buffer(&ctx, INITIAL_BOX_BUFFER_BYTES);
         let frame_group = frame_group(&gpu, &camera_buffer, &box_buffer);
         Self {
             scene,
@@ -212,9 +219,7 @@ impl<'s> WgpuBackend<'s> {
             queries: Vec::new(),
             batches: Vec::new(),
             cleared: false,
-            state: StateTracker::default(),
-            stats: FrameStats::default(),
-            drawn: vec![false; scene.instances.len()],
+            count: FrameCounter::new(scene.instances.len()),
             frame_start: Instant::now(),
             wait: Duration::ZERO,
             culling: None,
@@ -255,7 +260,7 @@ impl<'s> WgpuBackend<'s> {
     fn start(&mut self, camera: &Camera) {
         self.settle();
         self.camera = Some(*camera);
-        let mut uniform = [0f32; 20];
+        let mut uniform = [0f32; CAMERA_UNIFORM_FLOATS];
         uniform[..16].copy_from_slice(&camera.view_projection().to_cols_array());
         uniform[16] = QUERY_DEPTH_BIAS;
         self.gpu.ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::cast_slice(&uniform));
@@ -423,13 +428,14 @@ impl<'s> WgpuBackend<'s> {
         let Some(culling) = self.culling.as_mut() else { return };
         match culling.take_stats() {
             Ok(Some(counted)) => {
-                self.stats.query_boxes += counted.boxes;
-                self.stats.draw_calls += counted.draws;
-                self.stats.indirect_draw_calls += counted.draws;
-                self.stats.triangles += counted.triangles;
+                self.count.stats.query_boxes += counted.boxes;
+                self.count.stats.draw_calls += counted.draws;
+                self.count.stats.indirect_draw_calls += counted.draws;
+                self.count.stats.triangles += counted.triangles;
                 let drawn = &counted.drawn;
-                let new = self.drawn.iter().enumerate().filter(|&(i, &cpu)| !cpu && drawn[i / 32] >> (i % 32) & 1 != 0);
-                self.stats.visible_objects += new.count() as u64;
+                let new = (0..self.scene.instances.len())
+                    .filter(|&i| !self.count.was_drawn(i) && drawn[i / 32] >> (i % 32) & 1 != 0);
+                self.count.stats.visible_objects += new.count() as u64;
             }
             Ok(None) => {}
             Err(e) => self.gpu.ctx.fail(e),
@@ -450,17 +456,14 @@ impl<'s> WgpuBackend<'s> {
 
     /// Records a culling command (one dispatch).
     fn record_cull(&mut self, op: CullOp) {
-        self.stats.dispatches += 1;
+        self.count.stats.dispatches += 1;
         self.ops.push(Op::Cull(op));
     }
 
     /// Records a culling command that ends in an indirect draw in `state`
     /// (box tests, list draws), whose counts are read after the frame.
     fn record_indirect(&mut self, op: CullOp, state: RenderState) {
-        if self.state.switch(state) {
-            self.stats.state_changes += 1;
-        }
-        self.stats.indirect_draws += 1;
+        self.count.indirect_draw(state);
         self.culling().note_counted();
         self.record_cull(op);
     }
@@ -568,7 +571,7 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
                     material = Some(0);
                 }
                 pass.begin_occlusion_query(slot % QUERIES_PER_SET);
-                pass.draw_indexed(0..36, 0, boxes.clone());
+                pass.draw_indexed(0..BOX_INDEX_COUNT, 0, boxes.clone());
                 pass.end_occlusion_query();
             }
             Op::Cull(op) => {
@@ -585,9 +588,7 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
 impl Backend for WgpuBackend<'_> {
     fn begin_frame(&mut self, camera: &Camera) {
         self.start(camera);
-        self.state = StateTracker::default();
-        self.stats = FrameStats::default();
-        self.drawn.fill(false);
+        self.count.begin_frame();
         self.wait = Duration::ZERO;
         self.frame_start = Instant::now();
     }
@@ -595,25 +596,15 @@ impl Backend for WgpuBackend<'_> {
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
             let inst = &self.scene.instances[i as usize];
-            if self.state.switch(RenderState::Material(inst.material)) {
-                self.stats.state_changes += 1;
-            }
-            self.stats.draw_calls += 1;
-            self.stats.triangles += self.scene.meshes[inst.mesh as usize].triangle_count() as u64;
-            if !std::mem::replace(&mut self.drawn[i as usize], true) {
-                self.stats.visible_objects += 1;
-            }
+            self.count.set_state(RenderState::Material(inst.material));
+            self.count.draw(i, self.scene.meshes[inst.mesh as usize].triangle_count() as u64);
             self.ops.push(Op::Draw(i));
         }
     }
 
     fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
         let camera = self.camera.expect("issue_query outside a frame");
-        if self.state.switch(RenderState::Query) {
-            self.stats.state_changes += 1;
-        }
-        self.stats.queries += 1;
-        self.stats.query_boxes += boxes.len() as u64;
+        self.count.query(boxes.len());
         let Some(padded) = query_boxes(&camera, boxes) else {
             self.queries.push(QueryState::Ready(self.all_pixels()));
             return QueryHandle(self.queries.len() as u32 - 1);
@@ -639,7 +630,7 @@ impl Backend for WgpuBackend<'_> {
     }
 
     fn traverse(&mut self, nodes: u64) {
-        self.stats.traversal_steps += nodes;
+        self.count.traverse(nodes);
     }
 
     fn resolution(&self) -> (u32, u32) {
@@ -662,7 +653,7 @@ impl Backend for WgpuBackend<'_> {
             None => GpuTimes::default(),
         };
         self.add_cull_stats();
-        let mut s = self.stats;
+        let mut s = self.count.stats;
         s.frame_ms = frame.as_secs_f64() * 1e3;
         s.cpu_ms = cpu_end.saturating_sub(self.wait).as_secs_f64() * 1e3;
         s.wait_ms = self.wait.as_secs_f64() * 1e3;
@@ -787,7 +778,7 @@ impl WgpuBackend<'_> {
     /// culling resources): the time is wait time, the call a read-back. A
     /// failed read-back fails the backend and answers the default.
     fn read_back<T: Default>(&mut self, read: impl FnOnce(&Culling) -> Result<T, String>) -> T {
-        self.stats.readbacks += 1;
+        self.count.stats.readbacks += 1;
         self.flush();
         let start = Instant::now();
         let value = read(self.culling());

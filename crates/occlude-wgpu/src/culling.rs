@@ -17,12 +17,12 @@
 //! and, for box tests and list draws, a draw in the render pass that follows
 //! ([`Culling::encode_draw`]).
 
-use crate::backend::frame_group;
+use crate::backend::{frame_group, BOX_BYTES};
 use crate::context::GpuContext;
 use crate::pipelines::CullingPipelines;
 use crate::queries::PassTimer;
 use crate::readback::{take_bytes, Mapping};
-use crate::scene_buffers::{material_color, GpuScene};
+use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
 use occlude_core::query_box::QUERY_BOX_PAD;
 use occlude_core::{Aabb, BoxSet, Camera, ExpandInto, Flags, IdList, ItemRange, RangeTable, Scene};
 use std::collections::HashMap;
@@ -37,9 +37,6 @@ const MAX_GROUPS_PER_DIMENSION: u32 = 65535;
 
 /// Bytes of a list's header (count, capacity) before its ids.
 const LIST_HEADER: u64 = 8;
-
-/// Bytes of one box (min, slot, max, padding), as `Box` in `cull.wgsl`.
-const BOX_BYTES: u64 = 32;
 
 /// Bytes of one `DrawIndexedIndirectArgs`.
 const DRAW_ARGS_BYTES: u64 = 20;
@@ -239,7 +236,7 @@ impl Culling {
             })
         };
         let staging = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
-        let box_draw = [36u32, 0, 0, 0, 0];
+        let box_draw = [BOX_INDEX_COUNT, 0, 0, 0, 0];
         let indirect = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST;
         Self {
             scene: gpu.culling(scene),
@@ -282,8 +279,8 @@ impl Culling {
         for (k, plane) in camera.frustum().planes.iter().enumerate() {
             uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
         }
-        let r = camera.near_region_radius() * 1.01;
-        uniform[24..28].copy_from_slice(&camera.position.extend(r * r).to_array());
+        let near = camera.near_region();
+        uniform[24..28].copy_from_slice(&near.center.extend(near.radius * near.radius).to_array());
         self.ctx().queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
     }
 

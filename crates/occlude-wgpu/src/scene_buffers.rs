@@ -13,6 +13,10 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 use wgpu::util::DeviceExt;
 
+/// Indices of one query box's draw: the corners of its 12 triangles
+/// ([`BOX_TRIANGLES`]).
+pub(crate) const BOX_INDEX_COUNT: u32 = (BOX_TRIANGLES.len() * 3) as u32;
+
 /// Colour target format of the backend's off-screen render target (what a
 /// viewer drawing over [`crate::WgpuBackend::color_view`] must render to).
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -32,7 +36,7 @@ pub struct GpuScene {
     pub(crate) vertices: wgpu::Buffer,
     pub(crate) indices: wgpu::Buffer,
     pub(crate) transforms: wgpu::Buffer,
-    /// The 36 corner indices of [`BOX_TRIANGLES`], drawn once per query box.
+    /// The [`BOX_INDEX_COUNT`] corner indices of [`BOX_TRIANGLES`], drawn once per query box.
     pub(crate) box_indices: wgpu::Buffer,
     pub(crate) meshes: Vec<MeshRange>,
     /// Per instance, its material's bind group in `material_groups`.

@@ -2,7 +2,7 @@
 //! costs the soft backend's simulated clock charges (`GpuModel`: draw calls,
 //! triangles, fragments, state changes, queries, query latency) on the current
 //! adapter, and checks how well the soft backend with those costs predicts
-//! the measured frame time of each method (DESIGN.md, "The simulated GPU
+//! the measured frame time of each method (`docs/design.md`, "The simulated GPU
 //! clock": the model is "calibratable from measurements on the wgpu backend").
 //!
 //! Each cost comes from a synthetic frame that isolates it (many draws of an
@@ -224,6 +224,7 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
         aspect: w as f32 / h as f32,
         near: 0.25,
         far: 100.0,
+        matrices: None,
     };
     let repeats = config.repeats.max(1);
     let pixels = f64::from(w) * f64::from(h);

@@ -10,11 +10,12 @@ use occlude::bench::config::{
     load_camera_path, parse_frames, parse_resolution, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES,
     DEFAULT_METHODS, DEFAULT_RESOLUTION,
 };
+use occlude::bench::paper::PAPERS;
 use occlude::bench::plot::PlotKind;
 use occlude::bench::{self, BenchConfig};
 use occlude::output_path::parse_output_path;
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::MethodOptions;
+use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::HierarchyKind;
 use occlude_scenes::import::SceneSource;
 use occlude_scenes::{AutoPath, ImportOptions, LoadError, Size};
@@ -47,8 +48,8 @@ enum Command {
     RasterBench(occlude::raster_bench::RasterBenchArgs),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
-        /// Sizes to list: small, medium, paper or all.
-        #[arg(long, default_value = "all")]
+        // Sizes to list.
+        #[arg(long, default_value = "all", help = format!("Sizes to list: {}", one_of(&[&size_names()[..], &["all"]].concat())))]
         size: String,
         /// Generator seed.
         #[arg(long, default_value_t = 1)]
@@ -76,9 +77,8 @@ struct SceneArgs {
     /// {"keyframes":[{"time":0,"position":[x,y,z],"target":[x,y,z],"fov_y_deg":60}, ...]}.
     #[arg(long, value_name = "FILE")]
     camera_path: Option<PathBuf>,
-    /// Scene size: small, medium or paper [default: small; paper with
-    /// bench --paper].
-    #[arg(long)]
+    // Scene size.
+    #[arg(long, help = format!("Scene size: {} [default: small; paper with bench --paper]", one_of(&size_names())))]
     size: Option<String>,
     /// Seed of the procedural generator.
     #[arg(long, default_value_t = 1)]
@@ -118,8 +118,9 @@ impl SceneArgs {
 struct BenchArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Comma-separated methods, in table order.
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from))]
+    // Comma-separated methods, in table order.
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_METHODS.map(String::from),
+          help = format!("Comma-separated methods, in table order, of {}", METHOD_NAMES.join(", ")))]
     methods: Vec<String>,
     /// Frames: the first N of the walkthrough sampled at --fps, or all
     /// [default: 300, the first 10 s at 30 fps; with --paper: all].
@@ -152,11 +153,10 @@ struct BenchArgs {
     /// Plot queries and state changes per frame (.svg or .png).
     #[arg(long, value_parser = parse_output_path)]
     plot_queries: Option<PathBuf>,
-    /// Run a paper's experiments instead (scenes, methods, hierarchy and GPU
-    /// model as in the paper, except ioc, which takes --gpu-model; size,
-    /// frames, resolution, seed and backend from the other options): chc,
-    /// chcpp, om or ioc.
-    #[arg(long)]
+    // Run a paper's experiments instead.
+    #[arg(long, help = format!("Run a paper's experiments instead (scenes, methods, hierarchy and GPU \
+        model as in the paper, except ioc, which takes --gpu-model; size, frames, resolution, seed and \
+        backend from the other options): {}", one_of(&PAPERS)))]
     paper: Option<String>,
     /// Worker threads for the rasterizer (default: all cores).
     #[arg(long)]
@@ -174,9 +174,10 @@ struct BenchArgs {
 struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// The method shown first: vfc, sw, chc, chcpp, om, roc, ioc, hiz or opt
-    /// (keys 1-9 and 0 switch to them in that order, M to the next).
-    #[arg(long, default_value = occlude::view::DEFAULT_METHOD)]
+    // The method shown first.
+    #[arg(long, default_value = occlude::view::DEFAULT_METHOD, help = format!(
+        "The method shown first: {} (keys 1-9 and 0 switch to them in that order, M to the next)",
+        one_of(&METHOD_NAMES)))]
     method: String,
     /// Window size, WIDTHxHEIGHT (the screenshot's size).
     #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
@@ -457,9 +458,22 @@ fn report(args: &ReportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Names as a help line lists them: "a, b or c".
+fn one_of(names: &[&str]) -> String {
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    }
+}
+
+/// Every scene size's name, smallest first.
+fn size_names() -> Vec<&'static str> {
+    Size::ALL.map(Size::name).to_vec()
+}
+
 fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
     let sizes = if size == "all" {
-        vec![Size::Small, Size::Medium, Size::Paper]
+        Size::ALL.to_vec()
     } else {
         vec![size.parse::<Size>().map_err(|e| Failure::Usage(e.into()))?]
     };

@@ -369,13 +369,6 @@ mod tests {
         }
     }
 
-    /// A fresh directory for one test's files.
-    fn temp_dir(test: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("occlude-report-{}-{test}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
     #[test]
     fn html_holds_every_method_stat_and_plot_and_nothing_external() {
         let reports = [report("city"), report("plant")];
@@ -419,7 +412,8 @@ mod tests {
 
     #[test]
     fn markdown_has_tables_and_links_plots_written_beside_it() {
-        let dir = temp_dir("md");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let mut r = report("a|b");
         r.methods[1].name = "chc_x".into();
         let path = dir.join("out.md");
@@ -442,12 +436,12 @@ mod tests {
         for svg in &written[..4] {
             assert!(std::fs::read_to_string(svg).unwrap().starts_with("<svg"), "{}", svg.display());
         }
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
     fn load_reads_an_object_or_an_array_and_names_the_file_otherwise() {
-        let dir = temp_dir("load");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let one = dir.join("one.json");
         std::fs::write(&one, serde_json::to_string(&report("city")).unwrap()).unwrap();
         assert_eq!(load(&one).unwrap(), vec![report("city")]);
@@ -485,6 +479,5 @@ mod tests {
         assert!(e.contains("text.json is not valid JSON"), "{e}");
         let e = format!("{:#}", load(&dir.join("absent.json")).unwrap_err());
         assert!(e.contains("cannot read") && e.contains("absent.json"), "{e}");
-        std::fs::remove_dir_all(dir).unwrap();
     }
 }

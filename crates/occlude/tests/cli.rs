@@ -1,6 +1,6 @@
 //! The command line as a user meets it: bad input gets a clear message and
 //! exit code 2; a short run prints the table and writes JSON in the schema of
-//! DESIGN.md.
+//! `docs/design.md`.
 
 use std::process::Command;
 

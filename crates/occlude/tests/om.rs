@@ -1,5 +1,5 @@
 //! `om` (occupancy maps + multiple occlusion queries, Staneker, Bartz and
-//! Straßer) against the correctness rule of DESIGN.md, and against
+//! Straßer) against the correctness rule of `docs/design.md`, and against
 //! stop-and-wait for the queries its first stage saves.
 
 use indicatif::ProgressBar;

@@ -11,13 +11,6 @@ fn occlude(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_occlude")).args(args).output().expect("occlude runs")
 }
 
-/// A fresh directory for one test's files.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("occlude-report-cli-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// Runs `occlude` and asserts it succeeded.
 fn occlude_ok(args: &[&str]) {
     let out = occlude(args);
@@ -39,9 +32,10 @@ fn bench_and_report(dir: &Path, markdown: Option<&Path>) -> (PathBuf, PathBuf) {
 
 #[test]
 fn bench_json_becomes_html_and_markdown_reports() {
-    let dir = temp_dir("run");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let md = dir.join("r.md");
-    let (json, html) = bench_and_report(&dir, Some(&md));
+    let (json, html) = bench_and_report(dir, Some(&md));
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let methods: Vec<&str> =
         report["methods"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
@@ -62,12 +56,12 @@ fn bench_json_becomes_html_and_markdown_reports() {
         let svg = std::fs::read_to_string(dir.join(plot)).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{plot} has no lines");
     }
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]
 fn bad_json_is_an_error_naming_the_file_with_exit_code_2() {
-    let dir = temp_dir("bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let out_html = dir.join("r.html");
     for (name, text, what) in [
         ("missing.json", r#"{"scene": "city"}"#, "missing field"),
@@ -86,7 +80,6 @@ fn bad_json_is_an_error_naming_the_file_with_exit_code_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("absent.json"));
     assert!(!out_html.exists(), "a failed report must not write its page");
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
 /// The headless Chromium on PATH, if any.
@@ -121,8 +114,9 @@ fn html_report_renders_in_headless_chromium() {
         eprintln!("SKIPPED html_report_renders_in_headless_chromium: no `chromium` on PATH (set OCCLUDE_REQUIRE_BROWSER=1 to make this a failure)");
         return;
     };
-    let dir = temp_dir("chromium");
-    let (_, html) = bench_and_report(&dir, None);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let (_, html) = bench_and_report(dir, None);
     let screenshot = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report.png");
     let _ = std::fs::remove_file(&screenshot);
     let profile = dir.join("profile");
@@ -158,5 +152,4 @@ fn html_report_renders_in_headless_chromium() {
     let near = |p: &image::Rgb<u8>| p.0.iter().zip([line.0, line.1, line.2]).all(|(&a, b)| a.abs_diff(b) <= 12);
     let line_pixels = img.pixels().filter(|p| near(p)).count();
     assert!(line_pixels > 50, "only {line_pixels} pixels in the first plot line's colour {line:?}");
-    std::fs::remove_dir_all(dir).unwrap();
 }

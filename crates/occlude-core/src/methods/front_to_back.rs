@@ -1,6 +1,6 @@
 //! Front-to-back order over hierarchy nodes: a priority queue keyed on the
 //! distance from the eye to each node's box, as the CHC paper's traversal uses
-//! for hierarchies other than the kD-tree (section 4.5).
+//! for hierarchies other than the kD-tree (section 4.4).
 
 use crate::hierarchy::NodeId;
 use glam::Vec3;

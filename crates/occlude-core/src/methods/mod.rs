@@ -304,4 +304,14 @@ impl<'a> FrameContext<'a> {
         let b = self.hierarchy.bounds(id);
         !b.is_empty() && self.frustum.intersects(b)
     }
+
+    /// Adds those of `nodes` that are in the frustum to `queue`, ordered by
+    /// their distance from the eye.
+    pub fn push_in_frustum(&self, nodes: &[NodeId], queue: &mut FrontToBack) {
+        for &n in nodes {
+            if self.in_frustum(n) {
+                queue.push_node(self.hierarchy, n, self.camera.position);
+            }
+        }
+    }
 }

@@ -1,4 +1,4 @@
-//! The ideal visible set (DESIGN.md, "opt"; the CHC++ paper's OPT): draw
+//! The ideal visible set (`docs/design.md`; the CHC++ paper's OPT): draw
 //! exactly the hierarchy leaves that have at least one visible pixel, with no
 //! query. The set comes from an oracle pass run before the frame's clock
 //! starts, so `opt` is the fastest any query-based method can be on the same
@@ -59,6 +59,16 @@ impl CullingMethod for Optimal {
 /// near 1.0): the surface point is searched on the segment this spans.
 const DEPTH_TOLERANCE: f64 = 5e-7;
 
+/// Growth of a pixel's segment box, relative to its largest coordinate: far
+/// above `f32`'s rounding (about 6e-8), so that neither the segment's
+/// rounding to `f32` nor that of the leaves' boxes can separate the box that
+/// holds the surface point from the segment.
+const SEGMENT_PAD_RELATIVE: f64 = 1e-5;
+
+/// Growth of a pixel's segment box in world units, for segments near the
+/// origin, where a relative growth vanishes.
+const SEGMENT_PAD_ABSOLUTE: f64 = 1e-4;
+
 /// Marks, per node, the leaves whose box holds the surface point of some
 /// drawn pixel. Each pixel is unprojected (in f64) to a short segment along
 /// its ray covering the depth's rounding, and every leaf whose box, slightly
@@ -83,7 +93,7 @@ fn leaves_with_visible_pixels(h: &Hierarchy, camera: &Camera, view: &OracleView)
         let z = f64::from(depth);
         let a = unproject(x, y, (z - DEPTH_TOLERANCE).max(0.0));
         let b = unproject(x, y, (z + DEPTH_TOLERANCE).min(1.0));
-        let pad = 1e-5 * a.abs().max(b.abs()).max_element() + 1e-4;
+        let pad = SEGMENT_PAD_RELATIVE * a.abs().max(b.abs()).max_element() + SEGMENT_PAD_ABSOLUTE;
         let segment = Aabb::new(to_vec3(a.min(b) - DVec3::splat(pad)), to_vec3(a.max(b) + DVec3::splat(pad)));
         stack.push(h.root());
         while let Some(n) = stack.pop() {

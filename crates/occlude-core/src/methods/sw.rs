@@ -16,11 +16,8 @@ impl CullingMethod for StopAndWait {
 
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let h = ctx.hierarchy;
-        let eye = ctx.camera.position;
         let mut queue = FrontToBack::new();
-        if ctx.in_frustum(h.root()) {
-            queue.push_node(h, h.root(), eye);
-        }
+        ctx.push_in_frustum(&[h.root()], &mut queue);
         while let Some(node) = queue.pop() {
             backend.traverse(1);
             let query = backend.issue_query(std::slice::from_ref(h.bounds(node)));
@@ -30,11 +27,7 @@ impl CullingMethod for StopAndWait {
             if h.is_leaf(node) {
                 ctx.draw_leaf(backend, node);
             } else {
-                for &c in h.children(node) {
-                    if ctx.in_frustum(c) {
-                        queue.push_node(h, c, eye);
-                    }
-                }
+                ctx.push_in_frustum(h.children(node), &mut queue);
             }
         }
     }

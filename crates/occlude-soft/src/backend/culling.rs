@@ -77,7 +77,7 @@ impl SoftBackend<'_> {
     /// far has run and the copy has come back.
     fn read_back(&mut self) {
         self.flush();
-        self.stats.readbacks += 1;
+        self.count.stats.readbacks += 1;
         let ready = self.clock.gpu_free + self.model.readback_us;
         self.clock.wait_until(ready);
     }
@@ -92,7 +92,7 @@ impl SoftBackend<'_> {
     /// everything recorded before it has run.
     fn dispatch_costing(&mut self, work_us: f64) {
         self.flush();
-        self.stats.dispatches += 1;
+        self.count.stats.dispatches += 1;
         self.clock.cpu_work(self.model.cpu_dispatch_us);
         self.culling_work(self.model.gpu_dispatch_us + work_us);
     }
@@ -119,15 +119,15 @@ impl SoftBackend<'_> {
     /// (everything recorded before it has run).
     fn culling_work(&mut self, us: f64) {
         self.clock.gpu_command(self.clock.cpu, us);
-        charge_gpu_time(&mut self.stats, true, us);
+        charge_gpu_time(&mut self.count.stats, true, us);
     }
 
     /// Records an indirect multi-draw command: its CPU cost and its render
     /// state.
     fn indirect_draw(&mut self, state: RenderState) {
-        self.set_state(state);
+        let changed = self.count.indirect_draw(state);
+        self.charge_state_change(changed);
         self.clock.cpu_work(self.model.cpu_dispatch_us);
-        self.stats.indirect_draws += 1;
     }
 }
 
@@ -171,7 +171,7 @@ impl GpuCulling for SoftBackend<'_> {
         // The indirect draw of the raster list, one box per instance.
         self.indirect_draw(RenderState::Query);
         self.culling_work(self.model.gpu_indirect_draw_us);
-        self.stats.query_boxes += raster.len() as u64;
+        self.count.stats.query_boxes += raster.len() as u64;
         for (_, b) in &raster {
             let first = self.triangles.len();
             self.push_box_triangles(b);
@@ -230,7 +230,7 @@ impl GpuCulling for SoftBackend<'_> {
         }
         let set = &mut self.device.flags[flags.0 as usize];
         visible.into_iter().for_each(|id| set[id as usize] = true);
-        self.stats.query_boxes += tested.len() as u64;
+        self.count.stats.query_boxes += tested.len() as u64;
         let m = &self.model;
         let work_ns = count as f64 * m.gpu_compute_item_ns
             + tested.len() as f64 * m.gpu_hiz_box_ns
@@ -281,7 +281,7 @@ impl GpuCulling for SoftBackend<'_> {
         self.dispatch(ids.len());
         self.indirect_draw(RenderState::Indirect);
         for &i in &ids {
-            self.stats.indirect_draw_calls += 1;
+            self.count.stats.indirect_draw_calls += 1;
             self.draw_instance(i, self.model.gpu_indirect_draw_us);
         }
         self.device.lists[list.0 as usize].ids = ids;

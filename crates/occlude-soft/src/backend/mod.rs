@@ -18,8 +18,8 @@ use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest,
 use glam::{Mat4, Vec4};
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, Camera, CpuCullingWork, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView, QueryHandle,
-    RenderState, Scene, StateTracker,
+    Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView,
+    QueryHandle, RenderState, Scene,
 };
 use std::time::Instant;
 
@@ -67,15 +67,13 @@ pub struct SoftBackend<'s> {
     camera: Option<Camera>,
     view_projection: Mat4,
     clock: SimClock,
-    stats: FrameStats,
-    state: StateTracker,
+    count: FrameCounter,
     pending_state_us: f64,
     triangles: Vec<[Vec4; 3]>,
     clip_scratch: Vec<Vec4>,
     commands: Vec<Command>,
     ops: Vec<GpuOp>,
     queries: Vec<QueryState>,
-    drawn: Vec<bool>,
     frame_start: Instant,
     device: culling::Device,
 }
@@ -92,15 +90,13 @@ impl<'s> SoftBackend<'s> {
             camera: None,
             view_projection: Mat4::IDENTITY,
             clock: SimClock::default(),
-            stats: FrameStats::default(),
-            state: StateTracker::default(),
+            count: FrameCounter::new(scene.instances.len()),
             pending_state_us: 0.0,
             triangles: Vec::new(),
             clip_scratch: Vec::new(),
             commands: Vec::new(),
             ops: Vec::new(),
             queries: Vec::new(),
-            drawn: vec![false; scene.instances.len()],
             frame_start: Instant::now(),
             device: culling::Device::default(),
         }
@@ -127,10 +123,10 @@ impl<'s> SoftBackend<'s> {
         }
     }
 
-    /// Switches render state if needed, charging a state change.
-    fn set_state(&mut self, state: RenderState) {
-        if self.state.switch(state) {
-            self.stats.state_changes += 1;
+    /// Charges a render-state change's costs when `changed` (what
+    /// [`FrameCounter`] answered).
+    fn charge_state_change(&mut self, changed: bool) {
+        if changed {
             self.clock.cpu_work(self.model.cpu_state_change_us);
             self.pending_state_us += self.model.gpu_state_change_us;
         }
@@ -180,7 +176,7 @@ impl<'s> SoftBackend<'s> {
         for (op, r) in self.ops.iter().zip(&results) {
             let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
             let end = self.clock.gpu_command(op.issued_us, cost_us);
-            charge_gpu_time(&mut self.stats, op.cull, cost_us);
+            charge_gpu_time(&mut self.count.stats, op.cull, cost_us);
             match op.query {
                 Some(q) => {
                     let q = &mut self.queries[q as usize];
@@ -192,7 +188,7 @@ impl<'s> SoftBackend<'s> {
                         r.passed
                     };
                 }
-                None if !op.cull => self.stats.fragments += r.fragments,
+                None if !op.cull => self.count.stats.fragments += r.fragments,
                 // A batched box test: its caller reads the counts.
                 None => {}
             }
@@ -207,11 +203,7 @@ impl<'s> SoftBackend<'s> {
     /// its triangles and fragments; counts it.
     fn draw_instance(&mut self, i: u32, fixed_us: f64) {
         let triangles = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].triangle_count() as u64;
-        self.stats.draw_calls += 1;
-        self.stats.triangles += triangles;
-        if !std::mem::replace(&mut self.drawn[i as usize], true) {
-            self.stats.visible_objects += 1;
-        }
+        self.count.draw(i, triangles);
         let first = self.triangles.len();
         self.push_instance_triangles(i);
         let op = GpuOp {
@@ -239,17 +231,16 @@ impl Backend for SoftBackend<'_> {
         self.view_projection = camera.view_projection();
         self.depth.clear();
         self.clock = SimClock::default();
-        self.stats = FrameStats::default();
-        self.state = StateTracker::default();
+        self.count.begin_frame();
         self.pending_state_us = 0.0;
         self.queries.clear();
-        self.drawn.fill(false);
         self.frame_start = Instant::now();
     }
 
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
-            self.set_state(RenderState::Material(self.scene.instances[i as usize].material));
+            let changed = self.count.set_state(RenderState::Material(self.scene.instances[i as usize].material));
+            self.charge_state_change(changed);
             self.clock.cpu_work(self.model.cpu_draw_call_us);
             self.draw_instance(i, self.model.gpu_draw_call_us);
         }
@@ -257,10 +248,9 @@ impl Backend for SoftBackend<'_> {
 
     fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
         let camera = self.camera.expect("issue_query outside a frame");
-        self.set_state(RenderState::Query);
+        let changed = self.count.query(boxes.len());
+        self.charge_state_change(changed);
         self.clock.cpu_work(self.model.cpu_query_us);
-        self.stats.queries += 1;
-        self.stats.query_boxes += boxes.len() as u64;
         let handle = self.queries.len() as u32;
         let padded = query_boxes(&camera, boxes);
         let forced_visible = padded.is_none();
@@ -293,7 +283,7 @@ impl Backend for SoftBackend<'_> {
     }
 
     fn traverse(&mut self, nodes: u64) {
-        self.stats.traversal_steps += nodes;
+        self.count.traverse(nodes);
         self.clock.cpu_work(nodes as f64 * self.model.cpu_node_us);
     }
 
@@ -312,7 +302,7 @@ impl Backend for SoftBackend<'_> {
     fn end_frame(&mut self) -> FrameStats {
         self.flush();
         let c = &self.clock;
-        let mut s = self.stats;
+        let mut s = self.count.stats;
         s.frame_ms = c.frame_end() * 1e-3;
         s.cpu_ms = (c.cpu - c.wait) * 1e-3;
         s.gpu_ms = c.gpu_busy * 1e-3;

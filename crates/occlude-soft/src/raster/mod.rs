@@ -21,9 +21,10 @@
 //!    bounding boxes touch;
 //! 2. `tile`, in parallel over tiles: each tile runs its triangles in command order,
 //!    on its own pixels; per triangle, `hiz` rejects the 8x8 blocks whose stored
-//!    depths it cannot pass, `span` walks its exact row spans incrementally, and
-//!    `shade` depth-tests them 8 pixels at a time (AVX2 where the CPU has it, a
-//!    scalar loop otherwise, with identical results);
+//!    depths it cannot pass; with AVX2 `avx2` then tests the window's pixels 8
+//!    at a time, otherwise (and for the windows `avx2` declines) `span` walks
+//!    its exact row spans incrementally and `shade` depth-tests them one pixel
+//!    at a time, with identical results;
 //! 3. the tiles' fragment counts are summed per command.
 
 #[cfg(target_arch = "x86_64")]

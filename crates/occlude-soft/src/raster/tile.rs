@@ -1,6 +1,6 @@
 //! Rasterization of set-up triangles inside one screen tile: per triangle, the
-//! hierarchical-depth rejection of its blocks, then its exact row spans, shaded 8
-//! pixels at a time.
+//! hierarchical-depth rejection of its blocks, then its pixels: 8 at a time with
+//! AVX2, else along its exact row spans one at a time.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

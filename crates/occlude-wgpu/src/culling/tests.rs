@@ -31,6 +31,7 @@ fn camera() -> Camera {
         aspect: 1.0,
         near: 0.25,
         far: 100.0,
+        matrices: None,
     }
 }
 

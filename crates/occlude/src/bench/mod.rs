@@ -1,6 +1,6 @@
 //! `occlude bench`: every method on the same scene, hierarchy and camera path,
 //! with the comparison table of the CHC paper (Table 1) and JSON/CSV output in
-//! the schema of DESIGN.md.
+//! the schema of `docs/design.md`.
 
 pub mod config;
 pub mod dump;

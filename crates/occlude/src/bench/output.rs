@@ -1,4 +1,4 @@
-//! Writing a report as JSON (DESIGN.md schema) or CSV (one row per method and
+//! Writing a report as JSON (the schema in `docs/design.md`) or CSV (one row per method and
 //! frame, for spreadsheets and plotting tools).
 
 use super::summary::BenchReport;

@@ -276,7 +276,6 @@ mod tests {
     use super::*;
     use crate::bench::summary::SceneStats;
     use std::collections::BTreeMap;
-    use std::path::PathBuf;
 
     /// A method whose frames have the given frame times, queries and state changes.
     fn method(name: &str, frames: &[(f64, u64, u64)]) -> MethodSummary {
@@ -350,13 +349,6 @@ mod tests {
         report(vec![method("vfc", &frames(20.0, 0)), method("sw", &frames(12.0, 30)), method("chc", &frames(6.0, 10))])
     }
 
-    /// A fresh directory for one test's files.
-    fn temp_dir(test: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("occlude-plot-{}-{test}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
     /// Pixels of the PNG at `path` that are not white, and whether any has
     /// exactly `colour`.
     fn png_ink(path: &Path, colour: RGBColor) -> (usize, bool) {
@@ -371,7 +363,8 @@ mod tests {
 
     #[test]
     fn svg_plots_name_every_method_and_draw_lines() {
-        let dir = temp_dir("svg");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let r = sample();
         for (kind, file, label) in [
             (PlotKind::FrameTime, "t.svg", "simulated frame time (ms)"),
@@ -390,12 +383,12 @@ mod tests {
             let panels = if kind == PlotKind::FrameTime { 1 } else { 2 };
             assert!(lines >= 2 * r.methods.len() * panels, "{file}: only {lines} polylines");
         }
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
     fn wgpu_frame_times_are_not_called_simulated() {
-        let dir = temp_dir("wgpu");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let mut r = sample();
         r.backend = "wgpu".into();
         let path = dir.join("t.svg");
@@ -403,12 +396,12 @@ mod tests {
         let svg = std::fs::read_to_string(&path).unwrap();
         assert!(svg.contains("\nframe time (ms)\n</text>"));
         assert!(!svg.contains("simulated"));
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
     fn png_plots_are_drawn_in_method_colours() {
-        let dir = temp_dir("png");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let r = sample();
         for (kind, file) in [(PlotKind::FrameTime, "t.png"), (PlotKind::QueriesAndStateChanges, "q.PNG")] {
             let path = dir.join(file);
@@ -419,14 +412,14 @@ mod tests {
             assert!(ink < total / 2, "{file}: {ink} of {total} pixels drawn");
             assert!(has_last_colour, "{file}: no pixel in the third method's colour");
         }
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
     fn png_text_is_rendered() {
         // The same chart with and without a long title: the title's glyphs
         // must add ink, which they would not if text were silently dropped.
-        let dir = temp_dir("text");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let mut r = sample();
         write_plot(&r, PlotKind::FrameTime, &dir.join("a.png")).unwrap();
         r.scene = "a much longer scene name that takes a lot of room".into();
@@ -434,7 +427,6 @@ mod tests {
         let (short, _) = png_ink(&dir.join("a.png"), BLACK);
         let (long, _) = png_ink(&dir.join("b.png"), BLACK);
         assert!(long > short + 500, "title text added {} pixels", long as i64 - short as i64);
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
@@ -455,7 +447,8 @@ mod tests {
 
     #[test]
     fn empty_and_zero_reports_plot() {
-        let dir = temp_dir("empty");
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
         let zeros = [(0.0, 0, 0); 5];
         // Zero frames, zero-time frames, and zeros beside a wide spread (log axis).
         let reports = [
@@ -474,7 +467,6 @@ mod tests {
                 }
             }
         }
-        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Runs the methods frame by frame and checks each against view-frustum
-//! culling's depth image (the correctness rule of DESIGN.md).
+//! culling's depth image (the correctness rule of `docs/design.md`).
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
@@ -183,8 +183,7 @@ pub fn load_scene(config: &BenchConfig) -> Result<Scene> {
 /// soft rasterizer's parallel calls then start and end on the thread that
 /// makes them, where from outside a pool each call is handed to the pool's
 /// threads and the caller woken when they finish, and between calls their
-/// spinning competes with the traversal for the cores. Measured on 2 cores:
-/// the default `occlude bench` 10-16 % faster in wall time, `sw` 28 %.
+/// spinning competes with the traversal for the cores.
 pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     if rayon::current_thread_index().is_some() {
         return run_scene_here(scene, config, progress);

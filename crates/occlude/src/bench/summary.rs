@@ -1,4 +1,4 @@
-//! Per-method averages over a walkthrough, in the JSON schema of DESIGN.md.
+//! Per-method averages over a walkthrough, in the JSON schema of `docs/design.md`.
 
 use super::config::{BackendKind, BenchConfig};
 use super::runner::BenchRun;

@@ -91,13 +91,8 @@ impl FlyCamera {
 
     /// The camera for an image of aspect ratio `aspect`.
     pub fn camera(&self, aspect: f32, near: f32, far: f32) -> Camera {
-        camera_at(&self.keyframe(0.0), aspect, near, far)
+        self.keyframe(0.0).camera(aspect, near, far)
     }
-}
-
-/// The camera of a keyframe, as the walkthrough samples it (y up).
-pub fn camera_at(k: &Keyframe, aspect: f32, near: f32, far: f32) -> Camera {
-    Camera { position: k.position, target: k.target, up: Vec3::Y, fov_y_deg: k.fov_y_deg, aspect, near, far }
 }
 
 /// Playing a walkthrough: seconds since the path's first keyframe.

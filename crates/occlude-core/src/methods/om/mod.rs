@@ -27,7 +27,7 @@
 //! the GPU", and in stage 2 it only chooses which queries share a round. Any
 //! error in the map therefore costs time (a needless query, a needless draw,
 //! a redundant query result), never a pixel. The correctness rule of
-//! DESIGN.md holds by this argument, and `crates/occlude/tests/om.rs` checks
+//! `docs/design.md` holds by this argument, and `crates/occlude/tests/om.rs` checks
 //! it on every frame of every small scene.
 //!
 //! # Marking rule (stage 1)
@@ -161,15 +161,6 @@ impl OccupancyMap {
     }
 }
 
-/// Adds the children of `node` that are in the frustum to `queue`.
-fn push_children(ctx: &FrameContext<'_>, node: NodeId, queue: &mut FrontToBack) {
-    for &c in ctx.hierarchy.children(node) {
-        if ctx.in_frustum(c) {
-            queue.push_node(ctx.hierarchy, c, ctx.camera.position);
-        }
-    }
-}
-
 /// Adds the screen rectangle of box `b` as a node of `class` to `view`, when
 /// a view is being recorded and some of the box lies in front of the eye.
 fn note(view: &mut Option<DebugView>, class: NodeClass, view_projection: &Mat4, b: &Aabb) {
@@ -201,9 +192,7 @@ impl CullingMethod for OccupancyMap {
         // Stage 1: draw what reaches uncovered screen space, without queries.
         let mut queue = FrontToBack::new();
         let mut pending = FrontToBack::new();
-        if ctx.in_frustum(h.root()) {
-            queue.push_node(h, h.root(), ctx.camera.position);
-        }
+        ctx.push_in_frustum(&[h.root()], &mut queue);
         let mut stage1_no_query = 0u64;
         while let Some(node) = queue.pop() {
             backend.traverse(1);
@@ -219,7 +208,7 @@ impl CullingMethod for OccupancyMap {
                     self.map.mark(self.map.rect_of(&vp, &ctx.scene.instances[i as usize].bounds));
                 }
             } else {
-                push_children(ctx, node, &mut queue);
+                ctx.push_in_frustum(h.children(node), &mut queue);
             }
         }
 
@@ -258,7 +247,7 @@ impl CullingMethod for OccupancyMap {
                     ctx.draw_leaf(backend, node);
                     note(&mut view, NodeClass::DrawnAfterQuery, &vp, h.bounds(node));
                 } else {
-                    push_children(ctx, node, &mut next);
+                    ctx.push_in_frustum(h.children(node), &mut next);
                 }
             }
             std::mem::swap(&mut pending, &mut next);

@@ -244,6 +244,7 @@ mod tests {
             aspect: 4.0 / 3.0,
             near: 0.1,
             far: 100.0,
+            matrices: None,
         }
     }
 
