@@ -4,10 +4,10 @@
 //! exactly the leaves holding an instance that the oracle sees.
 
 use indicatif::ProgressBar;
-use occlude::bench::runner::{cameras, run_scene};
-use occlude::bench::BenchConfig;
+use occlude::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
+use occlude::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions};
-use occlude_core::{Backend, FrameContext, Hierarchy, HierarchyKind, Scene};
+use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Scene};
 use occlude_scenes::import::{import, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -281,17 +281,48 @@ fn node_seen_from_inside_its_box_is_never_culled() {
 fn simulated_figures_are_identical_between_runs() {
     let cfg = BenchConfig { frames: 20, resolution: (320, 240), ..config("city", HierarchyKind::Bvh) };
     let scene = small("city");
-    let strip = |mut r: occlude::bench::BenchReport| {
-        r.scene_stats.build_wall_ms = 0.0;
-        for m in &mut r.methods {
-            m.wall_ms = 0.0;
-            for f in &mut m.per_frame {
-                f.wall_ms = 0.0;
-            }
-        }
-        serde_json::to_string(&r).unwrap()
-    };
     let a = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
     let b = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
-    assert_eq!(strip(a), strip(b));
+    assert_eq!(simulated(a), simulated(b));
+}
+
+/// A report's JSON without its real times (which vary between runs).
+fn simulated(mut r: BenchReport) -> String {
+    r.scene_stats.build_wall_ms = 0.0;
+    for m in &mut r.methods {
+        m.wall_ms = 0.0;
+        for f in &mut m.per_frame {
+            f.wall_ms = 0.0;
+        }
+    }
+    serde_json::to_string(&r).unwrap()
+}
+
+#[test]
+fn a_variant_lane_gives_the_figures_of_a_run_of_its_own() {
+    // `--paper` runs a method's settings as lanes beside the methods, on the
+    // same frames and `vfc` reference: each must measure what a run with
+    // only that setting measures.
+    let scene = small("city");
+    let cfg = BenchConfig {
+        methods: vec!["vfc".into(), "chc".into()],
+        frames: 20,
+        resolution: (160, 120),
+        ..config("city", HierarchyKind::KdTree)
+    };
+    let items = ["chc.tav=2", "chc.nvp=25"];
+    let variant = Variant { method: "chc".into(), options: MethodOptions::parse(&items).unwrap() };
+    let run = run_scene_with_variants(&scene, &cfg, &[variant], &ProgressBar::hidden()).unwrap();
+    assert_eq!(run.variants.len(), 1);
+    let lane = BenchReport::with_methods(&run, &run.variants, &cfg);
+
+    let own =
+        BenchConfig { methods: vec!["chc".into()], options: MethodOptions::parse(&items).unwrap(), ..cfg.clone() };
+    let alone = run_scene(&scene, &own, &ProgressBar::hidden()).unwrap().report(&own);
+    assert_eq!(lane.methods[0].params.get("tav").map(String::as_str), Some("2"), "{:?}", lane.methods[0].params);
+    // The variant's frames differ from the defaults', so the comparison
+    // below could fail.
+    let frame_ms = |frames: &[FrameStats]| frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>();
+    assert_ne!(frame_ms(&run.methods[1].frames), frame_ms(&run.variants[0].frames));
+    assert_eq!(simulated(lane), simulated(alone));
 }
