@@ -4,6 +4,7 @@
 //! exactly the leaves holding an instance that the oracle sees.
 
 use indicatif::ProgressBar;
+use occlude::bench::ideal::IDEAL;
 use occlude::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
 use occlude::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions};
@@ -37,8 +38,15 @@ fn conservative_methods_match_vfc_on_every_frame() {
     for name in SCENE_NAMES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
-            let cfg = config(name, hierarchy);
+            // `ideal` (the CHC paper's ideal) is no method of its own: the
+            // runner records the draw calls `sw` makes in the frame and
+            // `ideal` replays them on its own backend, without queries. Its
+            // depth image checked against vfc's, as every lane's is, checks
+            // that the replay draws the whole of `sw`'s visible set.
+            let mut cfg = config(name, hierarchy);
+            cfg.methods.push(IDEAL.into());
             let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+            assert_eq!(run.methods.last().map(|m| m.name.as_str()), Some(IDEAL));
             for m in &run.methods {
                 for (f, stats) in m.frames.iter().enumerate() {
                     assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
