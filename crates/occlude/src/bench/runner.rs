@@ -352,3 +352,26 @@ impl BenchRun {
         BenchReport::new(self, config)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_variant_with_options_its_method_lacks_is_refused_with_the_option_named() {
+        let variant = |method: &str, items: &[&str]| Variant {
+            method: method.into(),
+            options: MethodOptions::parse(items).unwrap(),
+        };
+        assert!(variant("chc", &["chc.tav=2", "chc.nvp=25"]).create().is_ok());
+        for (v, needle) in [
+            (variant("chc", &["sw.tav=2"]), "sw.tav"),
+            (variant("chc", &["chc.nosuchkey=1"]), "nosuchkey"),
+            (variant("chc", &["chc.tav=many"]), "many"),
+            (variant("magic", &[]), "magic"),
+        ] {
+            let e = v.create().err().expect("refused").to_string();
+            assert!(e.contains(needle), "{needle}: {e}");
+        }
+    }
+}
