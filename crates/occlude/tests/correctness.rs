@@ -5,10 +5,13 @@
 
 use glam::Mat4;
 use indicatif::ProgressBar;
-use occlude::bench::runner::{cameras, differing_pixels, far_plane, render_frame, run_scene};
-use occlude::bench::BenchConfig;
-use occlude_core::methods::{create, DrawnSet, MethodOptions};
-use occlude_core::{Backend, Camera, FrameContext, Hierarchy, HierarchyKind, Scene};
+use occlude::bench::ideal::IDEAL;
+use occlude::bench::runner::{
+    cameras, differing_pixels, far_plane, render_frame, run_scene, run_scene_with_variants, Variant,
+};
+use occlude::bench::{BenchConfig, BenchReport};
+use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
+use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, HierarchyKind, Scene};
 use occlude_scenes::import::{import, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -38,8 +41,15 @@ fn conservative_methods_match_vfc_on_every_frame() {
     for name in SCENE_NAMES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
-            let cfg = config(name, hierarchy);
+            // `ideal` (the CHC paper's ideal) is no method of its own: the
+            // runner records the draw calls `sw` makes in the frame and
+            // `ideal` replays them on its own backend, without queries. Its
+            // depth image checked against vfc's, as every lane's is, checks
+            // that the replay draws the whole of `sw`'s visible set.
+            let mut cfg = config(name, hierarchy);
+            cfg.methods.push(IDEAL.into());
             let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+            assert_eq!(run.methods.last().map(|m| m.name.as_str()), Some(IDEAL));
             for m in &run.methods {
                 for (f, stats) in m.frames.iter().enumerate() {
                     assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
@@ -308,19 +318,50 @@ fn node_seen_from_inside_its_box_is_never_culled() {
 fn simulated_figures_are_identical_between_runs() {
     let cfg = BenchConfig { frames: 20, resolution: (320, 240), ..config("city", HierarchyKind::Bvh) };
     let scene = small("city");
-    let strip = |mut r: occlude::bench::BenchReport| {
-        r.scene_stats.build_wall_ms = 0.0;
-        for m in &mut r.methods {
-            m.wall_ms = 0.0;
-            for f in &mut m.per_frame {
-                f.wall_ms = 0.0;
-            }
-        }
-        serde_json::to_string(&r).unwrap()
-    };
     let a = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
     let b = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
-    assert_eq!(strip(a), strip(b));
+    assert_eq!(simulated(a), simulated(b));
+}
+
+/// A report's JSON without its real times (which vary between runs).
+fn simulated(mut r: BenchReport) -> String {
+    r.scene_stats.build_wall_ms = 0.0;
+    for m in &mut r.methods {
+        m.wall_ms = 0.0;
+        for f in &mut m.per_frame {
+            f.wall_ms = 0.0;
+        }
+    }
+    serde_json::to_string(&r).unwrap()
+}
+
+#[test]
+fn a_variant_lane_gives_the_figures_of_a_run_of_its_own() {
+    // `--paper` runs a method's settings as lanes beside the methods, on the
+    // same frames and `vfc` reference: each must measure what a run with
+    // only that setting measures.
+    let scene = small("city");
+    let cfg = BenchConfig {
+        methods: vec!["vfc".into(), "chc".into()],
+        frames: 20,
+        resolution: (160, 120),
+        ..config("city", HierarchyKind::KdTree)
+    };
+    let items = ["chc.tav=2", "chc.nvp=25"];
+    let variant = Variant { method: "chc".into(), options: MethodOptions::parse(&items).unwrap() };
+    let run = run_scene_with_variants(&scene, &cfg, &[variant], &ProgressBar::hidden()).unwrap();
+    assert_eq!(run.variants.len(), 1);
+    let lane = BenchReport::with_methods(&run, &run.variants, &cfg);
+
+    let own =
+        BenchConfig { methods: vec!["chc".into()], options: MethodOptions::parse(&items).unwrap(), ..cfg.clone() };
+    let alone = run_scene(&scene, &own, &ProgressBar::hidden()).unwrap().report(&own);
+    assert_eq!(lane.methods[0].params.get("tav").map(String::as_str), Some("2"), "{:?}", lane.methods[0].params);
+    // The variant's frames differ from the defaults', so the comparison
+    // below could fail.
+    let frame_ms = |frames: &[FrameStats]| frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>();
+    assert_ne!(frame_ms(&run.methods[1].frames), frame_ms(&run.variants[0].frames));
+    assert_eq!(simulated(lane), simulated(alone));
 }
 
 /// Cameras from matrices: each walkthrough camera's view with a reverse-Z
@@ -359,8 +400,7 @@ fn conservative_methods_match_vfc_with_cameras_from_matrices() {
     let cfg = BenchConfig { frames: 12, resolution: (240, 180), ..config(name, HierarchyKind::Bvh) };
     let h = Hierarchy::build(&scene, HierarchyKind::Bvh, cfg.build);
     let (w, ht) = cfg.resolution;
-    let lanes = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"];
-    let mut lanes: Vec<_> = lanes
+    let mut lanes: Vec<_> = METHOD_NAMES
         .iter()
         .map(|m| {
             let backend = SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone());

@@ -27,7 +27,7 @@ use super::config::BenchConfig;
 use super::ideal::IDEAL;
 use super::paper_tables::{PaperTables, Row, Table};
 use super::published;
-use super::runner::run_scene;
+use super::runner::{run_scene, run_scene_with_variants, Variant};
 use super::summary::BenchReport;
 use anyhow::Result;
 use indicatif::ProgressBar;
@@ -156,28 +156,32 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         };
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
-        let report = run_labelled(&scene, &config, progress, "methods")?;
+        // The variants other than the defaults (the first table's row of the
+        // method) run as lanes of the same run: `vfc` renders once per scene.
+        let variants = e
+            .variants
+            .iter()
+            .filter(|opts| !opts.is_empty())
+            .map(|opts| Ok(Variant { method: e.varied.into(), options: MethodOptions::parse(opts)? }))
+            .collect::<Result<Vec<_>>>()?;
+        progress.set_message(format!("{scene_name} {}: methods and {} variants", config.size, variants.len()));
+        let run = run_scene_with_variants(&scene, &config, &variants, progress)?;
+        let report = run.report(&config);
         compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published[0])));
         let defaults = report.methods.iter().find(|m| m.name == e.varied).cloned();
         reports.push(report);
+        let mut lanes = run.variants.iter();
         for opts in e.variants {
-            let options = opts.join(" ");
-            let summary = match (&defaults, opts.is_empty()) {
-                (Some(m), true) => m.clone(),
-                _ => {
-                    let config = BenchConfig {
-                        methods: vec![e.varied.into()],
-                        options: MethodOptions::parse(opts)?,
-                        ..config.clone()
-                    };
-                    let label = if opts.is_empty() { "defaults" } else { options.as_str() };
-                    let report = run_labelled(&scene, &config, progress, label)?;
-                    let m = report.methods[0].clone();
-                    reports.push(report);
-                    m
-                }
+            let summary = if opts.is_empty() {
+                defaults.clone().expect("every experiment's varied method is one of its methods")
+            } else {
+                let lane = lanes.next().expect("one lane per variant");
+                let report = BenchReport::with_methods(&run, std::slice::from_ref(lane), &config);
+                let m = report.methods[0].clone();
+                reports.push(report);
+                m
             };
-            varied.push(Row::new(scene_name, &summary, &options, published[1]));
+            varied.push(Row::new(scene_name, &summary, &opts.join(" "), published[1]));
         }
     }
     let tables = vec![Table::new(e.tables[0], published[0], compared), Table::new(e.tables[1], published[1], varied)];

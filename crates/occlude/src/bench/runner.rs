@@ -7,7 +7,7 @@ use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL};
 use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
-use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet};
+use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
 use occlude_core::{Backend, Camera, CullingMethod, FrameContext, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -21,6 +21,9 @@ pub struct BenchRun {
     pub scene: SceneStats,
     /// Per method (in configuration order), its per-frame statistics.
     pub methods: Vec<MethodRun>,
+    /// Per variant given to [`run_scene_with_variants`] (in that order), its
+    /// per-frame statistics (empty for [`run_scene`]).
+    pub variants: Vec<MethodRun>,
     /// View-frustum culling's frames (the reference, always run).
     pub reference: Vec<FrameStats>,
     /// The decisions of frame [`BenchConfig::dump_frame`] of each method that
@@ -83,6 +86,28 @@ pub struct MethodRun {
     /// The method's own counters (`CullingMethod::counters`), one value per
     /// frame each.
     pub counters: BTreeMap<String, Vec<f64>>,
+}
+
+/// A method with options of its own, run as one more lane beside the
+/// configured methods, on the same frames and checked against the same
+/// `vfc` reference: how a paper's table of one method's settings is made
+/// without rendering the reference again per setting.
+#[derive(Clone, Debug)]
+pub struct Variant {
+    /// The method, as `--methods` names it.
+    pub method: String,
+    /// Its options (each `method.key=value` naming [`Self::method`]); the
+    /// configuration's own options do not apply to it.
+    pub options: MethodOptions,
+}
+
+impl Variant {
+    /// The variant's method, built with its options; fails on an unknown
+    /// method, or an option naming another method or a key the method lacks.
+    fn create(&self) -> Result<BuiltMethod> {
+        self.options.check_methods(std::slice::from_ref(&self.method))?;
+        Ok(create(&self.method, &self.options)?)
+    }
 }
 
 /// One method with its own backend and state across frames.
@@ -185,16 +210,33 @@ pub fn load_scene(config: &BenchConfig) -> Result<Scene> {
 /// threads and the caller woken when they finish, and between calls their
 /// spinning competes with the traversal for the cores.
 pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
-    if rayon::current_thread_index().is_some() {
-        return run_scene_here(scene, config, progress);
-    }
-    let pool = rayon::ThreadPoolBuilder::new().build().context("cannot start the thread pool")?;
-    pool.install(|| run_scene_here(scene, config, progress))
+    run_scene_with_variants(scene, config, &[], progress)
 }
 
-/// [`run_scene`] on the calling thread.
-fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+/// [`run_scene`] with `variants` run as further lanes after the configured
+/// methods ([`BenchRun::variants`]).
+pub fn run_scene_with_variants(
+    scene: &Scene,
+    config: &BenchConfig,
+    variants: &[Variant],
+    progress: &ProgressBar,
+) -> Result<BenchRun> {
+    if rayon::current_thread_index().is_some() {
+        return run_scene_here(scene, config, variants, progress);
+    }
+    let pool = rayon::ThreadPoolBuilder::new().build().context("cannot start the thread pool")?;
+    pool.install(|| run_scene_here(scene, config, variants, progress))
+}
+
+/// [`run_scene_with_variants`] on the calling thread.
+fn run_scene_here(
+    scene: &Scene,
+    config: &BenchConfig,
+    variants: &[Variant],
+    progress: &ProgressBar,
+) -> Result<BenchRun> {
     config.validate()?;
+    let variant_methods = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>()?;
     let hierarchy = Hierarchy::build(scene, config.hierarchy, config.build);
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
@@ -222,6 +264,7 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    lanes.extend(variant_methods.into_iter().map(|built| Lane::new(built, renderer.backend(scene, config))));
     for lane in &mut lanes {
         let method = lane.built.method.as_ref();
         if let Err(e) = check_support(method, lane.backend.as_mut()) {
@@ -288,6 +331,7 @@ fn run_scene_here(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -
     Ok(BenchRun {
         scene: SceneStats::new(scene, &hierarchy, finished),
         methods,
+        variants: lanes.collect(),
         reference: reference.frames,
         dumps,
         adapter: renderer.adapter(),
@@ -305,5 +349,28 @@ impl BenchRun {
     /// The summary tables and JSON are made from.
     pub fn report(&self, config: &BenchConfig) -> BenchReport {
         BenchReport::new(self, config)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_variant_with_options_its_method_lacks_is_refused_with_the_option_named() {
+        let variant = |method: &str, items: &[&str]| Variant {
+            method: method.into(),
+            options: MethodOptions::parse(items).unwrap(),
+        };
+        assert!(variant("chc", &["chc.tav=2", "chc.nvp=25"]).create().is_ok());
+        for (v, needle) in [
+            (variant("chc", &["sw.tav=2"]), "sw.tav"),
+            (variant("chc", &["chc.nosuchkey=1"]), "nosuchkey"),
+            (variant("chc", &["chc.tav=many"]), "many"),
+            (variant("magic", &[]), "magic"),
+        ] {
+            let e = v.create().err().expect("refused").to_string();
+            assert!(e.contains(needle), "{needle}: {e}");
+        }
     }
 }

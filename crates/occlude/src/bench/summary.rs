@@ -1,7 +1,7 @@
 //! Per-method averages over a walkthrough, in the JSON schema of `docs/design.md`.
 
 use super::config::{BackendKind, BenchConfig};
-use super::runner::BenchRun;
+use super::runner::{BenchRun, MethodRun};
 use occlude_core::{FrameStats, Hierarchy, Scene};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -174,10 +174,15 @@ fn p95(frames: &[FrameStats]) -> f64 {
 impl BenchReport {
     /// Summarises a run.
     pub fn new(run: &BenchRun, config: &BenchConfig) -> Self {
+        Self::with_methods(run, &run.methods, config)
+    }
+
+    /// Summarises `methods`, lanes of `run` (its methods or its variants),
+    /// against the run's `vfc` reference, as if they were its only methods.
+    pub fn with_methods(run: &BenchRun, methods: &[MethodRun], config: &BenchConfig) -> Self {
         let vfc_ms = mean(&run.reference, |f| f.frame_ms);
-        let opt_ms = run.methods.iter().find(|m| m.name == "opt").map(|m| mean(&m.frames, |f| f.frame_ms));
-        let methods = run
-            .methods
+        let opt_ms = methods.iter().find(|m| m.name == "opt").map(|m| mean(&m.frames, |f| f.frame_ms));
+        let methods = methods
             .iter()
             .map(|m| {
                 let frames = &m.frames;
