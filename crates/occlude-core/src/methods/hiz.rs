@@ -25,11 +25,11 @@
 //! box that test finds visible (the proof is `depth_pyramid`'s), so the
 //! instance is drawn in step 1 or 4.
 
-use super::roc::TemporalSet;
+use super::roc::{AllInstances, TemporalSet};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
-use crate::gpu_culling::{BoxSet, IdList, Pyramid};
+use crate::gpu_culling::Pyramid;
 
 /// Parameters of `hiz`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,10 +49,7 @@ impl HizParams {
 /// The device resources of `hiz`, made on its first frame.
 #[derive(Clone, Copy, Debug)]
 struct Resources {
-    /// Every instance's box.
-    boxes: BoxSet,
-    /// Every instance id.
-    all: IdList,
+    all: AllInstances,
     pyramid: Pyramid,
     temporal: TemporalSet,
 }
@@ -93,14 +90,10 @@ impl CullingMethod for TwoPhaseHiZ {
         if gpu.pyramid_support().is_err() {
             return;
         }
-        let n = ctx.scene.instances.len() as u32;
-        let boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
-        let all: Vec<u32> = (0..n).collect();
         self.resources = Some(Resources {
-            boxes: gpu.create_boxes(&boxes),
-            all: gpu.create_list(n, &all),
+            all: AllInstances::new(gpu, ctx.scene),
             pyramid: gpu.create_pyramid(),
-            temporal: TemporalSet::new(gpu, n),
+            temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
         });
     }
 
@@ -110,9 +103,9 @@ impl CullingMethod for TwoPhaseHiZ {
         let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
             return ViewFrustumCulling.render(ctx, backend);
         };
-        let visible = r.temporal.begin(gpu, Some(r.boxes));
+        let visible = r.temporal.begin(gpu, Some(r.all.boxes));
         gpu.build_pyramid(r.pyramid);
-        gpu.test_boxes_pyramid(r.boxes, r.all, r.pyramid, self.params.texels, visible);
+        gpu.test_boxes_pyramid(r.all.boxes, r.all.ids, r.pyramid, self.params.texels, visible);
         r.temporal.finish(gpu, true);
     }
 }

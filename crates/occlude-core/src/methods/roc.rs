@@ -26,6 +26,7 @@ use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
 use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
+use crate::scene::Scene;
 use std::fmt;
 use std::str::FromStr;
 
@@ -124,13 +125,30 @@ impl TemporalSet {
     }
 }
 
+/// Every instance's box and the list of every instance id, on the device:
+/// what the methods testing every object each frame (`roc`, `hiz`) test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AllInstances {
+    /// Every instance's box.
+    pub(crate) boxes: BoxSet,
+    /// Every instance id.
+    pub(crate) ids: IdList,
+}
+
+impl AllInstances {
+    /// Uploads the boxes and the list of `scene`'s instances.
+    pub(crate) fn new(gpu: &mut dyn GpuCulling, scene: &Scene) -> Self {
+        let n = scene.instances.len() as u32;
+        let boxes: Vec<_> = scene.instances.iter().map(|i| i.bounds).collect();
+        let ids: Vec<u32> = (0..n).collect();
+        Self { boxes: gpu.create_boxes(&boxes), ids: gpu.create_list(n, &ids) }
+    }
+}
+
 /// The device resources of `roc`, made on its first frame.
 #[derive(Clone, Copy, Debug)]
 struct Resources {
-    /// Every instance's box.
-    boxes: BoxSet,
-    /// Every instance id.
-    all: IdList,
+    all: AllInstances,
     temporal: TemporalSet,
 }
 
@@ -163,14 +181,8 @@ impl CullingMethod for RasterOcclusion {
             return;
         }
         let Ok(gpu) = backend.gpu_culling() else { return };
-        let n = ctx.scene.instances.len() as u32;
-        let boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
-        let all: Vec<u32> = (0..n).collect();
-        self.resources = Some(Resources {
-            boxes: gpu.create_boxes(&boxes),
-            all: gpu.create_list(n, &all),
-            temporal: TemporalSet::new(gpu, n),
-        });
+        let all = AllInstances::new(gpu, ctx.scene);
+        self.resources = Some(Resources { all, temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32) });
     }
 
     /// A backend without [`GpuCulling`] (which the runner refuses first)
@@ -180,7 +192,7 @@ impl CullingMethod for RasterOcclusion {
             return ViewFrustumCulling.render(ctx, backend);
         };
         let visible = r.temporal.begin(gpu, None);
-        gpu.test_boxes(r.boxes, r.all, visible);
+        gpu.test_boxes(r.all.boxes, r.all.ids, visible);
         r.temporal.finish(gpu, self.params.mode == RocMode::Exact);
     }
 }
