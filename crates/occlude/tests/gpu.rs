@@ -17,7 +17,7 @@ use std::sync::Arc;
 fn config(scene: &str, hierarchy: HierarchyKind, frames: usize) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "opt"].map(String::from).to_vec(),
+        methods: ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
         frames,
         resolution: (320, 240),
         hierarchy,
@@ -132,16 +132,6 @@ fn without_a_vulkan_driver_other_apis_are_refused_or_absent_with_exit_code_2() {
     assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
     assert!(stderr.contains("no GPU adapter") && stderr.contains("--backend soft"), "{stderr}");
     assert!(!stderr.contains("Validation Error"), "{stderr}");
-}
-
-#[test]
-fn hiz_is_refused_on_the_gpu_until_it_has_a_depth_pyramid() {
-    if GpuContext::for_test("hiz_is_refused_on_the_gpu_until_it_has_a_depth_pyramid").is_none() {
-        return;
-    }
-    let cfg = BenchConfig { methods: vec!["hiz".into()], ..config("teapots", HierarchyKind::Bvh, 1) };
-    let err = run_scene(&small("teapots"), &cfg, &ProgressBar::hidden()).err().expect("hiz on wgpu is refused");
-    assert!(format!("{err:#}").contains("method hiz cannot run: the wgpu backend builds no depth pyramid"), "{err:#}");
 }
 
 #[test]
