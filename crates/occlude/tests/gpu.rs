@@ -7,6 +7,7 @@ use indicatif::ProgressBar;
 use occlude::bench::config::BackendKind;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
+use occlude_core::methods::MethodOptions;
 use occlude_core::{Backend, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -59,6 +60,35 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
                 triangles(m),
                 triangles(0)
             );
+        }
+    }
+}
+
+/// `hiz` on the GPU at issue 18's six sizes and 67x45 (pyramids with odd
+/// levels, and a one-texel pyramid at 1x1), reading the field's 2x2 texels
+/// a box and 8x8: 0 missing pixels on every frame.
+#[test]
+fn hiz_matches_vfc_on_the_gpu_at_odd_and_tiny_sizes() {
+    if GpuContext::for_test("hiz_matches_vfc_on_the_gpu_at_odd_and_tiny_sizes").is_none() {
+        return;
+    }
+    let scene = small("city");
+    for resolution in [(1024, 768), (1920, 1080), (1366, 768), (1023, 767), (641, 479), (67, 45), (1, 1)] {
+        for texels in ["hiz.texels=2", "hiz.texels=8"] {
+            let cfg = BenchConfig {
+                methods: vec!["vfc".into(), "hiz".into()],
+                options: MethodOptions::parse(&[texels]).unwrap(),
+                resolution,
+                ..config("city", HierarchyKind::Bvh, 6)
+            };
+            let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+            assert_eq!(run.aborted, None);
+            for m in &run.methods {
+                assert_eq!(m.frames.len(), 6, "{texels} at {resolution:?}/{}: frames lost", m.name);
+                for (f, stats) in m.frames.iter().enumerate() {
+                    assert_eq!(stats.missing_pixels, 0, "{texels} at {resolution:?}/{}: frame {f}", m.name);
+                }
+            }
         }
     }
 }
