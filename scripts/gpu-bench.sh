@@ -21,7 +21,7 @@ bin=${1:-target/release/occlude}
 out=${OUT:-gpu-out}
 size=${SIZE:-medium}
 frames=${FRAMES:-100}
-methods=vfc,sw,chc,chcpp,om,roc,ioc,opt
+methods=vfc,sw,chc,chcpp,om,roc,ioc,hiz,opt
 
 if [[ ! -x $bin ]]; then
   echo "gpu-bench: no occlude binary at $bin (cargo build --release -p occlude, or pass its path)" >&2

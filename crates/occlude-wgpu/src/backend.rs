@@ -445,8 +445,9 @@ impl<'s> WgpuBackend<'s> {
     /// GPU-resident culling's resources, made on first use.
     fn culling(&mut self) -> &mut Culling {
         let (gpu, scene, camera_buffer, camera) = (&self.gpu, self.scene, &self.camera_buffer, self.camera);
+        let depth = &self.target.depth;
         self.culling.get_or_insert_with(|| {
-            let culling = Culling::new(gpu, scene, camera_buffer);
+            let culling = Culling::new(gpu, scene, camera_buffer, depth);
             if let Some(camera) = &camera {
                 culling.set_camera(camera);
             }
@@ -741,19 +742,22 @@ impl GpuCulling for WgpuBackend<'_> {
     }
 
     fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
-        Err(GpuCullingUnsupported("the wgpu backend builds no depth pyramid yet, which hiz needs".into()))
+        self.ctx().gpu_culling_support()
     }
 
     fn create_pyramid(&mut self) -> Pyramid {
-        unreachable!("create_pyramid where pyramid_support is an error")
+        self.culling().create_pyramid()
     }
 
-    fn build_pyramid(&mut self, _: Pyramid) {
-        unreachable!("build_pyramid where pyramid_support is an error")
+    /// One op whose compute pass holds a dispatch per level past level 0.
+    fn build_pyramid(&mut self, pyramid: Pyramid) {
+        self.count.stats.dispatches += self.culling().reductions(pyramid);
+        self.ops.push(Op::Cull(CullOp::BuildPyramid(pyramid)));
     }
 
-    fn test_boxes_pyramid(&mut self, _: BoxSet, _: IdList, _: Pyramid, _: u32, _: Flags) {
-        unreachable!("test_boxes_pyramid where pyramid_support is an error")
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags) {
+        self.culling().note_counted();
+        self.record_cull(CullOp::TestPyramid { boxes, ids, pyramid, reach, flags });
     }
 
     fn draw_list(&mut self, list: IdList) {

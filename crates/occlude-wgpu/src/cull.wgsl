@@ -28,11 +28,26 @@ struct WriteList {
     ids: array<u32>,
 }
 
-// The camera of the frame: the six frustum planes (inside: n.p + d >= 0) and
-// the eye, its w the squared near-region radius (Camera::box_touches_near_region).
+// The camera of the frame: the six frustum planes (inside: n.p + d >= 0), the
+// eye, its w the squared near-region radius (Camera::box_touches_near_region),
+// the view-projection matrix, and depth_pyramid's constants: the query depth
+// bias, the depth slack and the pixel margin.
 struct Cull {
     planes: array<vec4<f32>, 6>,
     eye: vec4<f32>,
+    view_projection: mat4x4<f32>,
+    bias: f32,
+    depth_slack: f32,
+    pixel_margin: f32,
+}
+
+// A depth-pyramid level in `pyramid`: its first texel, width, height and row
+// pitch (level 0, copied from the depth texture, has rows padded for the copy).
+struct Level {
+    offset: u32,
+    width: u32,
+    height: u32,
+    pitch: u32,
 }
 
 // DrawIndexedIndirectArgs of the box-test draw; the CPU sets 36 corner indices
@@ -89,6 +104,10 @@ struct Stats {
 @group(0) @binding(11) var<storage, read> instances: array<InstanceDraw>;
 @group(0) @binding(12) var<storage, read_write> draws: array<DrawArgs>;
 @group(0) @binding(13) var<storage, read_write> stats: Stats;
+@group(0) @binding(14) var<storage, read_write> pyramid: array<f32>;
+@group(0) @binding(15) var<storage, read> levels: array<Level>;
+// The level a reduction writes, or the reach of a pyramid test.
+@group(0) @binding(16) var<uniform> param: vec4<u32>;
 
 // The box-test fragments' flags (the render pass's group 1).
 @group(1) @binding(0) var<storage, read_write> box_flags: array<u32>;
@@ -119,31 +138,34 @@ fn outside_frustum(b: Box) -> bool {
     return false;
 }
 
-// Box tests, first half: boxes near the eye are visible without drawing
-// (they cannot be rasterized soundly), boxes outside the frustum hidden; the
-// rest are appended to the raster list that the indirect box draw reads.
-@compute @workgroup_size(64)
-fn cs_test_boxes(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-                 @builtin(local_invocation_index) local: u32) {
-    let k = thread_index(group, groups, local);
-    if k >= src_len() {
-        return;
-    }
+// The frustum and near rules of box tests: entry k of `src` is to be tested
+// when its box is not empty, not near the eye (flagged visible here without a
+// test, as it cannot be rasterized soundly) and not outside the frustum.
+fn box_to_test(k: u32) -> bool {
     let b = boxes[src.ids[k]];
     // Empty boxes (min > max) hold nothing to see.
     if any(b.lo > b.hi) {
-        return;
+        return false;
     }
     let gap = max(max(b.lo - cull.eye.xyz, cull.eye.xyz - b.hi), vec3<f32>(0.0));
     if dot(gap, gap) <= cull.eye.w {
         flags[b.id] = 1u;
-        return;
+        return false;
     }
-    if outside_frustum(b) {
+    return !outside_frustum(b);
+}
+
+// Box tests, first half: the boxes to test are appended to the raster list
+// that the indirect box draw reads.
+@compute @workgroup_size(64)
+fn cs_test_boxes(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                 @builtin(local_invocation_index) local: u32) {
+    let k = thread_index(group, groups, local);
+    if k >= src_len() || !box_to_test(k) {
         return;
     }
     // The append slot doubles as the instance index of the box draw.
-    raster[atomicAdd(&box_draw.instance_count, 1u)] = b;
+    raster[atomicAdd(&box_draw.instance_count, 1u)] = boxes[src.ids[k]];
     atomicAdd(&stats.boxes, 1u);
 }
 
@@ -272,4 +294,125 @@ fn cs_draw_args(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups
         atomicAdd(&stats.triangles_hi, 1u);
     }
     atomicOr(&stats.drawn[i / 32u], 1u << (i % 32u));
+}
+
+// Depth-pyramid reduction of level param.x (depth_pyramid.rs): texel (x, y)
+// is the maximum of the texels (2x + i, 2y + j) of the level before that
+// exist, one thread per texel.
+@compute @workgroup_size(64)
+fn cs_pyramid_level(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                    @builtin(local_invocation_index) local: u32) {
+    let t = thread_index(group, groups, local);
+    let dst_level = levels[param.x];
+    if t >= dst_level.width * dst_level.height {
+        return;
+    }
+    let src_level = levels[param.x - 1u];
+    let x = t % dst_level.width;
+    let y = t / dst_level.width;
+    var farthest = 0.0;
+    for (var sy = 2u * y; sy < min(2u * y + 2u, src_level.height); sy++) {
+        for (var sx = 2u * x; sx < min(2u * x + 2u, src_level.width); sx++) {
+            farthest = max(farthest, pyramid[src_level.offset + sy * src_level.pitch + sx]);
+        }
+    }
+    pyramid[dst_level.offset + y * dst_level.pitch + x] = farthest;
+}
+
+// A bound on how far two f32 evaluations of a sum or quotient may differ,
+// relative to the magnitudes involved (16 units in the last place).
+const ROUNDING: f32 = 1.0 / 1048576.0;
+
+// depth_pyramid::box_footprint of a box, on the GPU: the pixel range
+// (x0, y0, x1, y1) of its corners' projection and its nearest depth, or
+// `near` when a corner is on or behind the near plane, or `empty` when the
+// range holds no pixel centre. The CPU divides in f64 and the GPU in f32,
+// and their products may round differently; each corner's projection is
+// grown, and its depth lowered, by a bound on that difference (ROUNDING of
+// the magnitudes summed, carried through the division to first order), so
+// the range here contains the CPU's and the depth is no greater.
+struct Footprint {
+    near: bool,
+    empty: bool,
+    lo: vec2<u32>,
+    hi: vec2<u32>,
+    depth: f32,
+}
+
+fn box_footprint(b: Box, size: vec2<f32>) -> Footprint {
+    var out = Footprint(false, false, vec2<u32>(0u), vec2<u32>(0u), 0.0);
+    let m = cull.view_projection;
+    var lo = vec2<f32>(3.0e38);
+    var hi = vec2<f32>(-3.0e38);
+    var depth = 3.0e38;
+    for (var c = 0u; c < 8u; c++) {
+        let p = vec4<f32>(select(b.lo, b.hi, (vec3<u32>(c) & vec3<u32>(1u, 2u, 4u)) != vec3<u32>(0u)), 1.0);
+        let v = m * p;
+        let z = v.z - cull.bias * v.w;
+        // Written so that NaN counts as reaching the near plane.
+        if !(z > 0.0 && v.w > 0.0) {
+            out.near = true;
+            return out;
+        }
+        // The magnitudes summed into each clip coordinate.
+        let a = abs(m[0]) * abs(p.x) + abs(m[1]) * abs(p.y) + abs(m[2]) * abs(p.z) + abs(m[3]);
+        let ndc = v.xy / v.w;
+        let s = vec2<f32>((ndc.x + 1.0) * 0.5 * size.x, (1.0 - ndc.y) * 0.5 * size.y);
+        let error = (ROUNDING * (a.xy + abs(ndc) * a.w) / v.w + ROUNDING * (abs(ndc) + 1.0)) * size;
+        lo = min(lo, s - error);
+        hi = max(hi, s + error);
+        let d = z / v.w;
+        let depth_error = ROUNDING * (a.z + cull.bias * a.w + abs(d) * a.w) / v.w + ROUNDING * abs(d);
+        depth = min(depth, d - depth_error);
+    }
+    // Pixel p is covered only if its centre p + 0.5 is in [lo, hi].
+    let first = max(ceil(lo - 0.5 - cull.pixel_margin), vec2<f32>(0.0));
+    let last = min(floor(hi - 0.5 + cull.pixel_margin), size - 1.0);
+    if !(first.x <= last.x && first.y <= last.y) {
+        out.empty = true;
+        return out;
+    }
+    out.lo = vec2<u32>(first);
+    out.hi = vec2<u32>(last);
+    out.depth = depth - cull.depth_slack;
+    return out;
+}
+
+// Pyramid box tests (DepthPyramid::test): the rules of box tests, then each
+// remaining box's footprint against the finest level at which it spans at
+// most param.x texels per axis; visible when its nearest depth is in front of
+// the farthest of them.
+@compute @workgroup_size(64)
+fn cs_test_boxes_pyramid(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                         @builtin(local_invocation_index) local: u32) {
+    let k = thread_index(group, groups, local);
+    if k >= src_len() || !box_to_test(k) {
+        return;
+    }
+    atomicAdd(&stats.boxes, 1u);
+    let b = boxes[src.ids[k]];
+    let f = box_footprint(b, vec2<f32>(f32(levels[0].width), f32(levels[0].height)));
+    if f.near {
+        flags[b.id] = 1u;
+        return;
+    }
+    if f.empty {
+        return;
+    }
+    // A reach of 0 is read as 1, which ends the level search too.
+    let reach = max(param.x, 1u);
+    var level = 0u;
+    while (f.hi.x >> level) - (f.lo.x >> level) >= reach || (f.hi.y >> level) - (f.lo.y >> level) >= reach {
+        level++;
+    }
+    let l = levels[level];
+    var farthest = 0.0;
+    for (var y = f.lo.y >> level; y <= f.hi.y >> level; y++) {
+        for (var x = f.lo.x >> level; x <= f.hi.x >> level; x++) {
+            farthest = max(farthest, pyramid[l.offset + y * l.pitch + x]);
+        }
+    }
+    if f.depth < farthest {
+        flags[b.id] = 1u;
+    }
 }

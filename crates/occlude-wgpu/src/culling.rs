@@ -16,6 +16,12 @@
 //! queries and encodes each as a compute pass ([`Culling::encode_compute`])
 //! and, for box tests and list draws, a draw in the render pass that follows
 //! ([`Culling::encode_draw`]).
+//!
+//! Depth pyramids (two-phase Hi-Z, [`occlude_core::depth_pyramid`]) live in
+//! one storage buffer each, level after level: a build copies the depth
+//! texture into level 0 and reduces each further level in a dispatch of its
+//! own; a pyramid box test is one dispatch applying the rules of box tests
+//! and then `DepthPyramid::test` to each box, without drawing.
 
 use crate::backend::{frame_group, BOX_BYTES};
 use crate::context::GpuContext;
@@ -23,8 +29,9 @@ use crate::pipelines::CullingPipelines;
 use crate::queries::PassTimer;
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
-use occlude_core::query_box::QUERY_BOX_PAD;
-use occlude_core::{Aabb, BoxSet, Camera, ExpandInto, Flags, IdList, ItemRange, RangeTable, Scene};
+use occlude_core::depth_pyramid::{level_sizes, DEPTH_SLACK, PIXEL_MARGIN};
+use occlude_core::query_box::{QUERY_BOX_PAD, QUERY_DEPTH_BIAS};
+use occlude_core::{Aabb, BoxSet, Camera, ExpandInto, Flags, IdList, ItemRange, Pyramid, RangeTable, Scene};
 use std::collections::HashMap;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -45,10 +52,15 @@ const DRAW_ARGS_BYTES: u64 = 20;
 /// and high, boxes rasterized) before the drawn-instance bits.
 const STATS_HEADER: u64 = 16;
 
+/// Bytes of the culling camera uniform, `Cull` of `cull.wgsl`.
+const CAMERA_BYTES: u64 = 4 * 48;
+
 /// A GPU-resident culling command, recorded among the backend's draws.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum CullOp {
     TestBoxes { boxes: BoxSet, ids: IdList, flags: Flags },
+    BuildPyramid(Pyramid),
+    TestPyramid { boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags },
     Expand { src: IdList, filter: Flags, table: RangeTable, into: ExpandInto },
     Compact { flags: Flags, unless: Option<Flags>, dst: IdList },
     DropOutside { boxes: BoxSet, flags: Flags },
@@ -62,16 +74,19 @@ impl CullOp {
         matches!(self, Self::TestBoxes { .. } | Self::DrawList(_))
     }
 
-    /// The command's resources, naming its compute bind group.
-    fn key(&self) -> [u32; 5] {
+    /// The command's resources, naming its compute bind group (a pyramid
+    /// build has one per level, named by [`level_key`]).
+    fn key(&self) -> [u32; 6] {
         match *self {
-            Self::TestBoxes { boxes, ids, flags } => [0, boxes.0, ids.0, flags.0, 0],
-            Self::Expand { src, filter, table, into: ExpandInto::List(dst) } => [1, src.0, filter.0, table.0, dst.0],
-            Self::Expand { src, filter, table, into: ExpandInto::Flags(f) } => [2, src.0, filter.0, table.0, f.0],
-            Self::Compact { flags, unless, dst } => [3, flags.0, unless.map_or(u32::MAX, |u| u.0), dst.0, 0],
-            Self::ClearFlags(flags) => [4, flags.0, 0, 0, 0],
-            Self::DrawList(list) => [5, list.0, 0, 0, 0],
-            Self::DropOutside { boxes, flags } => [6, boxes.0, flags.0, 0, 0],
+            Self::TestBoxes { boxes, ids, flags } => [0, boxes.0, ids.0, flags.0, 0, 0],
+            Self::Expand { src, filter, table, into: ExpandInto::List(dst) } => [1, src.0, filter.0, table.0, dst.0, 0],
+            Self::Expand { src, filter, table, into: ExpandInto::Flags(f) } => [2, src.0, filter.0, table.0, f.0, 0],
+            Self::Compact { flags, unless, dst } => [3, flags.0, unless.map_or(u32::MAX, |u| u.0), dst.0, 0, 0],
+            Self::ClearFlags(flags) => [4, flags.0, 0, 0, 0, 0],
+            Self::DrawList(list) => [5, list.0, 0, 0, 0, 0],
+            Self::DropOutside { boxes, flags } => [6, boxes.0, flags.0, 0, 0, 0],
+            Self::BuildPyramid(pyramid) => level_key(pyramid, 0),
+            Self::TestPyramid { boxes, ids, pyramid, reach, flags } => [8, boxes.0, ids.0, pyramid.0, reach, flags.0],
         }
     }
 }
@@ -87,10 +102,17 @@ pub(crate) struct CullingScene {
     compact_unless: wgpu::ComputePipeline,
     drop_outside: wgpu::ComputePipeline,
     draw_args: wgpu::ComputePipeline,
+    pyramid_level: wgpu::ComputePipeline,
+    test_boxes_pyramid: wgpu::ComputePipeline,
     /// `InstanceDraw` of `cull.wgsl` per instance.
     instances: wgpu::Buffer,
     /// Group 1 of list draws: every instance's colour.
     colors: wgpu::BindGroup,
+}
+
+/// The compute bind group key of the reduction of `pyramid`'s `level`.
+fn level_key(pyramid: Pyramid, level: u32) -> [u32; 6] {
+    [7, pyramid.0, level, 0, 0, 0]
 }
 
 impl CullingScene {
@@ -135,6 +157,8 @@ impl CullingScene {
             compact_unless: compute("cs_compact_unless"),
             drop_outside: compute("cs_drop_outside"),
             draw_args: compute("cs_draw_args"),
+            pyramid_level: compute("cs_pyramid_level"),
+            test_boxes_pyramid: compute("cs_test_boxes_pyramid"),
             render,
             instances,
             colors,
@@ -173,6 +197,18 @@ struct TableBuffers {
     items: wgpu::Buffer,
 }
 
+/// A depth pyramid: its levels one after the other in `texels` (level 0 with
+/// rows padded as texture copies need), and their places (`Level` of
+/// `cull.wgsl`) in `levels`.
+struct PyramidBuffers {
+    texels: wgpu::Buffer,
+    levels: wgpu::Buffer,
+    /// Texels per level, level 0 first.
+    counts: Vec<u32>,
+    /// Bytes per row of level 0.
+    row_bytes: u32,
+}
+
 /// What the box tests and list draws of a frame did, counted on the GPU.
 pub(crate) struct CullStats {
     /// Draws inside list draws.
@@ -193,12 +229,18 @@ pub(crate) struct Culling {
     scene: Arc<CullingScene>,
     /// The backend's camera uniform, which box tests draw with.
     frame_camera: wgpu::Buffer,
+    /// The backend's depth texture, which pyramids are built from.
+    depth: wgpu::Texture,
     /// `Cull` of `cull.wgsl`: frustum planes and near region of the frame.
     camera: wgpu::Buffer,
     boxes: Vec<wgpu::Buffer>,
     flags: Vec<FlagBuffer>,
     lists: Vec<ListBuffer>,
     tables: Vec<TableBuffers>,
+    pyramids: Vec<PyramidBuffers>,
+    /// Uniforms holding one number (`param` of `cull.wgsl`: a level to
+    /// reduce, a reach), by that number.
+    params: HashMap<u32, wgpu::Buffer>,
     /// Scratch shared by the commands, which run one after the other: the
     /// raster list of box tests, its draw arguments, and list draws' draw
     /// arguments, for the largest list capacity.
@@ -209,7 +251,7 @@ pub(crate) struct Culling {
     /// The frame group drawing `raster` as query boxes, made when needed.
     test_frame: Option<wgpu::BindGroup>,
     /// Compute bind groups by [`CullOp::key`].
-    groups: HashMap<[u32; 5], wgpu::BindGroup>,
+    groups: HashMap<[u32; 6], wgpu::BindGroup>,
     stats: wgpu::Buffer,
     stats_staging: wgpu::Buffer,
     count_staging: wgpu::Buffer,
@@ -223,8 +265,8 @@ pub(crate) struct Culling {
 
 impl Culling {
     /// Resources for a backend on `gpu`, drawing box tests with the camera
-    /// uniform `frame_camera`.
-    pub fn new(gpu: &Arc<GpuScene>, scene: &Scene, frame_camera: &wgpu::Buffer) -> Self {
+    /// uniform `frame_camera` and building pyramids from `depth`.
+    pub fn new(gpu: &Arc<GpuScene>, scene: &Scene, frame_camera: &wgpu::Buffer, depth: &wgpu::Texture) -> Self {
         let ctx = &gpu.ctx;
         let stats_bytes = STATS_HEADER + 4 * (scene.instances.len() as u64).div_ceil(32).max(1);
         let buffer = |label, size, usage| {
@@ -242,11 +284,14 @@ impl Culling {
             scene: gpu.culling(scene),
             gpu: Arc::clone(gpu),
             frame_camera: frame_camera.clone(),
-            camera: buffer("culling camera", 112, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
+            depth: depth.clone(),
+            camera: buffer("culling camera", CAMERA_BYTES, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
             boxes: Vec::new(),
             flags: Vec::new(),
             lists: Vec::new(),
             tables: Vec::new(),
+            pyramids: Vec::new(),
+            params: HashMap::new(),
             raster: buffer("raster boxes", BOX_BYTES, wgpu::BufferUsages::STORAGE),
             box_draw: storage_init(ctx, "box-test draw", bytemuck::cast_slice(&box_draw), indirect),
             draw_args: buffer(
@@ -273,14 +318,17 @@ impl Culling {
         &self.gpu.ctx
     }
 
-    /// Sets the frame's camera for box tests (frustum planes, near region).
+    /// Sets the frame's camera for box tests (frustum planes, near region,
+    /// view-projection matrix and the constants of pyramid footprints).
     pub fn set_camera(&self, camera: &Camera) {
-        let mut uniform = [0f32; 28];
+        let mut uniform = [0f32; CAMERA_BYTES as usize / 4];
         for (k, plane) in camera.frustum().planes.iter().enumerate() {
             uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
         }
         let near = camera.near_region();
         uniform[24..28].copy_from_slice(&near.center.extend(near.radius * near.radius).to_array());
+        uniform[28..44].copy_from_slice(&camera.view_projection().to_cols_array());
+        uniform[44..47].copy_from_slice(&[QUERY_DEPTH_BIAS, DEPTH_SLACK, PIXEL_MARGIN as f32]);
         self.ctx().queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
     }
 
@@ -347,6 +395,111 @@ impl Culling {
         RangeTable(self.tables.len() as u32 - 1)
     }
 
+    /// A depth pyramid over the depth texture, every texel at the far plane.
+    pub fn create_pyramid(&mut self) -> Pyramid {
+        let (width, height) = (self.depth.width(), self.depth.height());
+        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let row_bytes = (4 * width).div_ceil(align) * align;
+        let mut table = Vec::new();
+        let mut offset = 0;
+        for (k, (w, h)) in level_sizes(width, height).into_iter().enumerate() {
+            let pitch = if k == 0 { row_bytes / 4 } else { w };
+            table.push([offset, w, h, pitch]);
+            offset += pitch * h;
+        }
+        let far = vec![1f32; offset as usize];
+        let texels =
+            storage_init(self.ctx(), "depth pyramid", bytemuck::cast_slice(&far), wgpu::BufferUsages::COPY_DST);
+        let levels =
+            storage_init(self.ctx(), "pyramid levels", bytemuck::cast_slice(&table), wgpu::BufferUsages::empty());
+        let counts = table.iter().map(|l| l[1] * l[2]).collect();
+        self.pyramids.push(PyramidBuffers { texels, levels, counts, row_bytes });
+        Pyramid(self.pyramids.len() as u32 - 1)
+    }
+
+    /// The levels of `pyramid` past level 0: the dispatches of its build.
+    pub fn reductions(&self, pyramid: Pyramid) -> u64 {
+        self.pyramids[pyramid.0 as usize].counts.len() as u64 - 1
+    }
+
+    /// The uniform holding `value` in its first word, made on first use.
+    fn param(&mut self, value: u32) -> wgpu::Buffer {
+        let ctx = Arc::clone(&self.gpu.ctx);
+        let make = || {
+            ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("culling parameter"),
+                contents: bytemuck::cast_slice(&[value, 0, 0, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        };
+        self.params.entry(value).or_insert_with(make).clone()
+    }
+
+    /// Encodes the build of `pyramid`: the depth texture copied into level
+    /// 0, then one dispatch per further level, in one compute pass.
+    fn encode_pyramid_build(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        pyramid: Pyramid,
+        timer: Option<&mut PassTimer>,
+    ) {
+        let p = &self.pyramids[pyramid.0 as usize];
+        let (width, height) = (self.depth.width(), self.depth.height());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.depth,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::DepthOnly,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &p.texels,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(p.row_bytes),
+                    rows_per_image: Some(height),
+                },
+            },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        let counts = p.counts.clone();
+        let scene = Arc::clone(&self.scene);
+        let groups: Vec<wgpu::BindGroup> = (1..counts.len() as u32)
+            .map(|level| {
+                let param = self.param(level);
+                let p = &self.pyramids[pyramid.0 as usize];
+                let (texels, levels) = (p.texels.clone(), p.levels.clone());
+                let entries = [(14, &texels), (15, &levels), (16, &param)];
+                self.cached_group(level_key(pyramid, level), &scene.pyramid_level, &entries)
+            })
+            .collect();
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("depth pyramid"),
+            timestamp_writes: timer.and_then(PassTimer::compute_pass),
+        });
+        pass.set_pipeline(&scene.pyramid_level);
+        for (group, &texels) in groups.iter().zip(&counts[1..]) {
+            pass.set_bind_group(0, group, &[]);
+            let (x, y) = workgroups(texels);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+    }
+
+    /// The compute bind group `key` of `entries` for `pipeline`, made on
+    /// first use.
+    fn cached_group(
+        &mut self,
+        key: [u32; 6],
+        pipeline: &wgpu::ComputePipeline,
+        entries: &[(u32, &wgpu::Buffer)],
+    ) -> wgpu::BindGroup {
+        let ctx = &self.gpu.ctx;
+        self.groups
+            .entry(key)
+            .or_insert_with(|| bind_group(ctx, "culling", &pipeline.get_bind_group_layout(0), entries))
+            .clone()
+    }
+
     /// Replaces the scratch buffers by ones for lists of `capacity` ids; the
     /// bind groups naming the old ones go.
     fn grow_scratch(&mut self, capacity: u32) {
@@ -379,6 +532,8 @@ impl Culling {
                 encoder.clear_buffer(&self.flags[flags.0 as usize].buffer, 0, None);
                 return;
             }
+            CullOp::BuildPyramid(pyramid) => return self.encode_pyramid_build(encoder, pyramid, timer),
+            CullOp::TestPyramid { ids, .. } => (&scene.test_boxes_pyramid, self.lists[ids.0 as usize].capacity),
             CullOp::TestBoxes { ids, .. } => {
                 // Zero the box draw's instance count (the appended boxes).
                 encoder.clear_buffer(&self.box_draw, 4, Some(4));
@@ -454,6 +609,10 @@ impl Culling {
         if let Some(group) = self.groups.get(&op.key()) {
             return group.clone();
         }
+        let reach = match *op {
+            CullOp::TestPyramid { reach, .. } => Some(self.param(reach)),
+            _ => None,
+        };
         let list = |l: IdList| &self.lists[l.0 as usize].buffer;
         let flags = |f: Flags| &self.flags[f.0 as usize].buffer;
         let table = |t: RangeTable| &self.tables[t.0 as usize];
@@ -485,7 +644,14 @@ impl Culling {
             CullOp::DropOutside { boxes, flags: f } => {
                 vec![(0, &self.camera), (1, &self.boxes[boxes.0 as usize]), (3, flags(f))]
             }
-            CullOp::ClearFlags(_) => Vec::new(),
+            CullOp::TestPyramid { boxes, ids, pyramid, flags: f, .. } => {
+                let p = &self.pyramids[pyramid.0 as usize];
+                let mut entries = vec![(0, &self.camera), (1, &self.boxes[boxes.0 as usize]), (2, list(ids))];
+                entries.extend([(3, flags(f)), (13, &self.stats), (14, &p.texels), (15, &p.levels)]);
+                entries.extend(reach.as_ref().map(|r| (16, r)));
+                entries
+            }
+            CullOp::ClearFlags(_) | CullOp::BuildPyramid(_) => Vec::new(),
         };
         let group = bind_group(self.ctx(), "culling", &pipeline.get_bind_group_layout(0), &entries);
         self.groups.insert(op.key(), group.clone());

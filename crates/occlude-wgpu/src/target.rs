@@ -14,7 +14,7 @@ pub(crate) struct RenderTarget {
     pub color_view: wgpu::TextureView,
     pub depth_view: wgpu::TextureView,
     color: wgpu::Texture,
-    depth: wgpu::Texture,
+    pub depth: wgpu::Texture,
 }
 
 impl RenderTarget {

@@ -206,8 +206,15 @@ fn soft_and_wgpu_count_culling_work_alike() {
         let all = c.create_list(n, &all_instances(&scene));
         let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
         let h = Handles { all, set: c.create_boxes(&boxes), flags: c.create_flags(n), visible: c.create_list(n, &[]) };
+        assert_eq!(c.pyramid_support(), Ok(()));
+        let pyramid = c.create_pyramid();
         b.begin_frame(&camera());
         culled_frame(b, h);
+        // hiz's commands: a pyramid of the depth so far, boxes tested on it.
+        let c = b.gpu_culling().unwrap();
+        c.build_pyramid(pyramid);
+        c.clear_flags(h.flags);
+        c.test_boxes_pyramid(h.set, h.all, pyramid, 2, h.flags);
         b.end_frame()
     };
     let (g, s) = (frame(&mut on_gpu), frame(&mut soft));
@@ -348,4 +355,78 @@ fn dispatches_cover_every_thread() {
     assert_eq!(workgroups(65), (2, 1));
     let (x, y) = workgroups(u32::MAX);
     assert!(x <= MAX_GROUPS_PER_DIMENSION && u64::from(x) * u64::from(y) * 64 >= u64::from(u32::MAX));
+}
+
+/// Boxes in front of the camera of [`scene`] at many places and depths, some
+/// behind the wall, some beside it, some small enough to fall between pixels.
+fn scattered_boxes() -> Vec<Aabb> {
+    let mut rng = occlude_core::rng::Rng::new(18, 0);
+    (0..200)
+        .map(|_| {
+            let at = Vec3::new(rng.unit() * 24.0 - 12.0, rng.unit() * 24.0 - 12.0, -2.0 - rng.unit() * 30.0);
+            let half = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * rng.unit() * 2.0 + Vec3::splat(0.001);
+            Aabb::new(at - half, at + half)
+        })
+        .collect()
+}
+
+/// The pyramid box test on the GPU against `DepthPyramid::test` on the CPU,
+/// both over the wgpu backend's depth after drawing the scene, at odd sizes
+/// and 1x1, reach 2 and 8: the GPU never hides a box the CPU finds visible.
+/// (The flags need not be equal box for box: the GPU divides in `f32` where
+/// the CPU divides in `f64`, so `cull.wgsl` grows each footprint by a bound
+/// on that rounding, which can only add texels and lower the depth.)
+#[test]
+fn pyramid_tests_never_hide_what_the_cpu_pyramid_finds_visible() {
+    use occlude_core::depth_pyramid::{box_footprint, DepthPyramid};
+    let scene = scene();
+    let Some(gpu) = gpu("pyramid_tests_never_hide_what_the_cpu_pyramid_finds_visible", &scene) else { return };
+    let boxes = scattered_boxes();
+    let n = boxes.len() as u32;
+    let camera = camera();
+    let (mut visible, mut hidden, mut hidden_on_gpu) = (0, 0, 0);
+    for (width, height) in [(1, 1), (67, 45), (SIZE, SIZE), (5, 130)] {
+        let mut backend = WgpuBackend::new(Arc::clone(&gpu), &scene, width, height);
+        let c = backend.gpu_culling().unwrap();
+        let set = c.create_boxes(&boxes);
+        let ids = c.create_list(n, &(0..n).collect::<Vec<_>>());
+        let flags = c.create_flags(n);
+        let pyramid = c.create_pyramid();
+        for reach in [2, 8] {
+            backend.begin_frame(&camera);
+            backend.draw(&[WALL, BESIDE, IN_FRONT]);
+            let c = backend.gpu_culling().unwrap();
+            c.clear_flags(flags);
+            c.build_pyramid(pyramid);
+            c.test_boxes_pyramid(set, ids, pyramid, reach, flags);
+            backend.end_frame();
+            let on_gpu = read_flags(&mut backend, flags);
+            let mut depth = Vec::new();
+            backend.depth_image(&mut depth);
+            assert_eq!(backend.failure(), None);
+            let mut cpu = DepthPyramid::new(width, height);
+            cpu.build(&depth);
+            let vp = camera.view_projection();
+            let frustum = camera.frustum();
+            let on_cpu: Vec<u32> = boxes
+                .iter()
+                .map(|b| {
+                    let b = occlude_core::query_box::padded(b);
+                    let visible = camera.box_touches_near_region(&b)
+                        || frustum.intersects(&b) && cpu.test(&box_footprint(&vp, width, height, &b), reach).visible;
+                    u32::from(visible)
+                })
+                .collect();
+            let what = format!("{width}x{height}, reach {reach}");
+            let hidden_on_cpu = on_cpu.iter().filter(|&&v| v == 0).count();
+            (visible, hidden) = (visible + boxes.len() - hidden_on_cpu, hidden + hidden_on_cpu);
+            let falsely_hidden: Vec<usize> = (0..boxes.len()).filter(|&i| on_cpu[i] == 1 && on_gpu[i] == 0).collect();
+            assert!(falsely_hidden.is_empty(), "{what}: the GPU hides boxes {falsely_hidden:?}");
+            let extra = (0..boxes.len()).filter(|&i| on_cpu[i] == 0 && on_gpu[i] == 1).count();
+            hidden_on_gpu += hidden_on_cpu - extra;
+            eprintln!("{what}: {hidden_on_cpu} boxes hidden on the CPU, {extra} of them visible on the GPU");
+        }
+    }
+    assert!(visible > 0 && hidden > 0, "the CPU finds {visible} boxes visible and {hidden} hidden in all");
+    assert!(hidden_on_gpu > 0, "the GPU hides no box");
 }
