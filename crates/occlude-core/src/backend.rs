@@ -97,6 +97,14 @@ pub struct CpuCullingWork {
     pub boxes: u64,
 }
 
+impl std::ops::AddAssign for CpuCullingWork {
+    fn add_assign(&mut self, other: Self) {
+        self.triangles += other.triangles;
+        self.tiles += other.tiles;
+        self.boxes += other.boxes;
+    }
+}
+
 /// The render state a command needs: a material for draws, the query state
 /// (depth writes off) for occlusion queries. Switching it between commands is
 /// a state change (CHC++ paper, section 4).

@@ -213,11 +213,20 @@ fn render_occluders(
         let mesh = &ctx.scene.meshes[inst.mesh as usize];
         let done =
             buffer.render_triangles(&mesh.positions, &mesh.indices, view_projection * inst.transform, CullMode::Back);
-        work.triangles += done.triangles;
-        work.tiles += done.tiles;
+        work += CpuCullingWork { triangles: done.triangles, tiles: done.tiles, boxes: 0 };
     }
     work
 }
+
+/// Charges `work` on the backend's clock and adds it to the frame's
+/// counters.
+fn charge(total: &mut CpuCullingWork, backend: &mut dyn Backend, work: CpuCullingWork) {
+    backend.cpu_culling(work);
+    *total += work;
+}
+
+/// The work of testing one box against the buffer.
+const ONE_BOX: CpuCullingWork = CpuCullingWork { triangles: 0, tiles: 0, boxes: 1 };
 
 /// `view_projection` with clip-space depth pulled towards the eye by
 /// [`QUERY_DEPTH_BIAS`] (`z - bias * w`), as query boxes are drawn.
@@ -250,57 +259,44 @@ impl CullingMethod for MaskedOcclusion {
         let view_projection = ctx.camera.view_projection();
         let box_projection = biased(view_projection);
 
-        let occluder_work = render_occluders(buffer, ctx, view_projection, &before);
-        backend.cpu_culling(occluder_work);
-        self.work = occluder_work;
+        self.work = CpuCullingWork::default();
+        charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &before));
         self.drawn.clear();
 
         let h = ctx.hierarchy;
-        let eye = ctx.camera.position;
         let mut queue = FrontToBack::new();
-        if ctx.in_frustum(h.root()) {
-            queue.push_node(h, h.root(), eye);
-        }
+        ctx.push_in_frustum(&[h.root()], &mut queue);
         let mut candidates = Vec::new();
         while let Some(node) = queue.pop() {
             backend.traverse(1);
             let visible = box_may_be_visible(buffer, ctx, box_projection, h.bounds(node));
-            backend.cpu_culling(CpuCullingWork { boxes: 1, ..Default::default() });
-            self.work.boxes += 1;
+            charge(&mut self.work, backend, ONE_BOX);
             if !visible {
                 continue;
             }
             if h.is_leaf(node) {
                 // A leaf of several objects tests each object's own box.
                 candidates.clear();
+                let alone = h.instances(node).len() == 1;
                 for &i in h.instances(node) {
                     if ctx.was_drawn(i) {
                         continue;
                     }
-                    let alone = h.instances(node).len() == 1;
                     if alone || box_may_be_visible(buffer, ctx, box_projection, &ctx.scene.instances[i as usize].bounds)
                     {
                         candidates.push(i);
                     }
                     if !alone {
-                        backend.cpu_culling(CpuCullingWork { boxes: 1, ..Default::default() });
-                        self.work.boxes += 1;
+                        charge(&mut self.work, backend, ONE_BOX);
                     }
                 }
                 let drawn = ctx.draw_instances(backend, &candidates);
                 self.drawn.extend_from_slice(drawn);
                 if self.params.occluders == Occluders::Drawn {
-                    let work = render_occluders(buffer, ctx, view_projection, &candidates);
-                    backend.cpu_culling(work);
-                    self.work.triangles += work.triangles;
-                    self.work.tiles += work.tiles;
+                    charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &candidates));
                 }
             } else {
-                for &c in h.children(node) {
-                    if ctx.in_frustum(c) {
-                        queue.push_node(h, c, eye);
-                    }
-                }
+                ctx.push_in_frustum(h.children(node), &mut queue);
             }
         }
     }
