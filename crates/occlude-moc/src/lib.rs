@@ -37,14 +37,17 @@
 //!   buffer shows a pixel, `nearest < E(p) <= B(p)`, so the test says visible.
 //!
 //! # Rasterization
-//! Masks are built per pixel row from each edge's x-intercept (see the `raster`
-//! module: only pixel centres within the intercept's proven rounding band are
-//! tested one by one, so masks are exactly the per-pixel definition above), then
-//! four rows of spans become a subtile's mask by shifts. Inside a rayon pool of
-//! several threads, large triangle sets are set up and binned to bands of
-//! subtile rows in parallel chunks, then drawn in parallel bands, each band
-//! taking its triangles in order:
-//! the buffer is the same whatever the threads. There is no AVX2 path yet.
+//! Per subtile row of a triangle, each edge's x-intercepts on the four pixel
+//! rows are computed at once, then the masks and depth bounds of eight
+//! neighbouring subtiles at once by shifts and one plane evaluation per subtile
+//! (the `raster::lanes` module: only rows whose intercept lies within its proven
+//! rounding band of a pixel boundary are decided pixel by pixel, so masks are
+//! exactly the per-pixel definition above). These steps run in AVX2 where the
+//! CPU has it (detected at run time) and in portable code otherwise, with
+//! bit-identical results. Inside a rayon pool of several threads, large
+//! triangle sets are set up and binned to bands of subtile rows in parallel
+//! chunks, then drawn in parallel bands, each band taking its triangles in
+//! order: the buffer is the same whatever the threads.
 
 mod buffer;
 mod clip;

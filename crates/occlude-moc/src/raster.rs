@@ -1,6 +1,7 @@
-//! Occluder rasterization: per pixel row, each edge's span from its x-intercept,
-//! the spans of four rows turned into a subtile's coverage mask by shifts, and the
-//! triangle's farthest depth over the subtile from one corner.
+//! Occluder rasterization: per subtile row, each edge's x-intercepts on the
+//! four pixel rows, then the coverage masks of the subtiles in reach by shifts
+//! of the rows' spans and their depth bounds from the triangle's plane, eight
+//! subtiles at a time ([`lanes`], in AVX2 where the CPU has it: [`avx2`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with a tie rule). Along a row that
@@ -15,6 +16,12 @@ use crate::clip::clip_near;
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 use rayon::prelude::*;
+
+mod avx2;
+mod lanes;
+
+use avx2::Avx2;
+use lanes::{Spans, LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -143,13 +150,6 @@ fn floor_in(v: f64, min: f64, max: f64) -> i32 {
     i - i32::from(f64::from(i) > v)
 }
 
-/// The bits of pixels `lo..hi` of an 8-pixel subtile row starting at `x`.
-#[inline]
-fn row_bits(lo: i32, hi: i32, x: i32) -> u32 {
-    let (l, h) = ((lo - x).clamp(0, 8), (hi - x).clamp(0, 8));
-    (1u32 << h).saturating_sub(1u32 << l)
-}
-
 /// A triangle's depth plane `z = zx x + zy y + z0` and its farthest vertex depth.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DepthPlane {
@@ -211,6 +211,10 @@ pub(crate) struct ScreenTriangle {
     y1: i32,
     /// Intercept bands of the edges ([`Edge::band`]).
     bands: [f64; 3],
+    /// The range `x0 - 2.5 ..= x1 + 2.5` intercepts are clamped to: pixels of
+    /// the window keep their side, and no pixel boundary is near a clamped end.
+    t_min: f64,
+    t_max: f64,
 }
 
 impl ScreenTriangle {
@@ -244,7 +248,8 @@ impl ScreenTriangle {
         }
         let edges = [Edge::new(t[0], t[1]), Edge::new(t[1], t[2]), Edge::new(t[2], t[0])];
         let bands = edges.map(|e| e.band(w, h));
-        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t), x0, x1, y0, y1, bands })
+        let (t_min, t_max) = (f64::from(x0) - 2.5, f64::from(x1) + 2.5);
+        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t), x0, x1, y0, y1, bands, t_min, t_max })
     }
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
@@ -269,57 +274,71 @@ struct Band<'a> {
     width: u32,
     height: u32,
     merge: MergeMode,
+    /// The AVX2 lanes, where the CPU has them; else the portable ones.
+    avx2: Option<Avx2>,
 }
 
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
-    /// the four pixel rows' spans, then per subtile in their reach, the mask and
-    /// the depth bound, merged.
+    /// the four pixel rows' spans ([`Self::spans`]), then per [`LANES`] subtiles
+    /// in their reach, the masks and depth bounds, merged.
     fn draw(&mut self, tri: &ScreenTriangle) {
         let (r0, r1) = tri.subtile_rows();
         let last = self.first + self.subtiles.len() as u32 / self.cols;
         for sy in r0.max(self.first)..r1.min(last) {
-            let mut spans = [(0i32, 0i32); 4];
-            let (mut left, mut right) = (tri.x1, tri.x0);
-            for (r, span) in spans.iter_mut().enumerate() {
-                let y = (sy * 4) as i32 + r as i32;
-                if y < tri.y0 || y >= tri.y1 {
-                    continue;
-                }
-                let (mut lo, mut hi) = (tri.x0, tri.x1);
-                for (edge, &band) in tri.edges.iter().zip(&tri.bands) {
-                    (lo, hi) = edge.span(y, lo, hi, band);
-                    if lo >= hi {
-                        break;
-                    }
-                }
-                if lo < hi {
-                    *span = (lo, hi);
-                    left = left.min(lo);
-                    right = right.max(hi);
-                }
-            }
-            if left >= right {
+            let spans = self.spans(tri, sy);
+            let rows = (0..4).filter(|&r| spans.lo[r] < spans.hi[r]);
+            let (Some(left), Some(right)) = (rows.clone().map(|r| spans.lo[r]).min(), rows.map(|r| spans.hi[r]).max())
+            else {
                 continue;
-            }
+            };
             let row = ((sy - self.first) * self.cols) as usize;
-            let by = f64::from(sy * 4);
             let bottom = sy * 4 + 4 > self.height;
-            for sx in (left / 8) as u32..=((right - 1) / 8) as u32 {
-                let bx = (sx * 8) as i32;
-                let cover =
-                    spans.iter().enumerate().fold(0u32, |m, (r, &(lo, hi))| m | row_bits(lo, hi, bx) << (8 * r));
-                if cover != 0 {
-                    let depth = tri.plane.subtile_bound(f64::from(bx), by);
-                    let outside = if bottom || sx * 8 + 8 > self.width {
-                        outside_mask(self.width, self.height, sx, sy)
-                    } else {
-                        0
-                    };
-                    self.subtiles[row + sx as usize].merge(cover | outside, depth, self.merge);
+            let (first, end) = ((left / 8) as u32, ((right - 1) / 8 + 1) as u32);
+            for sx in (first..end).step_by(LANES) {
+                let (cover, depth) = match self.avx2 {
+                    Some(avx2) => avx2.subtile_lanes(tri, &spans, sx, sy),
+                    None => lanes::subtile_lanes(tri, &spans, sx, sy),
+                };
+                for (l, (&cover, &depth)) in cover.iter().zip(&depth).enumerate().take((end - sx) as usize) {
+                    if cover != 0 {
+                        let sx = sx + l as u32;
+                        let outside = if bottom || sx * 8 + 8 > self.width {
+                            outside_mask(self.width, self.height, sx, sy)
+                        } else {
+                            0
+                        };
+                        self.subtiles[row + sx as usize].merge(cover | outside, depth, self.merge);
+                    }
                 }
             }
         }
+    }
+
+    /// The covered pixels of the four rows of subtile row `sy`: the edges the
+    /// lanes decide, then the others row by row with the exact scalar rule, and
+    /// rows outside the triangle's window empty.
+    fn spans(&self, tri: &ScreenTriangle, sy: u32) -> Spans {
+        let y = (sy * 4) as i32;
+        let mut spans = match self.avx2 {
+            Some(avx2) => avx2.edge_spans(tri, y),
+            None => lanes::edge_spans(tri, y),
+        };
+        for r in 0..4 {
+            let y = y + r as i32;
+            if y < tri.y0 || y >= tri.y1 {
+                (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
+                continue;
+            }
+            for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+                if spans.exact >> i & 1 == 1 {
+                    let (lo, hi) = edge.span(y, tri.x0, tri.x1, band);
+                    spans.lo[r] = spans.lo[r].max(lo);
+                    spans.hi[r] = spans.hi[r].min(hi);
+                }
+            }
+        }
+        spans
     }
 }
 
@@ -434,9 +453,9 @@ impl MaskedBuffer {
             })
             .collect();
         chunks.iter().for_each(|(_, w)| work += *w);
-        let (cols, merge) = (self.cols, self.merge);
+        let (cols, merge, avx2) = (self.cols, self.merge, Avx2::detect());
         self.subtiles.par_chunks_mut(cols as usize * BAND_ROWS).enumerate().for_each(|(b, subtiles)| {
-            let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge };
+            let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
                 for &i in chunk.in_band(b) {
                     band.draw(&chunk.tris[i as usize]);
@@ -448,6 +467,11 @@ impl MaskedBuffer {
 
     /// The whole buffer as one band.
     fn whole(&mut self) -> Band<'_> {
+        self.whole_with(Avx2::detect())
+    }
+
+    /// The whole buffer as one band, with the AVX2 lanes or the portable ones.
+    fn whole_with(&mut self, avx2: Option<Avx2>) -> Band<'_> {
         Band {
             subtiles: &mut self.subtiles,
             first: 0,
@@ -455,6 +479,7 @@ impl MaskedBuffer {
             width: self.width,
             height: self.height,
             merge: self.merge,
+            avx2,
         }
     }
 }
@@ -544,6 +569,7 @@ mod tests {
         for round in 0..400 {
             let mut fast = MaskedBuffer::new(w, h).unwrap();
             let mut slow = fast.clone();
+            let mut portable = fast.clone();
             for _ in 0..1 + round % 6 {
                 let size = [2.0, 15.0, 120.0][round % 3];
                 let c = DVec3::new(rng.unit() * 100.0 - 10.0, rng.unit() * 60.0 - 8.0, 0.0);
@@ -562,9 +588,11 @@ mod tests {
                 let tris = [t, [t[0], t[2], t[1]]].into_iter();
                 for tri in tris.filter_map(|t| ScreenTriangle::new(t, CullMode::None, w, h)) {
                     fast.whole().draw(&tri);
+                    portable.whole_with(None).draw(&tri);
                     reference_draw(&mut slow, &tri);
                 }
             }
+            assert_same(&portable, &slow, &format!("portable, round {round}"));
             covered += fast.subtiles.iter().filter(|s| s.mask != 0 || s.reference < 1.0).count();
             assert_same(&fast, &slow, &format!("round {round}"));
         }

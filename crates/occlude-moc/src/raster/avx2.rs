@@ -1,0 +1,129 @@
+//! The AVX2 versions of [`super::lanes`]' two steps: the four rows' intercepts
+//! of an edge in one `f64 x 4` register, and eight subtiles' masks (`i32 x 8`)
+//! and depth bounds (two `f64 x 4`) at once. Same operations in the same order
+//! as the portable versions (products and sums rounded separately, never fused;
+//! `min` taking the second operand on NaN as `f64::min` takes the non-NaN one),
+//! so the results are bit-identical.
+
+use std::arch::x86_64::*;
+
+use super::lanes::{Spans, LANES};
+use super::ScreenTriangle;
+
+/// Proof that the running CPU supports AVX2: a value exists only where it does,
+/// which makes calling this module's `target_feature` functions sound.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx2(());
+
+impl Avx2 {
+    /// `Some` when the running CPU supports AVX2.
+    pub(crate) fn detect() -> Option<Self> {
+        is_x86_feature_detected!("avx2").then_some(Self(()))
+    }
+
+    /// [`lanes::edge_spans`](super::lanes::edge_spans), in AVX2.
+    pub(crate) fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { edge_spans(tri, y) }
+    }
+
+    /// [`lanes::subtile_lanes`](super::lanes::subtile_lanes), in AVX2.
+    pub(crate) fn subtile_lanes(
+        self,
+        tri: &ScreenTriangle,
+        spans: &Spans,
+        sx: u32,
+        sy: u32,
+    ) -> ([u32; LANES], [f32; LANES]) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { subtile_lanes(tri, spans, sx, sy) }
+    }
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
+    let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
+    let py = _mm256_add_pd(_mm256_cvtepi32_pd(rows), _mm256_set1_pd(0.5));
+    let (t_min, t_max) = (_mm256_set1_pd(tri.t_min), _mm256_set1_pd(tri.t_max));
+    let (half, one) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
+    let (mut lo, mut hi) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
+    let mut exact = 0u8;
+    for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+        let t = _mm256_sub_pd(
+            _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset)),
+            half,
+        );
+        let ordered = _mm256_cmp_pd::<_CMP_ORD_Q>(t, t);
+        let t = _mm256_max_pd(_mm256_min_pd(t, t_max), t_min);
+        let k = _mm256_floor_pd(t);
+        let fraction = _mm256_sub_pd(t, k);
+        let band = _mm256_set1_pd(band);
+        let safe = _mm256_and_pd(
+            ordered,
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(fraction, band),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_sub_pd(one, fraction), band),
+            ),
+        );
+        if _mm256_movemask_pd(safe) != 0xF {
+            exact |= 1 << i;
+            continue;
+        }
+        let bound = _mm_add_epi32(_mm256_cvttpd_epi32(k), _mm_set1_epi32(1));
+        if edge.a > 0.0 {
+            lo = _mm_max_epi32(lo, bound);
+        } else {
+            hi = _mm_min_epi32(hi, bound);
+        }
+    }
+    let mut spans = Spans { lo: [0; 4], hi: [0; 4], exact };
+    _mm_storeu_si128(spans.lo.as_mut_ptr().cast(), lo);
+    _mm_storeu_si128(spans.hi.as_mut_ptr().cast(), hi);
+    spans
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
+    let bx = _mm256_mullo_epi32(
+        _mm256_add_epi32(_mm256_set1_epi32(sx as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)),
+        _mm256_set1_epi32(8),
+    );
+    let (zero, eight, ones) = (_mm256_setzero_si256(), _mm256_set1_epi32(8), _mm256_set1_epi32(1));
+    let mut cover = zero;
+    for r in 0..4 {
+        let clamp =
+            |v: i32| _mm256_min_epi32(_mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(v), bx), zero), eight);
+        let (lo, hi) = (clamp(spans.lo[r]), clamp(spans.hi[r]));
+        let hi = _mm256_max_epi32(hi, lo);
+        let bits = _mm256_sub_epi32(_mm256_sllv_epi32(ones, hi), _mm256_sllv_epi32(ones, lo));
+        cover = _mm256_or_si256(cover, _mm256_sllv_epi32(bits, _mm256_set1_epi32(8 * r as i32)));
+    }
+    let plane = &tri.plane;
+    let corner_x = _mm256_add_epi32(bx, _mm256_set1_epi32(if plane.zx > 0.0 { 8 } else { 0 }));
+    let by = f64::from(sy * 4);
+    let y_term = _mm256_set1_pd(plane.zy * if plane.zy > 0.0 { by + 4.0 } else { by });
+    let (zx, z0, zmax) = (_mm256_set1_pd(plane.zx), _mm256_set1_pd(plane.z0), _mm256_set1_pd(plane.zmax));
+    let half = |x: __m128i| {
+        let at = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(zx, _mm256_cvtepi32_pd(x)), y_term), z0);
+        round_far(_mm256_min_pd(at, zmax))
+    };
+    let mut out = ([0u32; LANES], [0f32; LANES]);
+    _mm256_storeu_si256(out.0.as_mut_ptr().cast(), cover);
+    _mm_storeu_ps(out.1.as_mut_ptr(), half(_mm256_castsi256_si128(corner_x)));
+    _mm_storeu_ps(out.1.as_mut_ptr().add(4), half(_mm256_extracti128_si256::<1>(corner_x)));
+    out
+}
+
+/// [`super::round_far`] on four lanes: nudged farther, rounded to `f32`, one
+/// unit up where rounding went nearer and the result is not negative.
+#[target_feature(enable = "avx2")]
+unsafe fn round_far(depth: __m256d) -> __m128 {
+    let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), depth);
+    let depth = _mm256_add_pd(_mm256_add_pd(depth, _mm256_mul_pd(abs, _mm256_set1_pd(1e-9))), _mm256_set1_pd(1e-12));
+    let d = _mm256_cvtpd_ps(depth);
+    let nearer = _mm256_castpd_si256(_mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_cvtps_pd(d), depth));
+    // The low half of each 64-bit comparison lane, packed into four 32-bit lanes.
+    let nearer = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(nearer, _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
+    let up = _mm_and_si128(nearer, _mm_castps_si128(_mm_cmpge_ps(d, _mm_setzero_ps())));
+    _mm_castsi128_ps(_mm_sub_epi32(_mm_castps_si128(d), up))
+}

@@ -1,0 +1,157 @@
+//! The rasterizer's two inner steps in lanes, for one subtile row (four pixel
+//! rows) of a triangle, after HPG 2016 section 4 (coverage from the edges'
+//! x-intercepts per scanline, then shifts, no per-pixel work):
+//!
+//! - [`edge_spans`]: each edge's x-intercept on the four pixel rows at once,
+//!   giving each row's covered pixels `lo..hi`;
+//! - [`subtile_lanes`]: from those spans, the coverage masks and depth bounds of
+//!   eight neighbouring subtiles at once.
+//!
+//! Each has this portable version and an AVX2 one ([`super::avx2`]) that does the
+//! same `f64` and integer operations in the same order (never a fused
+//! multiply-add), so both give bit-identical results; the tests check it on
+//! random triangles.
+//!
+//! # Exactness
+//! An edge's intercept `t` on row `y` decides its covered pixels without testing
+//! them when `t`'s distance to the nearest pixel boundary exceeds the edge's
+//! proven error band ([`Edge::band`](super::Edge)): then the pixels up to
+//! `floor(t)` lie on one side and those from `floor(t) + 1` on the other, exactly
+//! as [`Edge::covers`](super::Edge) decides them. When any of the four rows is
+//! within the band (rare), or the edge is horizontal (band infinite), the edge is
+//! reported in [`Spans::exact`] and the caller decides its rows with the scalar,
+//! pixel-exact [`Edge::span`](super::Edge). A row's span is the intersection of
+//! its edges' half-lines with the triangle's pixel window, so the order in which
+//! edges are applied does not matter. Masks are therefore exactly the per-pixel
+//! definition.
+
+use super::{floor_in, ScreenTriangle};
+
+/// Subtiles handled by one [`subtile_lanes`] call.
+pub(crate) const LANES: usize = 8;
+
+/// The covered pixels `lo[r]..hi[r]` of the four pixel rows of a subtile row
+/// (`lo >= hi`: none), from the edges the lanes decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Spans {
+    pub lo: [i32; 4],
+    pub hi: [i32; 4],
+    /// Bit `i` set: edge `i` is not yet applied and must be decided row by row
+    /// with the exact scalar rule.
+    pub exact: u8,
+}
+
+/// Portable [`Spans`] of the four pixel rows from `y` of `tri`, each row
+/// starting as the triangle's window `x0..x1`.
+pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
+    let mut spans = Spans { lo: [tri.x0; 4], hi: [tri.x1; 4], exact: 0 };
+    'edges: for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+        let mut bound = [0i32; 4];
+        for (r, b) in bound.iter_mut().enumerate() {
+            let py = f64::from(y + r as i32) + 0.5;
+            let t = (edge.slope * py + edge.offset - 0.5).clamp(tri.t_min, tri.t_max);
+            let k = floor_in(t, tri.t_min, tri.t_max);
+            let fraction = t - f64::from(k);
+            if !(fraction > band && 1.0 - fraction > band) {
+                spans.exact |= 1 << i;
+                continue 'edges;
+            }
+            *b = k + 1;
+        }
+        let right = edge.a > 0.0;
+        let ends = if right { &mut spans.lo } else { &mut spans.hi };
+        for (end, b) in ends.iter_mut().zip(bound) {
+            *end = if right { (*end).max(b) } else { (*end).min(b) };
+        }
+    }
+    spans
+}
+
+/// Portable coverage masks and depth bounds of the [`LANES`] subtiles from
+/// column `sx` of subtile row `sy`: lane `l` is subtile `sx + l`, its mask bit
+/// `x + 8 y` set for the pixels of row `y` inside `spans` (a row's bits by
+/// shifts of its span's ends), its depth [`DepthPlane::subtile_bound`](super::DepthPlane).
+pub(crate) fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
+    let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
+    let by = f64::from(sy * 4);
+    for l in 0..LANES {
+        let bx = (sx as i32 + l as i32) * 8;
+        for r in 0..4 {
+            let (lo, hi) = ((spans.lo[r] - bx).clamp(0, 8), (spans.hi[r] - bx).clamp(0, 8));
+            cover[l] |= ((1u32 << hi.max(lo)) - (1u32 << lo)) << (8 * r);
+        }
+        depth[l] = tri.plane.subtile_bound(f64::from(bx), by);
+    }
+    (cover, depth)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::CullMode;
+    use glam::DVec3;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Random triangles of sizes 1 to 500 pixels on odd screen sizes, snapped to
+    /// half pixels in some (centres on edges, horizontal and vertical edges).
+    fn triangles(seed: u64, count: usize) -> Vec<(u32, u32, ScreenTriangle)> {
+        let mut rng = Lcg(seed);
+        let sizes = [1.0, 3.0, 10.0, 25.0, 50.0, 100.0, 250.0, 500.0];
+        let screens = [(1, 1), (7, 5), (83, 45), (641, 479), (1023, 767)];
+        let mut out = Vec::new();
+        while out.len() < count {
+            let (w, h) = screens[out.len() % screens.len()];
+            let size = sizes[out.len() % sizes.len()];
+            let c = DVec3::new(rng.unit() * f64::from(w + 20) - 10.0, rng.unit() * f64::from(h + 20) - 10.0, 0.0);
+            let mut t = [0; 3].map(|_| c + DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, 0.0) * size);
+            for p in &mut t {
+                p.z = rng.unit();
+                if out.len() % 3 == 0 {
+                    (p.x, p.y) = ((p.x * 2.0).round() / 2.0, (p.y * 2.0).round() / 2.0);
+                }
+            }
+            if out.len() % 5 == 0 {
+                t[1].y = t[0].y;
+            }
+            if out.len() % 7 == 0 {
+                t[2].x = t[0].x;
+            }
+            if let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h) {
+                out.push((w, h, tri));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn avx2_lanes_equal_the_portable_lanes() {
+        let Some(avx2) = super::super::avx2::Avx2::detect() else {
+            eprintln!("skipped: no AVX2 on this CPU");
+            return;
+        };
+        let mut subtiles = 0;
+        for (_, _, tri) in triangles(11, 4000) {
+            let (r0, r1) = tri.subtile_rows();
+            for sy in r0..r1 {
+                let y = (sy * 4) as i32;
+                let spans = edge_spans(&tri, y);
+                assert_eq!(avx2.edge_spans(&tri, y), spans, "{:?} row {sy}", tri.edges);
+                for sx in (tri.x0 / 8) as u32..=((tri.x1 - 1) / 8) as u32 {
+                    let (c, d) = subtile_lanes(&tri, &spans, sx, sy);
+                    let (ac, ad) = avx2.subtile_lanes(&tri, &spans, sx, sy);
+                    assert_eq!(ac, c);
+                    assert_eq!(ad.map(f32::to_bits), d.map(f32::to_bits));
+                    subtiles += c.iter().filter(|&&m| m != 0).count();
+                }
+            }
+        }
+        assert!(subtiles > 10_000, "{subtiles}");
+    }
+}
