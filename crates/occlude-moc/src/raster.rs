@@ -287,54 +287,49 @@ impl Band<'_> {
         let last = self.first + self.subtiles.len() as u32 / self.cols;
         for sy in r0.max(self.first)..r1.min(last) {
             let spans = self.spans(tri, sy);
-            let rows = (0..4).filter(|&r| spans.lo[r] < spans.hi[r]);
-            let (Some(left), Some(right)) = (rows.clone().map(|r| spans.lo[r]).min(), rows.map(|r| spans.hi[r]).max())
-            else {
-                continue;
-            };
+            let Some((left, right)) = spans.reach() else { continue };
             let row = ((sy - self.first) * self.cols) as usize;
             let bottom = sy * 4 + 4 > self.height;
             let (first, end) = ((left / 8) as u32, ((right - 1) / 8 + 1) as u32);
-            for sx in (first..end).step_by(LANES) {
+            let mut sx = first;
+            while sx < end {
                 let (cover, depth) = match self.avx2 {
                     Some(avx2) => avx2.subtile_lanes(tri, &spans, sx, sy),
                     None => lanes::subtile_lanes(tri, &spans, sx, sy),
                 };
-                for (l, (&cover, &depth)) in cover.iter().zip(&depth).enumerate().take((end - sx) as usize) {
+                for l in 0..(end - sx).min(LANES as u32) {
+                    let (cover, x) = (cover[l as usize], sx + l);
                     if cover != 0 {
-                        let sx = sx + l as u32;
-                        let outside = if bottom || sx * 8 + 8 > self.width {
-                            outside_mask(self.width, self.height, sx, sy)
+                        let outside = if bottom || x * 8 + 8 > self.width {
+                            outside_mask(self.width, self.height, x, sy)
                         } else {
                             0
                         };
-                        self.subtiles[row + sx as usize].merge(cover | outside, depth, self.merge);
+                        self.subtiles[row + x as usize].merge(cover | outside, depth[l as usize], self.merge);
                     }
                 }
+                sx += LANES as u32;
             }
         }
     }
 
     /// The covered pixels of the four rows of subtile row `sy`: the edges the
-    /// lanes decide, then the others row by row with the exact scalar rule, and
-    /// rows outside the triangle's window empty.
+    /// lanes decide, then the others (rarely any) row by row with the exact
+    /// scalar rule.
     fn spans(&self, tri: &ScreenTriangle, sy: u32) -> Spans {
         let y = (sy * 4) as i32;
         let mut spans = match self.avx2 {
             Some(avx2) => avx2.edge_spans(tri, y),
             None => lanes::edge_spans(tri, y),
         };
-        for r in 0..4 {
-            let y = y + r as i32;
-            if y < tri.y0 || y >= tri.y1 {
-                (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
-                continue;
-            }
-            for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
-                if spans.exact >> i & 1 == 1 {
-                    let (lo, hi) = edge.span(y, tri.x0, tri.x1, band);
-                    spans.lo[r] = spans.lo[r].max(lo);
-                    spans.hi[r] = spans.hi[r].min(hi);
+        if spans.exact != 0 {
+            for r in 0..4 {
+                for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+                    if spans.exact >> i & 1 == 1 {
+                        let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
+                        spans.lo[r] = spans.lo[r].max(lo);
+                        spans.hi[r] = spans.hi[r].min(hi);
+                    }
                 }
             }
         }

@@ -46,7 +46,10 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
     let py = _mm256_add_pd(_mm256_cvtepi32_pd(rows), _mm256_set1_pd(0.5));
     let (t_min, t_max) = (_mm256_set1_pd(tri.t_min), _mm256_set1_pd(tri.t_max));
     let (half, one) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
-    let (mut lo, mut hi) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
+    let inside =
+        _mm_andnot_si128(_mm_cmpgt_epi32(_mm_set1_epi32(tri.y0), rows), _mm_cmpgt_epi32(_mm_set1_epi32(tri.y1), rows));
+    let (x0, x1) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
+    let (mut lo, mut hi) = (_mm_blendv_epi8(x1, x0, inside), _mm_blendv_epi8(x0, x1, inside));
     let mut exact = 0u8;
     for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
         let t = _mm256_sub_pd(

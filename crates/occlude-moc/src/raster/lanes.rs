@@ -41,10 +41,30 @@ pub(crate) struct Spans {
     pub exact: u8,
 }
 
+impl Spans {
+    /// The pixels `left..right` the non-empty rows reach, `None` when all are
+    /// empty.
+    pub(crate) fn reach(&self) -> Option<(i32, i32)> {
+        let (mut left, mut right) = (i32::MAX, i32::MIN);
+        for (&lo, &hi) in self.lo.iter().zip(&self.hi) {
+            if lo < hi {
+                (left, right) = (left.min(lo), right.max(hi));
+            }
+        }
+        (left < right).then_some((left, right))
+    }
+}
+
 /// Portable [`Spans`] of the four pixel rows from `y` of `tri`, each row
-/// starting as the triangle's window `x0..x1`.
+/// starting as the triangle's window `x0..x1` (rows outside `y0..y1` empty:
+/// `x1..x0`).
 pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
-    let mut spans = Spans { lo: [tri.x0; 4], hi: [tri.x1; 4], exact: 0 };
+    let mut spans = Spans { lo: [tri.x1; 4], hi: [tri.x0; 4], exact: 0 };
+    for r in 0..4 {
+        if (tri.y0..tri.y1).contains(&(y + r as i32)) {
+            (spans.lo[r], spans.hi[r]) = (tri.x0, tri.x1);
+        }
+    }
     'edges: for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
         let mut bound = [0i32; 4];
         for (r, b) in bound.iter_mut().enumerate() {
