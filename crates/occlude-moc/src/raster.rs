@@ -241,8 +241,12 @@ impl ScreenTriangle {
         if lo_x >= hi_x || lo_y >= hi_y {
             return None;
         }
-        let (x0, x1) = ((lo_x - 0.5).ceil().max(0.0) as i32, ((hi_x - 0.5).floor() as i32 + 1).min(width as i32));
-        let (y0, y1) = ((lo_y - 0.5).ceil().max(0.0) as i32, ((hi_y - 0.5).floor() as i32 + 1).min(height as i32));
+        // The first and one past the last pixel centre in lo..hi (both within
+        // 0..=size): ceil(lo - 0.5) and floor(hi - 0.5) + 1.
+        let centres =
+            |lo: f64, hi: f64, size: f64| (-floor_in(0.5 - lo, -size, 1.0), floor_in(hi - 0.5, -1.0, size) + 1);
+        let ((x0, x1), (y0, y1)) = (centres(lo_x, hi_x, w), centres(lo_y, hi_y, h));
+        let (x0, x1, y0, y1) = (x0.max(0), x1.min(width as i32), y0.max(0), y1.min(height as i32));
         if x0 >= x1 || y0 >= y1 {
             return None;
         }

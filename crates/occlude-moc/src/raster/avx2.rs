@@ -8,7 +8,7 @@
 use std::arch::x86_64::*;
 
 use super::lanes::{Spans, LANES};
-use super::ScreenTriangle;
+use super::{DepthPlane, ScreenTriangle};
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
 /// which makes calling this module's `target_feature` functions sound.
@@ -91,12 +91,10 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
         _mm256_add_epi32(_mm256_set1_epi32(sx as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)),
         _mm256_set1_epi32(8),
     );
-    let (zero, eight, ones) = (_mm256_setzero_si256(), _mm256_set1_epi32(8), _mm256_set1_epi32(1));
-    let mut cover = zero;
+    let ones = _mm256_set1_epi32(1);
+    let mut cover = _mm256_setzero_si256();
     for r in 0..4 {
-        let clamp =
-            |v: i32| _mm256_min_epi32(_mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(v), bx), zero), eight);
-        let (lo, hi) = (clamp(spans.lo[r]), clamp(spans.hi[r]));
+        let (lo, hi) = (in_subtile(spans.lo[r], bx), in_subtile(spans.hi[r], bx));
         let hi = _mm256_max_epi32(hi, lo);
         let bits = _mm256_sub_epi32(_mm256_sllv_epi32(ones, hi), _mm256_sllv_epi32(ones, lo));
         cover = _mm256_or_si256(cover, _mm256_sllv_epi32(bits, _mm256_set1_epi32(8 * r as i32)));
@@ -105,20 +103,40 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
     let corner_x = _mm256_add_epi32(bx, _mm256_set1_epi32(if plane.zx > 0.0 { 8 } else { 0 }));
     let by = f64::from(sy * 4);
     let y_term = _mm256_set1_pd(plane.zy * if plane.zy > 0.0 { by + 4.0 } else { by });
-    let (zx, z0, zmax) = (_mm256_set1_pd(plane.zx), _mm256_set1_pd(plane.z0), _mm256_set1_pd(plane.zmax));
-    let half = |x: __m128i| {
-        let at = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(zx, _mm256_cvtepi32_pd(x)), y_term), z0);
-        round_far(_mm256_min_pd(at, zmax))
-    };
     let mut out = ([0u32; LANES], [0f32; LANES]);
     _mm256_storeu_si256(out.0.as_mut_ptr().cast(), cover);
-    _mm_storeu_ps(out.1.as_mut_ptr(), half(_mm256_castsi256_si128(corner_x)));
-    _mm_storeu_ps(out.1.as_mut_ptr().add(4), half(_mm256_extracti128_si256::<1>(corner_x)));
+    _mm_storeu_ps(out.1.as_mut_ptr(), depth_bounds(plane, _mm256_castsi256_si128(corner_x), y_term));
+    _mm_storeu_ps(out.1.as_mut_ptr().add(4), depth_bounds(plane, _mm256_extracti128_si256::<1>(corner_x), y_term));
     out
+}
+
+/// Pixel `x` as a column of each lane's subtile starting at `bx`, clamped to
+/// `0..=8`.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn in_subtile(x: i32, bx: __m256i) -> __m256i {
+    _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(x), bx), _mm256_setzero_si256()),
+        _mm256_set1_epi32(8),
+    )
+}
+
+/// [`DepthPlane::subtile_bound`](super::DepthPlane) on four lanes: the plane
+/// at the corner columns `x` and the row term `y_term` (`zy` times the corner
+/// row), capped by the farthest vertex, rounded far.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn depth_bounds(plane: &DepthPlane, x: __m128i, y_term: __m256d) -> __m128 {
+    let at = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(plane.zx), _mm256_cvtepi32_pd(x)), y_term),
+        _mm256_set1_pd(plane.z0),
+    );
+    round_far(_mm256_min_pd(at, _mm256_set1_pd(plane.zmax)))
 }
 
 /// [`super::round_far`] on four lanes: nudged farther, rounded to `f32`, one
 /// unit up where rounding went nearer and the result is not negative.
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn round_far(depth: __m256d) -> __m128 {
     let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), depth);
