@@ -52,11 +52,48 @@ impl Subtile {
         {
             self.mask = 0;
         }
-        self.working = if self.mask == 0 { depth } else { self.working.max(depth) };
+        self.working = if self.mask != 0 && self.working > depth { self.working } else { depth };
         self.mask |= cover;
         if self.mask == u32::MAX {
             self.reference = self.working;
             self.mask = 0;
+        }
+    }
+}
+
+/// Eight horizontally neighbouring subtiles (lane `l` is column `8 g + l` of
+/// group `g` of a row), stored field by field so that the rasterizer loads and
+/// merges all eight in lanes.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(crate) struct Group {
+    pub mask: [u32; 8],
+    pub working: [f32; 8],
+    pub reference: [f32; 8],
+}
+
+impl Group {
+    /// Subtile `l` of the group.
+    #[inline]
+    pub(crate) fn get(&self, l: usize) -> Subtile {
+        Subtile { mask: self.mask[l], working: self.working[l], reference: self.reference[l] }
+    }
+
+    /// Replaces subtile `l` of the group.
+    #[inline]
+    pub(crate) fn set(&mut self, l: usize, s: Subtile) {
+        (self.mask[l], self.working[l], self.reference[l]) = (s.mask, s.working, s.reference);
+    }
+
+    /// [`Subtile::merge`] of each lane whose `cover` is not empty.
+    #[inline]
+    pub(crate) fn merge(&mut self, cover: &[u32; 8], depth: &[f32; 8], mode: MergeMode) {
+        for l in 0..8 {
+            if cover[l] != 0 {
+                let mut s = self.get(l);
+                s.merge(cover[l], depth[l], mode);
+                self.set(l, s);
+            }
         }
     }
 }
@@ -71,7 +108,7 @@ pub(crate) fn outside_mask(width: u32, height: u32, sx: u32, sy: u32) -> u32 {
     !(0..rows).fold(0, |m, r| m | row << (8 * r))
 }
 
-const CLEAR: Subtile = Subtile { mask: 0, working: 0.0, reference: 1.0 };
+const CLEAR: Group = Group { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8] };
 
 /// A conservative, low-resolution-in-depth occlusion buffer.
 ///
@@ -81,7 +118,7 @@ const CLEAR: Subtile = Subtile { mask: 0, working: 0.0, reference: 1.0 };
 /// [`Occluded`](crate::Visibility::Occluded) for something an exact depth buffer
 /// of the same occluders would show; it may say visible for hidden things.
 ///
-/// Memory: 12 bytes per 32 pixels. Cost: proportional to the subtiles each
+/// Memory: 12 bytes per 32 pixels (the width padded to 64). Cost: proportional to the subtiles each
 /// triangle's bounding box touches.
 ///
 /// ```
@@ -100,11 +137,13 @@ const CLEAR: Subtile = Subtile { mask: 0, working: 0.0, reference: 1.0 };
 pub struct MaskedBuffer {
     pub(crate) width: u32,
     pub(crate) height: u32,
-    /// Subtiles per row (the width padded to whole 32-pixel tiles).
+    /// Subtiles per row (the width padded to whole 64-pixel groups of eight
+    /// subtiles).
     pub(crate) cols: u32,
     /// Subtile rows (the height padded to whole 8-pixel tiles).
     pub(crate) rows: u32,
-    pub(crate) subtiles: Vec<Subtile>,
+    /// Row by row, `cols / 8` groups a row.
+    pub(crate) groups: Vec<Group>,
     /// The merge rule used by renders.
     pub merge: MergeMode,
 }
@@ -113,7 +152,7 @@ impl MaskedBuffer {
     /// A cleared buffer of `width` x `height` pixels; an error if either is zero.
     pub fn new(width: u32, height: u32) -> Result<Self, Error> {
         let mut b =
-            MaskedBuffer { width: 0, height: 0, cols: 0, rows: 0, subtiles: Vec::new(), merge: MergeMode::default() };
+            MaskedBuffer { width: 0, height: 0, cols: 0, rows: 0, groups: Vec::new(), merge: MergeMode::default() };
         b.resize(width, height)?;
         Ok(b)
     }
@@ -125,11 +164,17 @@ impl MaskedBuffer {
         }
         self.width = width;
         self.height = height;
-        self.cols = width.div_ceil(32) * 4;
+        self.cols = width.div_ceil(64) * 8;
         self.rows = height.div_ceil(8) * 2;
-        self.subtiles.clear();
-        self.subtiles.resize((self.cols * self.rows) as usize, CLEAR);
+        self.groups.clear();
+        self.groups.resize((self.cols / 8 * self.rows) as usize, CLEAR);
         Ok(())
+    }
+
+    /// Subtile (`sx`, `sy`).
+    #[inline]
+    pub(crate) fn subtile(&self, sx: u32, sy: u32) -> Subtile {
+        self.groups[(sy * self.cols / 8 + sx / 8) as usize].get((sx % 8) as usize)
     }
 
     /// Screen width in pixels.
@@ -144,7 +189,7 @@ impl MaskedBuffer {
 
     /// Forgets every occluder: all pixels at the far plane (depth 1).
     pub fn clear(&mut self) {
-        self.subtiles.fill(CLEAR);
+        self.groups.fill(CLEAR);
     }
 
     /// The bound on the stored depth of every pixel, row by row (`width * height`
@@ -153,7 +198,7 @@ impl MaskedBuffer {
         out.clear();
         for y in 0..self.height {
             for x in 0..self.width {
-                let s = &self.subtiles[((y / 4) * self.cols + x / 8) as usize];
+                let s = self.subtile(x / 8, y / 4);
                 let bit = (x % 8) + 8 * (y % 4);
                 out.push(if s.mask >> bit & 1 == 1 { s.working } else { s.reference });
             }

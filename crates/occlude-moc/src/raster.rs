@@ -11,7 +11,7 @@
 //! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
 //! what the pixel-by-pixel definition gives.
 
-use crate::buffer::{outside_mask, MaskedBuffer, MergeMode, Subtile};
+use crate::buffer::{outside_mask, Group, MaskedBuffer, MergeMode};
 use crate::clip::clip_near;
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -269,10 +269,10 @@ impl ScreenTriangle {
     }
 }
 
-/// Subtile rows `first..first + subtiles.len() / cols` of a buffer, which a
+/// Subtile rows `first..first + groups.len() * 8 / cols` of a buffer, which a
 /// thread rasterizes on its own.
 struct Band<'a> {
-    subtiles: &'a mut [Subtile],
+    groups: &'a mut [Group],
     first: u32,
     cols: u32,
     width: u32,
@@ -288,31 +288,28 @@ impl Band<'_> {
     /// in their reach, the masks and depth bounds, merged.
     fn draw(&mut self, tri: &ScreenTriangle) {
         let (r0, r1) = tri.subtile_rows();
-        let last = self.first + self.subtiles.len() as u32 / self.cols;
+        let last = self.first + (self.groups.len() * LANES) as u32 / self.cols;
         for sy in r0.max(self.first)..r1.min(last) {
             let spans = self.spans(tri, sy);
             let Some((left, right)) = spans.reach() else { continue };
-            let row = ((sy - self.first) * self.cols) as usize;
+            let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
-            let (first, end) = ((left / 8) as u32, ((right - 1) / 8 + 1) as u32);
-            let mut sx = first;
-            while sx < end {
-                let (cover, depth) = match self.avx2 {
+            for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
+                let sx = g * LANES as u32;
+                let (mut cover, depth) = match self.avx2 {
                     Some(avx2) => avx2.subtile_lanes(tri, &spans, sx, sy),
                     None => lanes::subtile_lanes(tri, &spans, sx, sy),
                 };
-                for l in 0..(end - sx).min(LANES as u32) {
-                    let (cover, x) = (cover[l as usize], sx + l);
-                    if cover != 0 {
-                        let outside = if bottom || x * 8 + 8 > self.width {
-                            outside_mask(self.width, self.height, x, sy)
-                        } else {
-                            0
-                        };
-                        self.subtiles[row + x as usize].merge(cover | outside, depth[l as usize], self.merge);
+                if bottom || (sx + LANES as u32) * 8 > self.width {
+                    for (l, c) in cover.iter_mut().enumerate().filter(|(_, c)| **c != 0) {
+                        *c |= outside_mask(self.width, self.height, sx + l as u32, sy);
                     }
                 }
-                sx += LANES as u32;
+                let group = &mut self.groups[row + g as usize];
+                match self.avx2 {
+                    Some(avx2) => avx2.merge(group, &cover, &depth, self.merge),
+                    None => group.merge(&cover, &depth, self.merge),
+                }
             }
         }
     }
@@ -453,8 +450,8 @@ impl MaskedBuffer {
             .collect();
         chunks.iter().for_each(|(_, w)| work += *w);
         let (cols, merge, avx2) = (self.cols, self.merge, Avx2::detect());
-        self.subtiles.par_chunks_mut(cols as usize * BAND_ROWS).enumerate().for_each(|(b, subtiles)| {
-            let mut band = Band { subtiles, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
+        self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
+            let mut band = Band { groups, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
                 for &i in chunk.in_band(b) {
                     band.draw(&chunk.tris[i as usize]);
@@ -472,7 +469,7 @@ impl MaskedBuffer {
     /// The whole buffer as one band, with the AVX2 lanes or the portable ones.
     fn whole_with(&mut self, avx2: Option<Avx2>) -> Band<'_> {
         Band {
-            subtiles: &mut self.subtiles,
+            groups: &mut self.groups,
             first: 0,
             cols: self.cols,
             width: self.width,
@@ -516,6 +513,7 @@ fn screen_triangles(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::buffer::Subtile;
 
     /// The masks by definition: every pixel centre of the subtile tested against
     /// every edge.
@@ -536,8 +534,10 @@ mod tests {
                     let (bx, by) = (f64::from(sx * 8), f64::from(sy * 4));
                     let far = corners.iter().map(|&(dx, dy)| tri.plane.at(bx + dx, by + dy)).fold(f64::MIN, f64::max);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
-                    let s = &mut buffer.subtiles[(sy * buffer.cols + sx) as usize];
+                    let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
+                    let mut s = group.get((sx % 8) as usize);
                     s.merge(cover | outside, round_far(far.min(tri.plane.zmax)), mode);
+                    group.set((sx % 8) as usize, s);
                 }
             }
         }
@@ -551,8 +551,13 @@ mod tests {
         }
     }
 
+    /// Every subtile of the buffer, padding included, group by group.
+    fn subtiles(b: &MaskedBuffer) -> impl Iterator<Item = Subtile> + '_ {
+        b.groups.iter().flat_map(|g| (0..LANES).map(|l| g.get(l)))
+    }
+
     fn assert_same(a: &MaskedBuffer, b: &MaskedBuffer, what: &str) {
-        for (i, (s, r)) in a.subtiles.iter().zip(&b.subtiles).enumerate() {
+        for (i, (s, r)) in subtiles(a).zip(subtiles(b)).enumerate() {
             assert!(
                 s.mask == r.mask && s.working.to_bits() == r.working.to_bits() && s.reference == r.reference,
                 "{what}: subtile {i}: {s:?} vs {r:?}"
@@ -592,7 +597,7 @@ mod tests {
                 }
             }
             assert_same(&portable, &slow, &format!("portable, round {round}"));
-            covered += fast.subtiles.iter().filter(|s| s.mask != 0 || s.reference < 1.0).count();
+            covered += subtiles(&fast).filter(|s| s.mask != 0 || s.reference < 1.0).count();
             assert_same(&fast, &slow, &format!("round {round}"));
         }
         assert!(covered > 2000, "{covered}");
@@ -620,7 +625,7 @@ mod tests {
         };
         for mode in [MergeMode::LayerMerge, MergeMode::QuickMask] {
             let one = run(1, mode);
-            assert!(one.subtiles.iter().filter(|s| s.reference < 1.0).count() > 500);
+            assert!(subtiles(&one).filter(|s| s.reference < 1.0).count() > 500);
             for threads in [2, 3] {
                 assert_same(&run(threads, mode), &one, &format!("{threads} threads, {mode:?}"));
             }

@@ -31,7 +31,7 @@ impl MaskedBuffer {
         }
         for sy in y0 / 4..=(y1 as u32) / 4 {
             for sx in x0 / 8..=(x1 as u32) / 8 {
-                let s = &self.subtiles[(sy * self.cols + sx) as usize];
+                let s = self.subtile(sx, sy);
                 let bound = if s.mask == 0 { s.reference } else { s.reference.max(s.working) };
                 if nearest_depth < bound {
                     return Visibility::Visible;

@@ -9,6 +9,7 @@ use std::arch::x86_64::*;
 
 use super::lanes::{Spans, LANES};
 use super::{DepthPlane, ScreenTriangle};
+use crate::buffer::{Group, MergeMode};
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
 /// which makes calling this module's `target_feature` functions sound.
@@ -37,6 +38,12 @@ impl Avx2 {
     ) -> ([u32; LANES], [f32; LANES]) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { subtile_lanes(tri, spans, sx, sy) }
+    }
+
+    /// [`Group::merge`], in AVX2.
+    pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { merge(group, cover, depth, mode) }
     }
 }
 
@@ -147,4 +154,38 @@ unsafe fn round_far(depth: __m256d) -> __m128 {
     let nearer = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(nearer, _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
     let up = _mm_and_si128(nearer, _mm_castps_si128(_mm_cmpge_ps(d, _mm_setzero_ps())));
     _mm_castsi128_ps(_mm_sub_epi32(_mm_castps_si128(d), up))
+}
+
+/// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each
+/// step a comparison and a blend; lanes whose cover is empty, or whose depth is
+/// NaN or not nearer than the reference, keep their subtile.
+#[target_feature(enable = "avx2")]
+unsafe fn merge(group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
+    let zero = _mm256_setzero_si256();
+    let c = _mm256_loadu_si256(cover.as_ptr().cast());
+    let d = _mm256_loadu_ps(depth.as_ptr());
+    let mask = _mm256_load_si256(group.mask.as_ptr().cast());
+    let working = _mm256_load_ps(group.working.as_ptr());
+    let reference = _mm256_load_ps(group.reference.as_ptr());
+    // Taken: a cover, and a depth nearer than the reference (false on NaN).
+    let nearer = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(d, reference));
+    let taken = _mm256_andnot_si256(_mm256_cmpeq_epi32(c, zero), nearer);
+    let mut m = mask;
+    if mode == MergeMode::LayerMerge {
+        let distance = _mm256_andnot_ps(_mm256_set1_ps(-0.0), _mm256_sub_ps(d, working));
+        let discard = _mm256_andnot_si256(
+            _mm256_cmpeq_epi32(mask, zero),
+            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(distance, _mm256_sub_ps(reference, working))),
+        );
+        m = _mm256_andnot_si256(discard, m);
+    }
+    let w = _mm256_blendv_ps(_mm256_max_ps(working, d), d, _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, zero)));
+    let m = _mm256_or_si256(m, c);
+    let full = _mm256_cmpeq_epi32(m, _mm256_set1_epi32(-1));
+    let r = _mm256_blendv_ps(reference, w, _mm256_castsi256_ps(full));
+    let m = _mm256_andnot_si256(full, m);
+    let taken_ps = _mm256_castsi256_ps(taken);
+    _mm256_store_si256(group.mask.as_mut_ptr().cast(), _mm256_blendv_epi8(mask, m, taken));
+    _mm256_store_ps(group.working.as_mut_ptr(), _mm256_blendv_ps(working, w, taken_ps));
+    _mm256_store_ps(group.reference.as_mut_ptr(), _mm256_blendv_ps(reference, r, taken_ps));
 }

@@ -108,6 +108,7 @@ pub(crate) fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::buffer::{Group, MergeMode, Subtile};
     use crate::raster::CullMode;
     use glam::DVec3;
 
@@ -148,6 +149,51 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn avx2_merge_equals_the_portable_merge() {
+        let Some(avx2) = super::super::avx2::Avx2::detect() else {
+            eprintln!("skipped: no AVX2 on this CPU");
+            return;
+        };
+        let mut rng = Lcg(5);
+        // Few distinct values, so that ties, full masks and discards happen.
+        let depths = [0.1f32, 0.25, 0.5, 0.75, 1.0, f32::NAN];
+        let masks = [0u32, 0xFF, 0xFFFF_0000, 0x0F0F_0F0F, u32::MAX];
+        let mut pick = |n: usize| (rng.unit() * n as f64) as usize % n;
+        let (mut full, mut discarded) = (0, 0);
+        for mode in [MergeMode::LayerMerge, MergeMode::QuickMask] {
+            for _ in 0..20_000 {
+                let mut group = Group { mask: [0; LANES], working: [0.0; LANES], reference: [1.0; LANES] };
+                let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
+                for l in 0..LANES {
+                    let (w, r) = (depths[pick(5)], depths[pick(5)]);
+                    let (w, r) = (w.min(r), w.max(r));
+                    group.set(l, Subtile { mask: masks[pick(4)], working: w, reference: r });
+                    (cover[l], depth[l]) = (masks[pick(5)], depths[pick(6)]);
+                }
+                let before = group;
+                let mut portable = group;
+                portable.merge(&cover, &depth, mode);
+                avx2.merge(&mut group, &cover, &depth, mode);
+                for (l, &c) in cover.iter().enumerate() {
+                    let (a, p) = (group.get(l), portable.get(l));
+                    assert!(
+                        a.mask == p.mask
+                            && a.working.to_bits() == p.working.to_bits()
+                            && a.reference.to_bits() == p.reference.to_bits(),
+                        "{mode:?} lane {l}: {a:?} vs {p:?}"
+                    );
+                    let b = before.get(l);
+                    // A full mask moved the working depth into the reference; a
+                    // discarded working layer left only the new cover.
+                    full += usize::from(p.reference.to_bits() != b.reference.to_bits());
+                    discarded += usize::from(b.mask & !c != 0 && p.mask == c);
+                }
+            }
+        }
+        assert!(full > 1000 && discarded > 1000, "{full} {discarded}");
     }
 
     #[test]
