@@ -42,7 +42,9 @@
 //! neighbouring subtiles at once by shifts and one plane evaluation per subtile
 //! (the `raster::lanes` module: only rows whose intercept lies within its proven
 //! rounding band of a pixel boundary are decided pixel by pixel, so masks are
-//! exactly the per-pixel definition above). These steps run in AVX2 where the
+//! exactly the per-pixel definition above), and merged into them in lanes: the
+//! subtiles are stored in groups of eight (64x4 pixels), field by field, and
+//! each lane applies the merge rule above. These steps run in AVX2 where the
 //! CPU has it (detected at run time) and in portable code otherwise, with
 //! bit-identical results. Inside a rayon pool of several threads, large
 //! triangle sets are set up and binned to bands of subtile rows in parallel

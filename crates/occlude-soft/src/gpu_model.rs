@@ -73,7 +73,7 @@ pub struct GpuModel {
     /// buffer (`moc`: transform, near-plane clip, projection, edges), ns.
     #[serde(default = "MocCosts::triangle_ns")]
     pub cpu_moc_triangle_ns: f64,
-    /// CPU time per 32x8-pixel tile an occluder triangle's bounding box
+    /// CPU time per 32x8-pixel tile an occluder triangle's pixel-centre range
     /// overlaps in the masked buffer (coverage masks and merges), ns.
     #[serde(default = "MocCosts::tile_ns")]
     pub cpu_moc_tile_ns: f64,
@@ -84,7 +84,7 @@ pub struct GpuModel {
 }
 
 /// The masked occlusion buffer's CPU costs, the same in every preset (the
-/// scalar build of `occlude-moc` measured on the development machine by its
+/// AVX2 build of `occlude-moc` measured on the development machine by its
 /// `moc_costs` example, docs/gpu-models.md), and the defaults of model files
 /// that predate them.
 struct MocCosts;
@@ -102,11 +102,11 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 704.0;
+const MOC_TRIANGLE_NS: f64 = 256.0;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 1022.0;
+const MOC_TILE_NS: f64 = 17.7;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 6487.0;
+const MOC_BOX_NS: f64 = 2104.0;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
