@@ -1,9 +1,12 @@
-//! The AVX2 versions of [`super::lanes`]' two steps: the four rows' intercepts
-//! of an edge in one `f64 x 4` register, and eight subtiles' masks (`i32 x 8`)
-//! and depth bounds (two `f64 x 4`) at once. Same operations in the same order
-//! as the portable versions (products and sums rounded separately, never fused;
-//! `min` taking the second operand on NaN as `f64::min` takes the non-NaN one),
-//! so the results are bit-identical.
+//! The AVX2 versions of [`super::lanes`]' two steps and of the group merge
+//! ([`Group::merge`]): the four rows' intercepts of an edge in one `f64 x 4`
+//! register, eight subtiles' masks (`i32 x 8`) and depth bounds (two
+//! `f64 x 4`) at once, and a group's eight subtiles merged by compares and
+//! blends. Same operations in the same order as the portable versions
+//! (products and sums rounded separately, never fused; `min` taking the second
+//! operand on NaN as `f64::min` takes the non-NaN one; `max` of the working
+//! depth and the new one in the portable merge's order), so the results are
+//! bit-identical.
 
 use std::arch::x86_64::*;
 
