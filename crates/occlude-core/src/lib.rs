@@ -9,24 +9,29 @@
 pub mod backend;
 pub mod camera;
 pub mod depth_pyramid;
+pub mod frame;
 pub mod geometry;
 pub mod gpu_culling;
 pub mod hierarchy;
 pub mod methods;
+pub mod mock;
 pub mod path;
 pub mod query_box;
 pub mod rng;
 pub mod scene;
 pub mod stats;
 
-pub use backend::{Backend, CpuCullingWork, FrameCounter, OracleView, QueryHandle, RenderState, StateTracker};
-pub use camera::{Camera, Frustum, Visibility};
+pub use backend::{
+    Backend, CpuCullingWork, FrameCounter, Instruments, OracleView, QueryHandle, RenderState, StateTracker,
+};
+pub use camera::{Camera, CameraError, CameraMatrices, Frustum, NearRegion, Visibility};
+pub use frame::{differing_pixels, render_frame};
 pub use geometry::Aabb;
 pub use gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
 };
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
-pub use methods::{CullingMethod, FrameContext};
+pub use methods::{CullingMethod, DrawnSet, FrameContext};
 
 pub use path::{CameraPath, Keyframe, Sampling};
 pub use scene::{Instance, Mesh, Scene, SceneError};

@@ -6,12 +6,13 @@
 use glam::Mat4;
 use indicatif::ProgressBar;
 use occlude::bench::ideal::IDEAL;
-use occlude::bench::runner::{
-    cameras, differing_pixels, far_plane, render_frame, run_scene, run_scene_with_variants, Variant,
-};
+use occlude::bench::runner::{cameras, far_plane, run_scene, run_scene_with_variants, Variant};
 use occlude::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, HierarchyKind, Scene};
+use occlude_core::{
+    differing_pixels, render_frame, Backend, Camera, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments,
+    Scene,
+};
 use occlude_scenes::import::{import, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;

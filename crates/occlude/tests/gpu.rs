@@ -8,7 +8,7 @@ use occlude::bench::config::BackendKind;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, HierarchyKind, Scene};
+use occlude_core::{Backend, HierarchyKind, Instruments, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};

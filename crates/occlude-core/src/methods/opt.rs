@@ -27,6 +27,10 @@ impl CullingMethod for Optimal {
         "opt"
     }
 
+    fn needs_oracle(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let h = ctx.hierarchy;
         let in_view: Vec<NodeId> =
@@ -34,7 +38,13 @@ impl CullingMethod for Optimal {
         let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
         candidates.sort_unstable();
         candidates.dedup();
-        let view = backend.oracle(&ctx.camera, &candidates);
+        let Some(instruments) = backend.instruments() else {
+            // Without an oracle (refused up front by `check_support`), every
+            // leaf in view: a conservative image, not the ideal set.
+            self.leaves = in_view;
+            return;
+        };
+        let view = instruments.oracle(&ctx.camera, &candidates);
         let mut visible = vec![false; ctx.scene.instances.len()];
         for &i in &view.visible {
             visible[i as usize] = true;

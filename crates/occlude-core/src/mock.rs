@@ -1,0 +1,412 @@
+//! [`MockBackend`]: a [`Backend`] without pixels, for testing methods and
+//! decorators, a user's own included.
+//!
+//! It answers occlusion queries from a scripted visibility model instead of
+//! rasterizing: each instance is visible (the default) or hidden
+//! ([`MockBackend::set_visible`]), and a query is answered with the number
+//! of visible instances in the view frustum whose boxes meet one of its
+//! boxes. A node is so visible exactly when it holds a visible instance,
+//! and a method that is right draws every visible instance in view and no
+//! node without one. A query's result becomes available once
+//! [`MockBackend::with_latency`] further commands (draws and queries) have
+//! been issued after it, as a GPU's queue would delay it; reading it
+//! earlier is a wait. Every call of the [`Backend`] trait is logged
+//! ([`Call`]), so that tests can check the order of a method's draws and
+//! queries, and that a decorator forwards every call
+//! ([`assert_forwards_every_call`]).
+//!
+//! The mock has neither GPU-resident culling nor [`Instruments`]
+//! (`Backend::gpu_culling` and `Backend::instruments` answer so), so the
+//! methods needing them are refused on it by
+//! [`check_support`](crate::methods::check_support).
+
+use crate::backend::{Backend, CpuCullingWork, FrameCounter, Instruments, QueryHandle, RenderState};
+use crate::camera::{Camera, Frustum};
+use crate::geometry::Aabb;
+use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
+use crate::scene::Scene;
+use crate::stats::FrameStats;
+use glam::Vec3;
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// One call a [`MockBackend`] received, in the order received.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Call {
+    /// `begin_frame`.
+    BeginFrame,
+    /// `draw` of these instances.
+    Draw(Vec<u32>),
+    /// `issue_query` over these boxes, answered by this handle.
+    IssueQuery {
+        /// The handle returned.
+        query: QueryHandle,
+        /// The boxes queried.
+        boxes: Vec<Aabb>,
+    },
+    /// `is_available`, with its answer.
+    IsAvailable {
+        /// The query asked about.
+        query: QueryHandle,
+        /// Whether it was available.
+        available: bool,
+    },
+    /// `result`, with whether the caller had to wait for it.
+    Result {
+        /// The query read.
+        query: QueryHandle,
+        /// The answer: visible instances the query's boxes meet.
+        value: u64,
+        /// True when the result was not available yet (a stall).
+        waited: bool,
+    },
+    /// `traverse` of this many nodes.
+    Traverse(u64),
+    /// `resolution`.
+    Resolution,
+    /// `cpu_culling` with this work.
+    CpuCulling(CpuCullingWork),
+    /// `end_frame`.
+    EndFrame,
+    /// `failure`.
+    Failure,
+    /// `gpu_culling`.
+    GpuCulling,
+    /// `instruments`.
+    Instruments,
+}
+
+impl Call {
+    /// The [`Backend`] method's name, as [`BACKEND_CALLS`] lists it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Call::BeginFrame => "begin_frame",
+            Call::Draw(_) => "draw",
+            Call::IssueQuery { .. } => "issue_query",
+            Call::IsAvailable { .. } => "is_available",
+            Call::Result { .. } => "result",
+            Call::Traverse(_) => "traverse",
+            Call::Resolution => "resolution",
+            Call::CpuCulling(_) => "cpu_culling",
+            Call::EndFrame => "end_frame",
+            Call::Failure => "failure",
+            Call::GpuCulling => "gpu_culling",
+            Call::Instruments => "instruments",
+        }
+    }
+}
+
+/// Every method of the [`Backend`] trait, in the order it declares them.
+pub const BACKEND_CALLS: [&str; 12] = [
+    "begin_frame",
+    "draw",
+    "issue_query",
+    "is_available",
+    "result",
+    "traverse",
+    "resolution",
+    "cpu_culling",
+    "end_frame",
+    "failure",
+    "gpu_culling",
+    "instruments",
+];
+
+/// The calls a [`MockBackend`] received, shared with whoever holds a handle
+/// ([`MockBackend::log`]), so that a test can read them through a decorator
+/// that owns the mock.
+pub type CallLog = Rc<RefCell<Vec<Call>>>;
+
+/// What the mock's `gpu_culling` answers, so that a test can tell a
+/// forwarded answer from a decorator's own default.
+pub const NO_GPU_CULLING: &str = "the mock backend has no GPU-resident culling";
+
+#[derive(Clone, Copy, Debug)]
+struct MockQuery {
+    value: u64,
+    /// The command count at which the result becomes available.
+    ready_at: u64,
+}
+
+/// A backend that answers queries from a scripted visibility model and logs
+/// every call (module documentation).
+#[derive(Debug)]
+pub struct MockBackend {
+    bounds: Vec<Aabb>,
+    triangles: Vec<u64>,
+    materials: Vec<u32>,
+    visible: Vec<bool>,
+    latency: u64,
+    resolution: (u32, u32),
+    frustum: Option<Frustum>,
+    count: FrameCounter,
+    queries: Vec<MockQuery>,
+    commands: u64,
+    log: CallLog,
+}
+
+impl MockBackend {
+    /// A mock of `scene`'s instances (their boxes, triangle counts and
+    /// materials) rendering `width` x `height` images, every instance
+    /// visible, results available at once.
+    pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
+        let instances = &scene.instances;
+        Self {
+            bounds: instances.iter().map(|i| i.bounds).collect(),
+            triangles: instances.iter().map(|i| scene.meshes[i.mesh as usize].triangle_count() as u64).collect(),
+            materials: instances.iter().map(|i| i.material).collect(),
+            visible: vec![true; instances.len()],
+            latency: 0,
+            resolution: (width, height),
+            frustum: None,
+            count: FrameCounter::new(instances.len()),
+            queries: Vec::new(),
+            commands: 0,
+            log: CallLog::default(),
+        }
+    }
+
+    /// The mock with each query's result available only after `commands`
+    /// further draws and queries.
+    pub fn with_latency(mut self, commands: u64) -> Self {
+        self.latency = commands;
+        self
+    }
+
+    /// Scripts instance `instance` visible or hidden, from the next query on.
+    pub fn set_visible(&mut self, instance: u32, visible: bool) {
+        self.visible[instance as usize] = visible;
+    }
+
+    /// A handle on the log of calls (shared, also through decorators).
+    pub fn log(&self) -> CallLog {
+        Rc::clone(&self.log)
+    }
+
+    /// The calls logged so far, removed from the log.
+    pub fn take_log(&self) -> Vec<Call> {
+        std::mem::take(&mut self.log.borrow_mut())
+    }
+
+    fn push(&self, call: Call) {
+        self.log.borrow_mut().push(call);
+    }
+
+    fn is_ready(&self, query: QueryHandle) -> bool {
+        self.queries[query.0 as usize].ready_at <= self.commands
+    }
+}
+
+impl Backend for MockBackend {
+    fn begin_frame(&mut self, camera: &Camera) {
+        self.frustum = Some(camera.frustum());
+        self.count.begin_frame();
+        self.queries.clear();
+        self.push(Call::BeginFrame);
+    }
+
+    fn draw(&mut self, instances: &[u32]) {
+        for &i in instances {
+            self.count.set_state(RenderState::Material(self.materials[i as usize]));
+            self.count.draw(i, self.triangles[i as usize]);
+        }
+        self.commands += 1;
+        self.push(Call::Draw(instances.to_vec()));
+    }
+
+    fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
+        let frustum = self.frustum.as_ref().expect("issue_query outside a frame");
+        let value = (0..self.bounds.len())
+            .filter(|&i| self.visible[i] && frustum.intersects(&self.bounds[i]))
+            .filter(|&i| boxes.iter().any(|b| b.overlaps(&self.bounds[i])))
+            .count() as u64;
+        self.count.query(boxes.len());
+        self.commands += 1;
+        let query = QueryHandle(self.queries.len() as u32);
+        self.queries.push(MockQuery { value, ready_at: self.commands + self.latency });
+        self.push(Call::IssueQuery { query, boxes: boxes.to_vec() });
+        query
+    }
+
+    fn is_available(&mut self, query: QueryHandle) -> bool {
+        let available = self.is_ready(query);
+        self.push(Call::IsAvailable { query, available });
+        available
+    }
+
+    fn result(&mut self, query: QueryHandle) -> u64 {
+        let waited = !self.is_ready(query);
+        let value = self.queries[query.0 as usize].value;
+        self.push(Call::Result { query, value, waited });
+        value
+    }
+
+    fn traverse(&mut self, nodes: u64) {
+        self.count.traverse(nodes);
+        self.push(Call::Traverse(nodes));
+    }
+
+    fn resolution(&self) -> (u32, u32) {
+        self.push(Call::Resolution);
+        self.resolution
+    }
+
+    fn cpu_culling(&mut self, work: CpuCullingWork) {
+        self.push(Call::CpuCulling(work));
+    }
+
+    fn end_frame(&mut self) -> FrameStats {
+        self.frustum = None;
+        self.push(Call::EndFrame);
+        self.count.stats
+    }
+
+    fn failure(&self) -> Option<String> {
+        self.push(Call::Failure);
+        None
+    }
+
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        self.push(Call::GpuCulling);
+        Err(GpuCullingUnsupported(NO_GPU_CULLING.into()))
+    }
+
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        self.push(Call::Instruments);
+        None
+    }
+}
+
+/// Calls every [`Backend`] method once on `decorator`, a backend wrapping a
+/// [`MockBackend`] whose log is `log` (of a scene with at least one
+/// instance), and panics naming each method the mock did not receive: a
+/// decorator that forgets to forward a defaulted method silently drops
+/// work, and this finds it.
+pub fn assert_forwards_every_call(decorator: &mut dyn Backend, log: &CallLog) {
+    log.borrow_mut().clear();
+    let camera = Camera {
+        position: Vec3::new(0.0, 0.0, 10.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 60.0,
+        aspect: 1.0,
+        near: 0.1,
+        far: 100.0,
+        matrices: None,
+    };
+    decorator.begin_frame(&camera);
+    decorator.draw(&[0]);
+    let query = decorator.issue_query(&[Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))]);
+    decorator.is_available(query);
+    decorator.result(query);
+    decorator.traverse(1);
+    decorator.resolution();
+    decorator.cpu_culling(CpuCullingWork { triangles: 1, tiles: 1, boxes: 1 });
+    decorator.end_frame();
+    decorator.failure();
+    if let Err(e) = decorator.gpu_culling() {
+        assert_eq!(e.0, NO_GPU_CULLING, "gpu_culling answered by the decorator, not forwarded");
+    }
+    decorator.instruments();
+    let received: Vec<&str> = log.borrow().iter().map(Call::name).collect();
+    let missing: Vec<&str> = BACKEND_CALLS.iter().copied().filter(|c| !received.contains(c)).collect();
+    assert!(missing.is_empty(), "the decorator did not forward {missing:?}");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Mesh;
+    use glam::Mat4;
+
+    fn two_cubes() -> Scene {
+        let mut scene = Scene {
+            name: "two cubes".into(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            material_count: 0,
+            path: Default::default(),
+        };
+        let cube =
+            scene.add_mesh(Mesh::new(Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5)).corners().to_vec(), vec![0, 1, 2]));
+        scene.add_instance(cube, Mat4::IDENTITY, 0);
+        scene.add_instance(cube, Mat4::from_translation(Vec3::new(0.0, 0.0, -5.0)), 1);
+        scene
+    }
+
+    /// The mock itself receives every call (so that the check holds for
+    /// decorators of it), and a decorator that forwards nothing but the
+    /// required calls is caught.
+    #[test]
+    fn every_call_is_logged_and_a_forgetful_decorator_is_caught() {
+        let scene = two_cubes();
+        let mut mock = MockBackend::new(&scene, 8, 8);
+        let log = mock.log();
+        assert_forwards_every_call(&mut mock, &log);
+
+        struct Forgetful(MockBackend);
+        impl Backend for Forgetful {
+            fn begin_frame(&mut self, camera: &Camera) {
+                self.0.begin_frame(camera);
+            }
+            fn draw(&mut self, instances: &[u32]) {
+                self.0.draw(instances);
+            }
+            fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
+                self.0.issue_query(boxes)
+            }
+            fn is_available(&mut self, query: QueryHandle) -> bool {
+                self.0.is_available(query)
+            }
+            fn result(&mut self, query: QueryHandle) -> u64 {
+                self.0.result(query)
+            }
+            fn resolution(&self) -> (u32, u32) {
+                self.0.resolution()
+            }
+            fn end_frame(&mut self) -> FrameStats {
+                self.0.end_frame()
+            }
+        }
+        let mut forgetful = Forgetful(MockBackend::new(&scene, 8, 8));
+        let log = forgetful.0.log();
+        let caught =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| assert_forwards_every_call(&mut forgetful, &log)));
+        assert!(caught.is_err(), "a decorator forwarding only the required calls passed");
+    }
+
+    /// Queries see the scripted visibility, in the frustum only, and their
+    /// results wait for the latency.
+    #[test]
+    fn queries_answer_the_script_after_the_latency() {
+        let scene = two_cubes();
+        let mut mock = MockBackend::new(&scene, 8, 8).with_latency(2);
+        let camera = Camera::from_matrices(
+            Mat4::look_at_rh(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y),
+            Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0),
+            false,
+        )
+        .unwrap();
+        mock.begin_frame(&camera);
+        let both = Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::splat(1.0));
+        let first = mock.issue_query(&[both]);
+        assert!(!mock.is_available(first));
+        mock.set_visible(0, false);
+        let second = mock.issue_query(&[both]);
+        mock.draw(&[1]);
+        assert!(mock.is_available(first), "two commands later");
+        assert_eq!(mock.result(first), 2);
+        assert_eq!(mock.result(second), 1);
+        let behind = Aabb::new(Vec3::splat(20.0), Vec3::splat(21.0));
+        let outside = mock.issue_query(&[behind]);
+        assert_eq!(mock.result(outside), 0);
+        let stats = mock.end_frame();
+        assert_eq!((stats.queries, stats.draw_calls, stats.triangles), (3, 1, 1));
+        let waits: Vec<bool> = mock
+            .take_log()
+            .iter()
+            .filter_map(|c| if let Call::Result { waited, .. } = c { Some(*waited) } else { None })
+            .collect();
+        assert_eq!(waits, [false, true, true]);
+    }
+}
