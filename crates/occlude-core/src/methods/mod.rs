@@ -18,6 +18,8 @@ pub mod opt;
 pub mod options;
 pub mod roc;
 pub mod sw;
+#[cfg(test)]
+mod test_rig;
 pub mod vfc;
 
 pub use debug::{DebugView, NdcRect, NodeClass};

@@ -123,3 +123,24 @@ fn leaves_with_visible_pixels(h: &Hierarchy, camera: &Camera, view: &OracleView)
 fn to_vec3(v: DVec3) -> Vec3 {
     v.as_vec3()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::check_support;
+    use super::super::test_rig::{assert_draws_exactly, method, Rig};
+
+    /// `opt` needs the oracle: refused on a backend without instruments,
+    /// and, run anyway, it draws every leaf in view (a conservative image)
+    /// rather than nothing.
+    #[test]
+    fn is_refused_without_an_oracle_and_falls_back_to_every_leaf_in_view() {
+        let rig = Rig::row(4);
+        let mut mock = rig.mock();
+        let mut opt = method("opt", &[]);
+        let refused = check_support(opt.method.as_ref(), &mut mock).unwrap_err();
+        assert!(refused.0.contains("oracle"), "{refused}");
+        mock.set_visible(2, false);
+        let calls = &rig.run(&mut opt, &mut mock, 1)[0];
+        assert_draws_exactly(calls, &rig.in_view());
+    }
+}
