@@ -97,7 +97,7 @@ impl CullingMethod for TwoPhaseHiZ {
         });
     }
 
-    /// A backend without [`GpuCulling`] or depth pyramids (which the runner
+    /// A backend without [`GpuCulling`](crate::GpuCulling) or depth pyramids (which the runner
     /// refuses first) gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {

@@ -135,7 +135,7 @@ impl FromStr for Merge {
 pub struct MocParams {
     /// `moc.occluders`: `drawn` (default), `last` or `largest`.
     pub occluders: Occluders,
-    /// `moc.count` [64]: how many objects `largest` renders.
+    /// `moc.count` (default 64): how many objects `largest` renders.
     pub count: u32,
     /// `moc.merge`: `layer` (the paper's heuristic, default) or `quick`.
     pub merge: MergeMode,
