@@ -21,13 +21,7 @@
 //! use occlude_core::{render_frame, Aabb, Camera, DrawnSet, Hierarchy, HierarchyKind, Mesh, Scene};
 //!
 //! // The scene: one mesh placed three times, a hierarchy over the placements.
-//! let mut scene = Scene {
-//!     name: "row".into(),
-//!     meshes: Vec::new(),
-//!     instances: Vec::new(),
-//!     material_count: 0,
-//!     path: Default::default(),
-//! };
+//! let mut scene = Scene::new("row");
 //! let corners = Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5)).corners().to_vec();
 //! let mesh = scene.add_mesh(Mesh::new(corners, vec![0, 1, 3, 0, 3, 2]));
 //! for x in [-2.0, 0.0, 2.0] {

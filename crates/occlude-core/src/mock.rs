@@ -24,9 +24,9 @@ use crate::backend::{Backend, CpuCullingWork, FrameCounter, Instruments, QueryHa
 use crate::camera::{Camera, Frustum};
 use crate::geometry::Aabb;
 use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
-use crate::scene::Scene;
+use crate::scene::{Mesh, Scene};
 use crate::stats::FrameStats;
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use std::cell::RefCell;
 use std::rc::Rc;
 
@@ -277,26 +277,23 @@ impl Backend for MockBackend {
     }
 }
 
-/// Calls every [`Backend`] method once on `decorator`, a backend wrapping a
-/// [`MockBackend`] whose log is `log` (of a scene with at least one
-/// instance), and panics naming each method the mock did not receive: a
-/// decorator that forgets to forward a defaulted method silently drops
-/// work, and this finds it.
-pub fn assert_forwards_every_call(decorator: &mut dyn Backend, log: &CallLog) {
-    log.borrow_mut().clear();
-    let camera = Camera {
-        position: Vec3::new(0.0, 0.0, 10.0),
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        fov_y_deg: 60.0,
-        aspect: 1.0,
-        near: 0.1,
-        far: 100.0,
-        matrices: None,
-    };
+/// Wraps a [`MockBackend`] (of a one-box scene) with `wrap`, calls every
+/// [`Backend`] method once on the result, and panics naming each method the
+/// mock did not receive: a decorator that forgets to forward a defaulted
+/// method silently drops work, and this finds it.
+pub fn assert_forwards_every_call<D: Backend>(wrap: impl FnOnce(MockBackend) -> D) {
+    let mut scene = Scene::new("one box");
+    let unit = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+    let mesh = scene.add_mesh(Mesh::new(unit.corners().to_vec(), vec![0, 1, 3]));
+    scene.add_instance(mesh, Mat4::IDENTITY, 0);
+    let mock = MockBackend::new(&scene, 8, 8);
+    let log = mock.log();
+    let mut decorator = wrap(mock);
+    let view = Mat4::look_at_rh(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y);
+    let camera = Camera::from_matrices(view, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).expect("a camera");
     decorator.begin_frame(&camera);
     decorator.draw(&[0]);
-    let query = decorator.issue_query(&[Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0))]);
+    let query = decorator.issue_query(&[unit]);
     decorator.is_available(query);
     decorator.result(query);
     decorator.traverse(1);
@@ -316,17 +313,9 @@ pub fn assert_forwards_every_call(decorator: &mut dyn Backend, log: &CallLog) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Mesh;
-    use glam::Mat4;
 
     fn two_cubes() -> Scene {
-        let mut scene = Scene {
-            name: "two cubes".into(),
-            meshes: Vec::new(),
-            instances: Vec::new(),
-            material_count: 0,
-            path: Default::default(),
-        };
+        let mut scene = Scene::new("two cubes");
         let cube =
             scene.add_mesh(Mesh::new(Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5)).corners().to_vec(), vec![0, 1, 2]));
         scene.add_instance(cube, Mat4::IDENTITY, 0);
@@ -339,10 +328,7 @@ mod tests {
     /// required calls is caught.
     #[test]
     fn every_call_is_logged_and_a_forgetful_decorator_is_caught() {
-        let scene = two_cubes();
-        let mut mock = MockBackend::new(&scene, 8, 8);
-        let log = mock.log();
-        assert_forwards_every_call(&mut mock, &log);
+        assert_forwards_every_call(|mock| mock);
 
         struct Forgetful(MockBackend);
         impl Backend for Forgetful {
@@ -368,10 +354,7 @@ mod tests {
                 self.0.end_frame()
             }
         }
-        let mut forgetful = Forgetful(MockBackend::new(&scene, 8, 8));
-        let log = forgetful.0.log();
-        let caught =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| assert_forwards_every_call(&mut forgetful, &log)));
+        let caught = std::panic::catch_unwind(|| assert_forwards_every_call(Forgetful));
         assert!(caught.is_err(), "a decorator forwarding only the required calls passed");
     }
 

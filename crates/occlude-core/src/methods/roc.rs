@@ -200,10 +200,8 @@ impl CullingMethod for RasterOcclusion {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::check_support;
-    use crate::methods::test_rig::{assert_draws_exactly, method, queries, Rig};
+    use crate::methods::test_rig::assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling;
     use crate::methods::MethodOptions;
-    use crate::mock::NO_GPU_CULLING;
 
     #[test]
     fn mode_defaults_to_exact_and_rejects_others() {
@@ -214,19 +212,8 @@ mod tests {
         assert!(err.to_string().contains("roc.mode = fast: expected exact or last"), "{err}");
     }
 
-    /// Needs GPU-resident culling: refused on a backend without it (the
-    /// backend's reason given); run anyway, it falls back to view-frustum
-    /// culling: everything in view drawn, no query.
     #[test]
     fn is_refused_without_gpu_culling_and_falls_back_to_frustum_culling() {
-        let rig = Rig::row(4);
-        let mut mock = rig.mock();
-        let mut m = method("roc", &[]);
-        let refused = check_support(m.method.as_ref(), &mut mock).unwrap_err();
-        assert_eq!(refused.0, NO_GPU_CULLING);
-        for calls in rig.run(&mut m, &mut mock, 2) {
-            assert_draws_exactly(&calls, &rig.in_view());
-            assert!(queries(&calls).is_empty());
-        }
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling("roc");
     }
 }

@@ -1,12 +1,12 @@
 //! A small scene of boxes, a camera and a [`MockBackend`] for the methods'
 //! unit tests: each method's file checks its own behaviour on it.
 
-use super::{create, BuiltMethod, DrawnSet, MethodOptions};
+use super::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
 use crate::camera::Camera;
 use crate::frame::render_frame;
 use crate::geometry::Aabb;
 use crate::hierarchy::{BuildOptions, Hierarchy, HierarchyKind, NodeId};
-use crate::mock::{Call, MockBackend};
+use crate::mock::{Call, MockBackend, NO_GPU_CULLING};
 use crate::scene::{Mesh, Scene};
 use glam::{Mat4, Vec3};
 
@@ -44,13 +44,7 @@ impl Rig {
     /// `k`), a BVH with at most `leaf_size` instances per leaf, and a camera
     /// at `(0, 0, 10)` looking at the origin (60 degrees, square image).
     pub fn new(boxes: &[Aabb], leaf_size: usize) -> Self {
-        let mut scene = Scene {
-            name: "rig".into(),
-            meshes: Vec::new(),
-            instances: Vec::new(),
-            material_count: 0,
-            path: Default::default(),
-        };
+        let mut scene = Scene::new("rig");
         let cube = scene.add_mesh(unit_cube());
         for (k, b) in boxes.iter().enumerate() {
             let transform = Mat4::from_translation(b.center()) * Mat4::from_scale(b.extent());
@@ -159,4 +153,19 @@ pub(crate) fn assert_draws_exactly(calls: &[Call], visible_in_view: &[u32]) {
     let mut want = visible_in_view.to_vec();
     want.sort_unstable();
     assert_eq!(got, want, "drawn instances");
+}
+
+/// For a method needing GPU-resident culling: refused on a backend without
+/// it (the backend's reason given); run anyway, it falls back to
+/// view-frustum culling: everything in view drawn, no query.
+pub(crate) fn assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling(name: &str) {
+    let rig = Rig::row(4);
+    let mut mock = rig.mock();
+    let mut m = method(name, &[]);
+    let refused = check_support(m.method.as_ref(), &mut mock).unwrap_err();
+    assert_eq!(refused.0, NO_GPU_CULLING);
+    for calls in rig.run(&mut m, &mut mock, 2) {
+        assert_draws_exactly(&calls, &rig.in_view());
+        assert!(queries(&calls).is_empty());
+    }
 }
