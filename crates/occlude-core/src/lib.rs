@@ -59,6 +59,7 @@ pub mod frame;
 pub mod geometry;
 pub mod gpu_culling;
 pub mod hierarchy;
+pub mod host_culling;
 pub mod methods;
 pub mod mock;
 pub mod path;

@@ -15,15 +15,24 @@
 //! queries, and that a decorator forwards every call
 //! ([`assert_forwards_every_call`]).
 //!
-//! The mock has neither GPU-resident culling nor [`Instruments`]
-//! (`Backend::gpu_culling` and `Backend::instruments` answer so), so the
-//! methods needing them are refused on it by
-//! [`check_support`](crate::methods::check_support).
+//! GPU-resident culling is off unless asked for
+//! ([`MockBackend::with_gpu_culling`]); then box tests (against the depth
+//! buffer or a pyramid alike) set the flag of a box that meets a visible
+//! instance in the frustum or touches the camera's near region, the other
+//! commands move ids and flags as the soft backend's do
+//! ([`HostResources`]), and the commands that draw, test, build a pyramid
+//! or read back are logged too. The mock has no [`Instruments`] (no image):
+//! `opt` is refused on it by
+//! [`check_support`](crate::methods::check_support), as the GPU-driven
+//! methods are without GPU culling.
 
 use crate::backend::{Backend, CpuCullingWork, FrameCounter, Instruments, QueryHandle, RenderState};
-use crate::camera::{Camera, Frustum};
+use crate::camera::Camera;
 use crate::geometry::Aabb;
-use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
+use crate::gpu_culling::{
+    BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
+};
+use crate::host_culling::HostResources;
 use crate::scene::{Mesh, Scene};
 use crate::stats::FrameStats;
 use glam::{Mat4, Vec3};
@@ -74,6 +83,21 @@ pub enum Call {
     GpuCulling,
     /// `instruments`.
     Instruments,
+    /// [`GpuCulling::test_boxes`] (`pyramid` false) or
+    /// [`GpuCulling::test_boxes_pyramid`] (true) of these ids.
+    TestBoxes {
+        /// The ids of the list tested.
+        ids: Vec<u32>,
+        /// Whether the test was against a depth pyramid.
+        pyramid: bool,
+    },
+    /// [`GpuCulling::build_pyramid`].
+    BuildPyramid,
+    /// [`GpuCulling::draw_list`] of these instances.
+    DrawList(Vec<u32>),
+    /// [`GpuCulling::read_count`], [`GpuCulling::read_list`] or
+    /// [`GpuCulling::read_flags`].
+    ReadBack,
 }
 
 impl Call {
@@ -92,6 +116,10 @@ impl Call {
             Call::Failure => "failure",
             Call::GpuCulling => "gpu_culling",
             Call::Instruments => "instruments",
+            Call::TestBoxes { .. } => "test_boxes",
+            Call::BuildPyramid => "build_pyramid",
+            Call::DrawList(_) => "draw_list",
+            Call::ReadBack => "read_back",
         }
     }
 }
@@ -138,8 +166,10 @@ pub struct MockBackend {
     visible: Vec<bool>,
     latency: u64,
     resolution: (u32, u32),
-    frustum: Option<Frustum>,
+    camera: Option<Camera>,
     count: FrameCounter,
+    /// GPU-resident culling's resources, when it is on.
+    culling: Option<HostResources>,
     queries: Vec<MockQuery>,
     commands: u64,
     log: CallLog,
@@ -158,8 +188,9 @@ impl MockBackend {
             visible: vec![true; instances.len()],
             latency: 0,
             resolution: (width, height),
-            frustum: None,
+            camera: None,
             count: FrameCounter::new(instances.len()),
+            culling: None,
             queries: Vec::new(),
             commands: 0,
             log: CallLog::default(),
@@ -170,6 +201,13 @@ impl MockBackend {
     /// further draws and queries.
     pub fn with_latency(mut self, commands: u64) -> Self {
         self.latency = commands;
+        self
+    }
+
+    /// The mock with GPU-resident culling ([`GpuCulling`], depth pyramids
+    /// included), answered from the same script as queries.
+    pub fn with_gpu_culling(mut self) -> Self {
+        self.culling = Some(HostResources::default());
         self
     }
 
@@ -192,6 +230,42 @@ impl MockBackend {
         self.log.borrow_mut().push(call);
     }
 
+    /// The number of visible instances in the frustum whose boxes meet one
+    /// of `boxes`: a query's answer.
+    fn visible_instances(&self, boxes: &[Aabb]) -> u64 {
+        let frustum = self.camera.as_ref().expect("a query or box test outside a frame").frustum();
+        (0..self.bounds.len())
+            .filter(|&i| self.visible[i] && frustum.intersects(&self.bounds[i]))
+            .filter(|&i| boxes.iter().any(|b| b.overlaps(&self.bounds[i])))
+            .count() as u64
+    }
+
+    /// GPU-resident culling's resources (only offered when on).
+    fn resources(&mut self) -> &mut HostResources {
+        self.culling.as_mut().expect("GPU culling is offered only when on")
+    }
+
+    /// A box test of the boxes of `boxes` named by `ids` into `flags`.
+    fn test(&mut self, boxes: BoxSet, ids: IdList, flags: Flags, pyramid: bool) {
+        let camera = self.camera.expect("a box test outside a frame");
+        let frustum = camera.frustum();
+        let res = self.culling.as_ref().expect("GPU culling is offered only when on");
+        let tested = res.lists[ids.0 as usize].ids.clone();
+        let set: Vec<u32> = tested
+            .iter()
+            .copied()
+            .filter(|&id| {
+                res.boxes[boxes.0 as usize][id as usize].is_some_and(|b| {
+                    camera.box_touches_near_region(&b) || (frustum.intersects(&b) && self.visible_instances(&[b]) > 0)
+                })
+            })
+            .collect();
+        self.count.stats.query_boxes += tested.len() as u64;
+        self.resources().put(set, ExpandInto::Flags(flags));
+        self.commands += 1;
+        self.push(Call::TestBoxes { ids: tested, pyramid });
+    }
+
     fn is_ready(&self, query: QueryHandle) -> bool {
         self.queries[query.0 as usize].ready_at <= self.commands
     }
@@ -199,7 +273,7 @@ impl MockBackend {
 
 impl Backend for MockBackend {
     fn begin_frame(&mut self, camera: &Camera) {
-        self.frustum = Some(camera.frustum());
+        self.camera = Some(*camera);
         self.count.begin_frame();
         self.queries.clear();
         self.push(Call::BeginFrame);
@@ -215,11 +289,7 @@ impl Backend for MockBackend {
     }
 
     fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
-        let frustum = self.frustum.as_ref().expect("issue_query outside a frame");
-        let value = (0..self.bounds.len())
-            .filter(|&i| self.visible[i] && frustum.intersects(&self.bounds[i]))
-            .filter(|&i| boxes.iter().any(|b| b.overlaps(&self.bounds[i])))
-            .count() as u64;
+        let value = self.visible_instances(boxes);
         self.count.query(boxes.len());
         self.commands += 1;
         let query = QueryHandle(self.queries.len() as u32);
@@ -256,7 +326,7 @@ impl Backend for MockBackend {
     }
 
     fn end_frame(&mut self) -> FrameStats {
-        self.frustum = None;
+        self.camera = None;
         self.push(Call::EndFrame);
         self.count.stats
     }
@@ -268,12 +338,104 @@ impl Backend for MockBackend {
 
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         self.push(Call::GpuCulling);
-        Err(GpuCullingUnsupported(NO_GPU_CULLING.into()))
+        if self.culling.is_none() {
+            return Err(GpuCullingUnsupported(NO_GPU_CULLING.into()));
+        }
+        Ok(self)
     }
 
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
         self.push(Call::Instruments);
         None
+    }
+}
+
+impl GpuCulling for MockBackend {
+    fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
+        self.resources().create_boxes(boxes)
+    }
+
+    fn create_flags(&mut self, len: u32) -> Flags {
+        self.resources().create_flags(len)
+    }
+
+    fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
+        self.resources().create_list(capacity, ids)
+    }
+
+    fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
+        self.resources().create_table(ranges, items)
+    }
+
+    fn clear_flags(&mut self, flags: Flags) {
+        self.resources().flags[flags.0 as usize].fill(false);
+    }
+
+    fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
+        self.test(boxes, ids, flags, false);
+    }
+
+    fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
+        Ok(())
+    }
+
+    fn create_pyramid(&mut self) -> Pyramid {
+        let (width, height) = self.resolution;
+        self.resources().create_pyramid(width, height)
+    }
+
+    fn build_pyramid(&mut self, _pyramid: Pyramid) {
+        self.push(Call::BuildPyramid);
+    }
+
+    /// The script has no depth: a pyramid test answers as a test against
+    /// the depth buffer does (a pyramid may only add visibility).
+    fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, _pyramid: Pyramid, _reach: u32, flags: Flags) {
+        self.test(boxes, ids, flags, true);
+    }
+
+    fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {
+        let items = self.resources().gather(src, filter, table);
+        self.resources().put(items, into);
+    }
+
+    fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags) {
+        let frustum = self.camera.expect("drop_outside_frustum outside a frame").frustum();
+        self.resources().drop_outside_frustum(boxes, flags, &frustum);
+    }
+
+    fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
+        let ids = self.resources().compacted(flags, unless);
+        self.resources().lists[dst.0 as usize].set(ids);
+    }
+
+    fn draw_list(&mut self, list: IdList) {
+        let ids = self.resources().lists[list.0 as usize].ids.clone();
+        self.count.indirect_draw(RenderState::Indirect);
+        for &i in &ids {
+            self.count.stats.indirect_draw_calls += 1;
+            self.count.draw(i, self.triangles[i as usize]);
+        }
+        self.commands += 1;
+        self.push(Call::DrawList(ids));
+    }
+
+    fn read_count(&mut self, list: IdList) -> u32 {
+        self.count.stats.readbacks += 1;
+        self.push(Call::ReadBack);
+        self.resources().lists[list.0 as usize].ids.len() as u32
+    }
+
+    fn read_list(&mut self, list: IdList) -> Vec<u32> {
+        self.count.stats.readbacks += 1;
+        self.push(Call::ReadBack);
+        self.resources().lists[list.0 as usize].ids.clone()
+    }
+
+    fn read_flags(&mut self, flags: Flags) -> Vec<bool> {
+        self.count.stats.readbacks += 1;
+        self.push(Call::ReadBack);
+        self.resources().flags[flags.0 as usize].clone()
     }
 }
 

@@ -113,7 +113,10 @@ impl CullingMethod for TwoPhaseHiZ {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::test_rig::assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling;
+    use crate::methods::test_rig::{
+        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, culling_steps,
+        method, Rig,
+    };
     use crate::methods::MethodOptions;
 
     #[test]
@@ -128,5 +131,25 @@ mod tests {
     #[test]
     fn is_refused_without_gpu_culling_and_falls_back_to_frustum_culling() {
         assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling("hiz");
+    }
+
+    /// The early pass draws last frame's visible objects (those in view),
+    /// the pyramid is built from them, every box is tested against it, and
+    /// the late pass draws the newly visible, in that order: an object
+    /// turning visible is drawn in that frame, a hidden one never.
+    #[test]
+    fn early_pass_pyramid_test_late_pass() {
+        let rig = Rig::row(4);
+        let all: Vec<u32> = (0..rig.scene.instances.len() as u32).collect();
+        let mut mock = rig.mock().with_gpu_culling();
+        mock.set_visible(2, false);
+        let mut hiz = method("hiz", &[]);
+        let frames = rig.run(&mut hiz, &mut mock, 2);
+        let steps = [("draw", vec![0, 1, 3]), ("build pyramid", vec![]), ("pyramid test", all), ("draw", vec![])];
+        assert_eq!(culling_steps(&frames[1]), steps);
+        mock.set_visible(2, true);
+        let turned = &rig.run(&mut hiz, &mut mock, 1)[0];
+        assert_eq!(culling_steps(turned).last(), Some(&("draw", vec![2])));
+        assert_draws_exactly(turned, &[0, 1, 2, 3]);
     }
 }

@@ -130,9 +130,38 @@ pub(crate) fn method(name: &str, options: &[&str]) -> BuiltMethod {
     create(name, &MethodOptions::parse(options).expect("valid options")).expect("a method")
 }
 
-/// The instances drawn by `calls`, in draw order.
+/// The instances drawn by `calls` (draw calls and list draws), in draw
+/// order.
 pub(crate) fn drawn(calls: &[Call]) -> Vec<u32> {
-    calls.iter().filter_map(|c| if let Call::Draw(i) = c { Some(i.clone()) } else { None }).flatten().collect()
+    calls
+        .iter()
+        .filter_map(|c| match c {
+            Call::Draw(i) | Call::DrawList(i) => Some(i.clone()),
+            _ => None,
+        })
+        .flatten()
+        .collect()
+}
+
+/// The list draws and box tests of `calls`, in order: `("draw", ids)`,
+/// `("test", ids)` (`"pyramid test"` against a pyramid) and
+/// `("build pyramid", [])`, ids sorted.
+pub(crate) fn culling_steps(calls: &[Call]) -> Vec<(&'static str, Vec<u32>)> {
+    let sorted = |ids: &[u32]| {
+        let mut ids = ids.to_vec();
+        ids.sort_unstable();
+        ids
+    };
+    calls
+        .iter()
+        .filter_map(|c| match c {
+            Call::DrawList(ids) => Some(("draw", sorted(ids))),
+            Call::TestBoxes { ids, pyramid: false } => Some(("test", sorted(ids))),
+            Call::TestBoxes { ids, pyramid: true } => Some(("pyramid test", sorted(ids))),
+            Call::BuildPyramid => Some(("build pyramid", Vec::new())),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The queries of `calls`, as their boxes.

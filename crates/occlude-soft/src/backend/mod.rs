@@ -16,6 +16,7 @@ use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
 use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest, Rasterizer};
 use glam::{Mat4, Vec4};
+use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, Instruments,
@@ -75,7 +76,7 @@ pub struct SoftBackend<'s> {
     ops: Vec<GpuOp>,
     queries: Vec<QueryState>,
     frame_start: Instant,
-    device: culling::Device,
+    device: HostResources,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -98,7 +99,7 @@ impl<'s> SoftBackend<'s> {
             ops: Vec::new(),
             queries: Vec::new(),
             frame_start: Instant::now(),
-            device: culling::Device::default(),
+            device: HostResources::default(),
         }
     }
 
