@@ -15,7 +15,25 @@ use crate::stats::FrameStats;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct QueryHandle(pub u32);
 
-/// A renderer that can draw instances and answer occlusion queries.
+/// A renderer that can draw instances and answer occlusion queries: all a
+/// culling method needs.
+///
+/// A renderer of one's own implements the required calls (frames, draws,
+/// queries, its resolution); every other call has a default that is right
+/// for a backend that measures its own time and offers nothing more:
+/// [`Backend::traverse`] and [`Backend::cpu_culling`] charge nothing (a
+/// measured clock has already seen that work pass), [`Backend::failure`] is
+/// `None`, and [`Backend::gpu_culling`] and [`Backend::instruments`] say the
+/// backend has none, so that a method needing them is refused
+/// ([`check_support`](crate::methods::check_support)) rather than run on a
+/// fallback. The benchmark's instruments (the depth image, the oracle) are
+/// the separate trait [`Instruments`].
+///
+/// A backend that wraps another (a decorator) must forward every call,
+/// the defaulted ones too: a default it forgets silently drops work.
+/// [`crate::mock::assert_forwards_every_call`] checks a decorator, and
+/// [`crate::mock::MockBackend`] logs every call of this trait: a method
+/// added here is added there too.
 pub trait Backend {
     /// Starts a frame seen by `camera`: clears depth and statistics.
     fn begin_frame(&mut self, camera: &Camera);
@@ -38,8 +56,10 @@ pub trait Backend {
     /// spent waiting is the frame's wait time.
     fn result(&mut self, query: QueryHandle) -> u64;
 
-    /// Charges the CPU cost of visiting `nodes` hierarchy nodes.
-    fn traverse(&mut self, nodes: u64);
+    /// Charges the CPU cost of visiting `nodes` hierarchy nodes. A backend
+    /// whose CPU time is measured has seen that time pass and need not
+    /// implement it (the default does nothing).
+    fn traverse(&mut self, _nodes: u64) {}
 
     /// Width and height of the images the backend renders, in pixels: the
     /// resolution a method's own screen-space buffers must have.
@@ -47,23 +67,14 @@ pub trait Backend {
 
     /// Charges CPU work a method did itself on a software occlusion buffer
     /// (`moc`). A backend whose CPU time is measured (wgpu) has already seen
-    /// it pass and does nothing; the soft backend's simulated clock charges it
-    /// from its cost model.
+    /// it pass and does nothing (the default); the soft backend's simulated
+    /// clock charges it from its cost model.
     fn cpu_culling(&mut self, _work: CpuCullingWork) {}
 
-    /// Ends the frame and returns its statistics.
+    /// Ends the frame and returns its statistics. Methods never read them;
+    /// a backend that measures nothing returns what its [`FrameCounter`]
+    /// counted, or `FrameStats::default()`.
     fn end_frame(&mut self) -> FrameStats;
-
-    /// Writes the depth image of the last finished frame, row by row, into
-    /// `out` (replacing what it held), for the correctness rule (`docs/design.md`).
-    /// Costs nothing on the frame's clock; `out`'s memory is reused, so that a
-    /// run comparing every frame's image allocates none.
-    fn depth_image(&mut self, out: &mut Vec<f32>);
-
-    /// Oracle pass, outside any frame's clock: draws all `candidates` from
-    /// `camera` and reports which of them have at least one pixel in the
-    /// final depth image (ties included), with that image. Used by `opt`.
-    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView;
 
     /// A fatal error the backend met (a lost GPU device, say), after which
     /// its answers mean nothing: whoever runs frames stops and reports it.
@@ -83,6 +94,34 @@ pub trait Backend {
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         Err(GpuCullingUnsupported("this backend has no GPU-resident culling".into()))
     }
+
+    /// The backend's benchmark instruments ([`Instruments`]: its depth image
+    /// and the oracle pass), or `None` for a backend that renders into
+    /// images it does not read back (the default). `opt` needs them
+    /// ([`CullingMethod::needs_oracle`]), and so does the correctness rule.
+    ///
+    /// [`CullingMethod::needs_oracle`]: crate::CullingMethod::needs_oracle
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        None
+    }
+}
+
+/// What a benchmark reads from a backend beyond culling: the depth image
+/// (the correctness rule compares it with view-frustum culling's,
+/// [`crate::frame::differing_pixels`]) and the oracle pass behind `opt`.
+/// Reached through [`Backend::instruments`]; both backends of `occlude`
+/// implement it, a renderer of one's own need not.
+pub trait Instruments {
+    /// Writes the depth image of the last finished frame, row by row, into
+    /// `out` (replacing what it held), for the correctness rule (`docs/design.md`).
+    /// Costs nothing on the frame's clock; `out`'s memory is reused, so that a
+    /// run comparing every frame's image allocates none.
+    fn depth_image(&mut self, out: &mut Vec<f32>);
+
+    /// Oracle pass, outside any frame's clock: draws all `candidates` from
+    /// `camera` and reports which of them have at least one pixel in the
+    /// final depth image (ties included), with that image. Used by `opt`.
+    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView;
 }
 
 /// CPU work on a masked software occlusion buffer, the measure its cost is

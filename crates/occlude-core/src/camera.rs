@@ -101,6 +101,28 @@ impl Camera {
     /// `near` and `far` as distances along the view direction (`far` infinite
     /// for an infinite far plane). Matrices that are not finite or not
     /// invertible, or whose near plane is not ahead of the eye, are refused.
+    ///
+    /// ```
+    /// use glam::{Mat4, Vec3};
+    /// use occlude_core::{Aabb, Camera, CameraError, Visibility};
+    ///
+    /// // A renderer's reverse-Z camera with an infinite far plane.
+    /// let view = Mat4::look_at_rh(Vec3::new(0.0, 2.0, 10.0), Vec3::ZERO, Vec3::Y);
+    /// let projection = Mat4::perspective_infinite_reverse_rh(1.0, 16.0 / 9.0, 0.1);
+    /// let camera = Camera::from_matrices(view, projection, true)?;
+    /// assert_eq!(camera.near, 0.1);
+    /// assert!(camera.far.is_infinite());
+    ///
+    /// // Its frustum: a box ahead is in view however far, one behind is not.
+    /// let ahead = Aabb::new(Vec3::new(-1.0, -1.0, -1e6), Vec3::new(1.0, 1.0, -1e6 + 1.0));
+    /// let behind = Aabb::new(Vec3::new(-1.0, -1.0, 20.0), Vec3::new(1.0, 1.0, 21.0));
+    /// assert_ne!(camera.frustum().classify(&ahead), Visibility::Outside);
+    /// assert_eq!(camera.frustum().classify(&behind), Visibility::Outside);
+    ///
+    /// // The same projection said to be forward-Z is refused.
+    /// assert_eq!(Camera::from_matrices(view, projection, false), Err(CameraError::NearPlane));
+    /// # Ok::<(), CameraError>(())
+    /// ```
     pub fn from_matrices(view: Mat4, projection: Mat4, reverse_z: bool) -> Result<Self, CameraError> {
         for (name, m) in [("view", &view), ("projection", &projection)] {
             if !m.is_finite() {

@@ -106,6 +106,19 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// An empty scene called `name`, with no walkthrough: meshes and
+    /// instances are added with [`Scene::add_mesh`] and
+    /// [`Scene::add_instance`].
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            material_count: 0,
+            path: Default::default(),
+        }
+    }
+
     /// Adds a mesh and returns its index.
     pub fn add_mesh(&mut self, mesh: Mesh) -> u32 {
         self.meshes.push(mesh);

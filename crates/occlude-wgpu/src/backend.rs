@@ -21,7 +21,7 @@ use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
+    IdList, Instruments, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
 };
 use std::ops::Range;
 use std::sync::Arc;
@@ -666,6 +666,21 @@ impl Backend for WgpuBackend<'_> {
         s
     }
 
+    fn failure(&self) -> Option<String> {
+        self.ctx().failure()
+    }
+
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        self.ctx().gpu_culling_support()?;
+        Ok(self)
+    }
+
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        Some(self)
+    }
+}
+
+impl Instruments for WgpuBackend<'_> {
     fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.settle();
         let gpu = Arc::clone(&self.gpu);
@@ -686,15 +701,6 @@ impl Backend for WgpuBackend<'_> {
         self.depth_image(&mut depth);
         self.camera = None;
         OracleView::new(candidates, pixels, depth, self.target.width, self.target.height)
-    }
-
-    fn failure(&self) -> Option<String> {
-        self.ctx().failure()
-    }
-
-    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
-        self.ctx().gpu_culling_support()?;
-        Ok(self)
     }
 }
 

@@ -61,7 +61,7 @@ pub struct GpuContext {
 
 impl GpuContext {
     /// Opens the most capable adapter that can run the backend (see
-    /// [`choose`]); the `WGPU_BACKEND` environment variable narrows the
+    /// `choose`); the `WGPU_BACKEND` environment variable narrows the
     /// graphics APIs searched and `WGPU_ADAPTER_NAME` the adapters' names.
     pub fn new() -> Result<Self, GpuError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -238,7 +238,7 @@ fn in_words(items: &[&str]) -> String {
     }
 }
 
-/// The adapter of `instance` to open, as [`choose`] picks it (of those that
+/// The adapter of `instance` to open, as `choose` picks it (of those that
 /// can draw to `surface`, when given); `WGPU_ADAPTER_NAME` narrows the names.
 pub fn best_adapter(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<wgpu::Adapter, GpuError> {
     let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));

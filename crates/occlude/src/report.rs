@@ -8,7 +8,7 @@
 //! frame times, and queries and state changes (the CHC++ paper's Figure 10).
 //! The HTML page needs nothing beside it (inline CSS, inline SVG), so it can be
 //! mailed or attached to an issue as one file. Both renderings are made from
-//! the same list of [`Block`]s, so they cannot drift apart.
+//! the same list of `Block`s, so they cannot drift apart.
 
 use crate::bench::plot::{self, PlotKind};
 use crate::bench::summary::BenchReport;

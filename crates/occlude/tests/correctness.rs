@@ -3,15 +3,14 @@
 //! produce view-frustum culling's depth image bit for bit, and `opt` draws
 //! exactly the leaves holding an instance that the oracle sees.
 
-use glam::Mat4;
+mod common;
+
 use indicatif::ProgressBar;
 use occlude::bench::ideal::IDEAL;
-use occlude::bench::runner::{
-    cameras, differing_pixels, far_plane, render_frame, run_scene, run_scene_with_variants, Variant,
-};
+use occlude::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
 use occlude::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, Camera, FrameContext, FrameStats, Hierarchy, HierarchyKind, Scene};
+use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene};
 use occlude_scenes::import::{import, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
@@ -364,66 +363,20 @@ fn a_variant_lane_gives_the_figures_of_a_run_of_its_own() {
     assert_eq!(simulated(lane), simulated(alone));
 }
 
-/// Cameras from matrices: each walkthrough camera's view with a reverse-Z
-/// infinite-far perspective, a forward infinite-far perspective and an
-/// orthographic projection (near plane behind the eye).
-fn cameras_from_matrices(scene: &Scene, cfg: &BenchConfig) -> Vec<(&'static str, Camera)> {
-    let aspect = cfg.resolution.0 as f32 / cfg.resolution.1 as f32;
-    let half_height = scene.bounds().extent().length() * 0.1;
-    let far = far_plane(scene);
-    cameras(scene, cfg)
-        .into_iter()
-        .flat_map(|c| {
-            let fov = c.fov_y_deg.to_radians();
-            let ortho = Mat4::orthographic_rh(
-                -half_height * aspect,
-                half_height * aspect,
-                -half_height,
-                half_height,
-                -2.0,
-                far,
-            );
-            [
-                ("reverse-Z infinite", Mat4::perspective_infinite_reverse_rh(fov, aspect, c.near), true),
-                ("infinite", Mat4::perspective_infinite_rh(fov, aspect, c.near), false),
-                ("orthographic", ortho, false),
-            ]
-            .map(|(kind, p, reverse)| (kind, Camera::from_matrices(c.view(), p, reverse).unwrap()))
-        })
-        .collect()
-}
-
 #[test]
 fn conservative_methods_match_vfc_with_cameras_from_matrices() {
     let name = "city";
     let scene = small(name);
-    let cfg = BenchConfig { frames: 12, resolution: (240, 180), ..config(name, HierarchyKind::Bvh) };
-    let h = Hierarchy::build(&scene, HierarchyKind::Bvh, cfg.build);
+    let cfg = BenchConfig {
+        methods: METHOD_NAMES.map(String::from).to_vec(),
+        frames: 12,
+        resolution: (240, 180),
+        ..config(name, HierarchyKind::Bvh)
+    };
     let (w, ht) = cfg.resolution;
-    let mut lanes: Vec<_> = METHOD_NAMES
-        .iter()
-        .map(|m| {
-            let backend = SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone());
-            (create(m, &Default::default()).unwrap().method, backend, DrawnSet::default())
-        })
-        .collect();
-    let (mut reference, mut image) = (Vec::new(), Vec::new());
-    let mut culled = 0;
-    for (f, (kind, camera)) in cameras_from_matrices(&scene, &cfg).iter().enumerate() {
-        let mut vfc_draws = 0;
-        for (method, backend, drawn) in &mut lanes {
-            let stats = render_frame(method.as_mut(), backend, &scene, &h, camera, drawn);
-            if method.name() == "vfc" {
-                backend.depth_image(&mut reference);
-                assert!(reference.iter().any(|&d| d < 1.0), "{kind} camera {f}: vfc drew nothing");
-                vfc_draws = stats.draw_calls;
-            } else {
-                backend.depth_image(&mut image);
-                let differ = differing_pixels(&reference, &image);
-                assert_eq!(differ, 0, "{kind} camera {f}: {} differs from vfc in {differ} pixels", method.name());
-                culled += u64::from(method.name() == "sw" && stats.draw_calls < vfc_draws);
-            }
-        }
-    }
-    assert!(culled > 0, "sw never drew fewer objects than vfc: the cameras test no occlusion");
+    let culled = common::assert_methods_match_vfc_with_cameras_from_matrices(&scene, &cfg, || {
+        Box::new(SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()))
+    });
+    let sw = culled.iter().find(|(m, _)| m == "sw").unwrap().1;
+    assert!(sw > 0, "sw never drew fewer objects than vfc: the cameras test no occlusion");
 }

@@ -3,12 +3,14 @@
 //! the correctness rule of `docs/design.md` with depth images read back from the
 //! GPU, and a cross-check of what the GPU and the soft rasterizer see.
 
+mod common;
+
 use indicatif::ProgressBar;
 use occlude::bench::config::BackendKind;
 use occlude::bench::runner::{cameras, run_scene};
 use occlude::bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, HierarchyKind, Scene};
+use occlude_core::{Backend, HierarchyKind, Instruments, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -61,6 +63,30 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
                 triangles(0)
             );
         }
+    }
+}
+
+/// Cameras from matrices (reverse-Z infinite, forward infinite,
+/// orthographic) on the GPU: the depth flip, the frustum and the near
+/// region reach the wgpu backend's draws, queries and GPU-resident culling
+/// as they reach the soft backend's, and a query method, a GPU-driven one
+/// and the CPU buffer give vfc's depth on every camera.
+#[test]
+fn methods_match_vfc_on_the_gpu_with_cameras_from_matrices() {
+    let Some(ctx) = GpuContext::for_test("methods_match_vfc_on_the_gpu_with_cameras_from_matrices") else { return };
+    let scene = small("city");
+    let cfg = BenchConfig {
+        methods: ["vfc", "sw", "chcpp", "roc", "hiz", "moc"].map(String::from).to_vec(),
+        resolution: (240, 180),
+        ..config("city", HierarchyKind::Bvh, 6)
+    };
+    let gpu = Arc::new(GpuScene::new(ctx, &scene).unwrap());
+    let (w, h) = cfg.resolution;
+    let culled = common::assert_methods_match_vfc_with_cameras_from_matrices(&scene, &cfg, || {
+        Box::new(WgpuBackend::new(Arc::clone(&gpu), &scene, w, h))
+    });
+    for (method, cameras) in culled {
+        assert!(cameras > 0, "{method} never drew fewer objects than vfc: the cameras test no occlusion");
     }
 }
 

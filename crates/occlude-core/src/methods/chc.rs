@@ -187,3 +187,66 @@ impl CullingMethod for Chc {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_rig::{assert_draws_exactly, drawn, method, queried_alone, Rig};
+    use crate::mock::Call;
+
+    /// A hidden object is not drawn, its leaf is queried again in every
+    /// following frame (the interval of an invisible node), and it is drawn
+    /// in the frame it turns visible.
+    #[test]
+    fn a_hidden_object_is_requeried_each_frame_and_drawn_once_visible() {
+        let rig = Rig::row(4);
+        let mut mock = rig.mock();
+        mock.set_visible(1, false);
+        let mut chc = method("chc", &[]);
+        let leaf = *rig.hierarchy.bounds(rig.leaf_of(1));
+        for (f, calls) in rig.run(&mut chc, &mut mock, 4).iter().enumerate() {
+            assert_draws_exactly(calls, &[0, 2, 3]);
+            assert!(queried_alone(calls, &leaf), "frame {f}: the hidden leaf was not queried");
+        }
+        mock.set_visible(1, true);
+        let calls = &rig.run(&mut chc, &mut mock, 1)[0];
+        assert_draws_exactly(calls, &[0, 1, 2, 3]);
+    }
+
+    /// With `tav` = 2 a visible leaf is queried, then assumed visible for
+    /// two frames without a query, then queried again; with `tav` = 0 it
+    /// is queried every frame.
+    #[test]
+    fn a_visible_leaf_is_requeried_after_tav_frames() {
+        let rig = Rig::row(4);
+        let leaf = *rig.hierarchy.bounds(rig.leaf_of(0));
+        let queried_frames = |options: &[&str]| -> Vec<usize> {
+            let mut mock = rig.mock();
+            let frames = rig.run(&mut method("chc", options), &mut mock, 7);
+            frames.iter().enumerate().filter(|(_, c)| queried_alone(c, &leaf)).map(|(f, _)| f + 1).collect()
+        };
+        assert_eq!(queried_frames(&["chc.tav=2"]), [1, 4, 7]);
+        assert_eq!(queried_frames(&[]), [1, 2, 3, 4, 5, 6, 7]);
+    }
+
+    /// A leaf visible in the last frame is drawn at once, before its query's
+    /// result comes back (section 4.1: no wait for previously visible leaves).
+    #[test]
+    fn previously_visible_leaves_are_drawn_before_their_results_are_read() {
+        let rig = Rig::row(4);
+        let mut mock = rig.mock().with_latency(1000);
+        let frames = rig.run(&mut method("chc", &[]), &mut mock, 2);
+        let calls = &frames[1];
+        let leaf = *rig.hierarchy.bounds(rig.leaf_of(0));
+        let query = calls
+            .iter()
+            .find_map(|c| match c {
+                Call::IssueQuery { query, boxes } if boxes[..] == [leaf] => Some(*query),
+                _ => None,
+            })
+            .expect("the leaf is queried");
+        let drawn_at = calls.iter().position(|c| matches!(c, Call::Draw(i) if i.contains(&0))).expect("drawn");
+        let read_at = calls.iter().position(|c| matches!(c, Call::Result { query: q, .. } if *q == query)).unwrap();
+        assert!(drawn_at < read_at, "drawn at call {drawn_at}, its result read at {read_at}");
+        assert_eq!(drawn(calls).len(), 4);
+    }
+}

@@ -97,7 +97,7 @@ impl CullingMethod for TwoPhaseHiZ {
         });
     }
 
-    /// A backend without [`GpuCulling`] or depth pyramids (which the runner
+    /// A backend without [`GpuCulling`](crate::GpuCulling) or depth pyramids (which the runner
     /// refuses first) gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let (Some(r), Ok(gpu)) = (self.resources.as_mut(), backend.gpu_culling()) else {
@@ -113,6 +113,10 @@ impl CullingMethod for TwoPhaseHiZ {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::test_rig::{
+        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, culling_steps,
+        method, Rig,
+    };
     use crate::methods::MethodOptions;
 
     #[test]
@@ -122,5 +126,30 @@ mod tests {
         assert_eq!(read(&["hiz.texels=8"]), Ok(HizParams { texels: 8 }));
         let err = read(&["hiz.texels=0"]).unwrap_err();
         assert!(err.to_string().contains("hiz.texels = 0: expected an integer from 1 to 16"), "{err}");
+    }
+
+    #[test]
+    fn is_refused_without_gpu_culling_and_falls_back_to_frustum_culling() {
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling("hiz");
+    }
+
+    /// The early pass draws last frame's visible objects (those in view),
+    /// the pyramid is built from them, every box is tested against it, and
+    /// the late pass draws the newly visible, in that order: an object
+    /// turning visible is drawn in that frame, a hidden one never.
+    #[test]
+    fn early_pass_pyramid_test_late_pass() {
+        let rig = Rig::row(4);
+        let all: Vec<u32> = (0..rig.scene.instances.len() as u32).collect();
+        let mut mock = rig.mock().with_gpu_culling();
+        mock.set_visible(2, false);
+        let mut hiz = method("hiz", &[]);
+        let frames = rig.run(&mut hiz, &mut mock, 2);
+        let steps = [("draw", vec![0, 1, 3]), ("build pyramid", vec![]), ("pyramid test", all), ("draw", vec![])];
+        assert_eq!(culling_steps(&frames[1]), steps);
+        mock.set_visible(2, true);
+        let turned = &rig.run(&mut hiz, &mut mock, 1)[0];
+        assert_eq!(culling_steps(turned).last(), Some(&("draw", vec![2])));
+        assert_draws_exactly(turned, &[0, 1, 2, 3]);
     }
 }

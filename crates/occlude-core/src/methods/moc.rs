@@ -135,7 +135,7 @@ impl FromStr for Merge {
 pub struct MocParams {
     /// `moc.occluders`: `drawn` (default), `last` or `largest`.
     pub occluders: Occluders,
-    /// `moc.count` [64]: how many objects `largest` renders.
+    /// `moc.count` (default 64): how many objects `largest` renders.
     pub count: u32,
     /// `moc.merge`: `layer` (the paper's heuristic, default) or `quick`.
     pub merge: MergeMode,
@@ -316,4 +316,28 @@ impl CullingMethod for MaskedOcclusion {
 fn box_may_be_visible(buffer: &MaskedBuffer, ctx: &FrameContext<'_>, box_projection: Mat4, bounds: &Aabb) -> bool {
     let b = padded(bounds);
     ctx.camera.box_touches_near_region(&b) || buffer.test_aabb(b.min, b.max, box_projection) == Visibility::Visible
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_rig::{assert_draws_exactly, method, queries, Rig, BEHIND, SIDE, WALL};
+    use crate::mock::Call;
+
+    /// Behind a drawn wall, a cube is culled on the CPU although the mock
+    /// would answer any query about it "visible": no query is issued, and
+    /// the buffer's work is reported to the backend. Without occluders
+    /// (`last` on the first frame) nothing is culled.
+    #[test]
+    fn culls_what_the_drawn_wall_hides_without_a_query() {
+        let rig = Rig::wall();
+        for options in [&[][..], &["moc.merge=quick"]] {
+            let calls = &rig.run(&mut method("moc", options), &mut rig.mock(), 1)[0];
+            assert_draws_exactly(calls, &[WALL, SIDE]);
+            assert!(queries(calls).is_empty(), "{options:?}");
+            let work: u64 = calls.iter().map(|c| if let Call::CpuCulling(w) = c { w.triangles } else { 0 }).sum();
+            assert!(work >= 12, "{options:?}: the wall's triangles were not reported ({work})");
+        }
+        let first = &rig.run(&mut method("moc", &["moc.occluders=last"]), &mut rig.mock(), 1)[0];
+        assert_draws_exactly(first, &[WALL, BEHIND, SIDE]);
+    }
 }

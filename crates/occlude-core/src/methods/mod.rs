@@ -1,8 +1,9 @@
 //! Culling methods, each written once against [`Backend`].
 //!
-//! A method decides, frame by frame, which hierarchy leaves to draw. The
-//! runner calls [`CullingMethod::prepare`] before the frame's clock starts,
-//! then `Backend::begin_frame`, [`CullingMethod::render`] and
+//! A method decides, frame by frame, which hierarchy leaves to draw. A frame
+//! is [`render_frame`](crate::frame::render_frame):
+//! [`CullingMethod::prepare`] before the frame's clock starts, then
+//! `Backend::begin_frame`, [`CullingMethod::render`] and
 //! `Backend::end_frame`.
 
 pub mod chc;
@@ -17,6 +18,8 @@ pub mod opt;
 pub mod options;
 pub mod roc;
 pub mod sw;
+#[cfg(test)]
+mod test_rig;
 pub mod vfc;
 
 pub use debug::{DebugView, NdcRect, NodeClass};
@@ -53,11 +56,14 @@ pub struct BuiltMethod {
     pub params: Vec<(String, String)>,
 }
 
-/// Whether `backend` can run `method`: the GPU-resident culling and the
-/// depth pyramids it needs, or what the device lacks. The bench runner and
-/// the viewer ask before the first frame, so that a method never runs on
-/// its fallback unseen.
+/// Whether `backend` can run `method`: the oracle, GPU-resident culling
+/// and depth pyramids it needs, or what the backend lacks. The bench runner
+/// and the viewer ask before the first frame, so that a method never runs
+/// on its fallback unseen.
 pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> Result<(), GpuCullingUnsupported> {
+    if method.needs_oracle() && backend.instruments().is_none() {
+        return Err(GpuCullingUnsupported("this backend has no oracle pass (Backend::instruments)".into()));
+    }
     if !method.needs_gpu_culling() {
         return Ok(());
     }
@@ -106,6 +112,13 @@ pub trait CullingMethod {
     /// ([`Backend::gpu_culling`]); the runner refuses a backend without it
     /// before the first frame.
     fn needs_gpu_culling(&self) -> bool {
+        false
+    }
+
+    /// Whether the method reads the backend's oracle pass
+    /// ([`Instruments::oracle`](crate::Instruments::oracle), `opt`); the
+    /// runner refuses a backend without it before the first frame.
+    fn needs_oracle(&self) -> bool {
         false
     }
 

@@ -27,6 +27,10 @@ impl CullingMethod for Optimal {
         "opt"
     }
 
+    fn needs_oracle(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let h = ctx.hierarchy;
         let in_view: Vec<NodeId> =
@@ -34,7 +38,13 @@ impl CullingMethod for Optimal {
         let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
         candidates.sort_unstable();
         candidates.dedup();
-        let view = backend.oracle(&ctx.camera, &candidates);
+        let Some(instruments) = backend.instruments() else {
+            // Without an oracle (refused up front by `check_support`), every
+            // leaf in view: a conservative image, not the ideal set.
+            self.leaves = in_view;
+            return;
+        };
+        let view = instruments.oracle(&ctx.camera, &candidates);
         let mut visible = vec![false; ctx.scene.instances.len()];
         for &i in &view.visible {
             visible[i as usize] = true;
@@ -112,4 +122,25 @@ fn leaves_with_visible_pixels(h: &Hierarchy, camera: &Camera, view: &OracleView)
 
 fn to_vec3(v: DVec3) -> Vec3 {
     v.as_vec3()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::check_support;
+    use super::super::test_rig::{assert_draws_exactly, method, Rig};
+
+    /// `opt` needs the oracle: refused on a backend without instruments,
+    /// and, run anyway, it draws every leaf in view (a conservative image)
+    /// rather than nothing.
+    #[test]
+    fn is_refused_without_an_oracle_and_falls_back_to_every_leaf_in_view() {
+        let rig = Rig::row(4);
+        let mut mock = rig.mock();
+        let mut opt = method("opt", &[]);
+        let refused = check_support(opt.method.as_ref(), &mut mock).unwrap_err();
+        assert!(refused.0.contains("oracle"), "{refused}");
+        mock.set_visible(2, false);
+        let calls = &rig.run(&mut opt, &mut mock, 1)[0];
+        assert_draws_exactly(calls, &rig.in_view());
+    }
 }

@@ -200,6 +200,10 @@ impl CullingMethod for RasterOcclusion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::test_rig::{
+        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, culling_steps,
+        method, Rig,
+    };
     use crate::methods::MethodOptions;
 
     #[test]
@@ -209,5 +213,35 @@ mod tests {
         assert_eq!(read(&["roc.mode=last"]), Ok(RocParams { mode: RocMode::Last }));
         let err = read(&["roc.mode=fast"]).unwrap_err();
         assert!(err.to_string().contains("roc.mode = fast: expected exact or last"), "{err}");
+    }
+
+    #[test]
+    fn is_refused_without_gpu_culling_and_falls_back_to_frustum_culling() {
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling("roc");
+    }
+
+    /// Each frame draws last frame's visible objects, then tests every box,
+    /// then draws the newly visible: an object turning visible is drawn in
+    /// that frame (`exact`), or only in the next (`last`); a hidden one is
+    /// never drawn.
+    #[test]
+    fn draws_last_frames_visible_then_tests_every_box_then_the_newly_visible() {
+        let rig = Rig::row(4);
+        let all: Vec<u32> = (0..rig.scene.instances.len() as u32).collect();
+        for (options, drawn_late) in [(&[][..], false), (&["roc.mode=last"][..], true)] {
+            let mut mock = rig.mock().with_gpu_culling();
+            mock.set_visible(2, false);
+            let mut roc = method("roc", options);
+            let frames = rig.run(&mut roc, &mut mock, 2);
+            let mut steps = vec![("draw", vec![0, 1, 3]), ("test", all.clone())];
+            if !drawn_late {
+                steps.push(("draw", vec![]));
+            }
+            assert_eq!(culling_steps(&frames[1]), steps, "{options:?}");
+            mock.set_visible(2, true);
+            let turned = &rig.run(&mut roc, &mut mock, 1)[0];
+            assert_draws_exactly(turned, if drawn_late { &[0, 1, 3] } else { &[0, 1, 2, 3] });
+            assert_draws_exactly(&rig.run(&mut roc, &mut mock, 1)[0], &[0, 1, 2, 3]);
+        }
     }
 }

@@ -45,3 +45,24 @@ impl CullingMethod for ViewFrustumCulling {
         backend.traverse(visited);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_rig::{assert_draws_exactly, method, queries, Rig};
+    use crate::mock::Call;
+
+    /// Everything in the frustum drawn once, nothing behind the camera, no
+    /// query, and the nodes visited charged.
+    #[test]
+    fn draws_everything_in_view_once_and_queries_nothing() {
+        let rig = Rig::row(6);
+        let mut mock = rig.mock();
+        mock.set_visible(2, false);
+        let frames = rig.run(&mut method("vfc", &[]), &mut mock, 2);
+        for calls in &frames {
+            assert_draws_exactly(calls, &[0, 1, 2, 3, 4, 5]);
+            assert!(queries(calls).is_empty());
+            assert!(calls.iter().any(|c| matches!(c, Call::Traverse(n) if *n > 0)));
+        }
+    }
+}

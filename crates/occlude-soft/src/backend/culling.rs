@@ -24,53 +24,11 @@
 
 use super::{charge_gpu_time, GpuOp, SoftBackend};
 use crate::raster::{CommandKind, DepthTest};
-use occlude_core::depth_pyramid::{box_footprint, DepthPyramid};
-use occlude_core::query_box::padded;
+use occlude_core::depth_pyramid::box_footprint;
 use occlude_core::{
     Aabb, BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
     RenderState,
 };
-
-/// The soft backend's "device memory": every resource created so far.
-#[derive(Default)]
-pub(super) struct Device {
-    /// Padded boxes; `None` for an empty box, which never tests visible.
-    boxes: Vec<Vec<Option<Aabb>>>,
-    flags: Vec<Vec<bool>>,
-    lists: Vec<List>,
-    tables: Vec<Table>,
-    pyramids: Vec<DepthPyramid>,
-    /// The depth image a pyramid is built from, reused.
-    depth_scratch: Vec<f32>,
-}
-
-/// An id list and the most ids it may hold.
-struct List {
-    ids: Vec<u32>,
-    capacity: usize,
-}
-
-/// Per id, a range of `items`.
-struct Table {
-    ranges: Vec<ItemRange>,
-    items: Vec<u32>,
-}
-
-impl Table {
-    fn items_of(&self, id: u32) -> &[u32] {
-        let r = self.ranges[id as usize];
-        &self.items[r.first as usize..(r.first + r.count) as usize]
-    }
-}
-
-impl List {
-    /// Replaces the ids; a list never holds more than its capacity (the GPU
-    /// would write past its buffer: a caller's bug).
-    fn set(&mut self, ids: Vec<u32>) {
-        assert!(ids.len() <= self.capacity, "{} ids into a list of capacity {}", ids.len(), self.capacity);
-        self.ids = ids;
-    }
-}
 
 impl SoftBackend<'_> {
     /// Charges a read-back: the frame waits until everything recorded so
@@ -133,27 +91,19 @@ impl SoftBackend<'_> {
 
 impl GpuCulling for SoftBackend<'_> {
     fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
-        let set = boxes.iter().map(|b| (!b.is_empty()).then(|| padded(b))).collect();
-        self.device.boxes.push(set);
-        BoxSet(self.device.boxes.len() as u32 - 1)
+        self.device.create_boxes(boxes)
     }
 
     fn create_flags(&mut self, len: u32) -> Flags {
-        self.device.flags.push(vec![false; len as usize]);
-        Flags(self.device.flags.len() as u32 - 1)
+        self.device.create_flags(len)
     }
 
     fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
-        let mut list = List { ids: Vec::new(), capacity: capacity as usize };
-        list.set(ids.to_vec());
-        self.device.lists.push(list);
-        IdList(self.device.lists.len() as u32 - 1)
+        self.device.create_list(capacity, ids)
     }
 
     fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
-        assert!(ranges.iter().all(|r| r.first as usize + r.count as usize <= items.len()), "a range past the items");
-        self.device.tables.push(Table { ranges: ranges.to_vec(), items: items.to_vec() });
-        RangeTable(self.device.tables.len() as u32 - 1)
+        self.device.create_table(ranges, items)
     }
 
     fn clear_flags(&mut self, flags: Flags) {
@@ -199,8 +149,7 @@ impl GpuCulling for SoftBackend<'_> {
     }
 
     fn create_pyramid(&mut self) -> Pyramid {
-        self.device.pyramids.push(DepthPyramid::new(self.depth.width(), self.depth.height()));
-        Pyramid(self.device.pyramids.len() as u32 - 1)
+        self.device.create_pyramid(self.depth.width(), self.depth.height())
     }
 
     fn build_pyramid(&mut self, pyramid: Pyramid) {
@@ -239,39 +188,21 @@ impl GpuCulling for SoftBackend<'_> {
     }
 
     fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {
-        let d = &self.device;
-        let pass = &d.flags[filter.0 as usize];
-        let t = &d.tables[table.0 as usize];
-        let src_ids = &d.lists[src.0 as usize].ids;
-        let gathered: Vec<u32> =
-            src_ids.iter().filter(|&&id| pass[id as usize]).flat_map(|&id| t.items_of(id).iter().copied()).collect();
-        self.dispatch(src_ids.len() + gathered.len());
-        match into {
-            ExpandInto::List(list) => self.device.lists[list.0 as usize].set(gathered),
-            ExpandInto::Flags(flags) => {
-                let set = &mut self.device.flags[flags.0 as usize];
-                gathered.into_iter().for_each(|i| set[i as usize] = true);
-            }
-        }
+        let gathered = self.device.gather(src, filter, table);
+        self.dispatch(self.device.lists[src.0 as usize].ids.len() + gathered.len());
+        self.device.put(gathered, into);
     }
 
     fn drop_outside_frustum(&mut self, boxes: BoxSet, flags: Flags) {
         let frustum = self.camera.expect("drop_outside_frustum outside a frame").frustum();
         let len = self.device.flags[flags.0 as usize].len();
         self.dispatch(len);
-        let set = &mut self.device.flags[flags.0 as usize];
-        for (flag, b) in set.iter_mut().zip(&self.device.boxes[boxes.0 as usize]) {
-            *flag &= b.is_some_and(|b| frustum.intersects(&b));
-        }
+        self.device.drop_outside_frustum(boxes, flags, &frustum);
     }
 
     fn compact(&mut self, flags: Flags, unless: Option<Flags>, dst: IdList) {
-        let d = &self.device;
-        let set = &d.flags[flags.0 as usize];
-        let except = unless.map(|u| &d.flags[u.0 as usize]);
-        let ids: Vec<u32> =
-            (0..set.len()).filter(|&k| set[k] && !except.is_some_and(|e| e[k])).map(|k| k as u32).collect();
-        self.dispatch(set.len());
+        let ids = self.device.compacted(flags, unless);
+        self.dispatch(self.device.flags[flags.0 as usize].len());
         self.device.lists[dst.0 as usize].set(ids);
     }
 

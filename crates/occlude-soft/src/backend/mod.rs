@@ -16,10 +16,11 @@ use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
 use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest, Rasterizer};
 use glam::{Mat4, Vec4};
+use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, OracleView,
-    QueryHandle, RenderState, Scene,
+    Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, Instruments,
+    OracleView, QueryHandle, RenderState, Scene,
 };
 use std::time::Instant;
 
@@ -75,7 +76,7 @@ pub struct SoftBackend<'s> {
     ops: Vec<GpuOp>,
     queries: Vec<QueryState>,
     frame_start: Instant,
-    device: culling::Device,
+    device: HostResources,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -98,7 +99,7 @@ impl<'s> SoftBackend<'s> {
             ops: Vec::new(),
             queries: Vec::new(),
             frame_start: Instant::now(),
-            device: culling::Device::default(),
+            device: HostResources::default(),
         }
     }
 
@@ -312,6 +313,16 @@ impl Backend for SoftBackend<'_> {
         s
     }
 
+    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        Ok(self)
+    }
+
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        Some(self)
+    }
+}
+
+impl Instruments for SoftBackend<'_> {
     fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.flush();
         self.depth.copy_to(out);
@@ -339,9 +350,5 @@ impl Backend for SoftBackend<'_> {
         self.triangles.clear();
         let pixels = results[candidates.len()..].iter().map(|r| r.passed).collect();
         OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
-    }
-
-    fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
-        Ok(self)
     }
 }

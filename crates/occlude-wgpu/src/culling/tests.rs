@@ -6,7 +6,7 @@ use super::*;
 use crate::{GpuContext, GpuScene, WgpuBackend};
 use glam::{Mat4, Quat, Vec3};
 use occlude_core::query_box::BOX_TRIANGLES;
-use occlude_core::{Backend, FrameStats, GpuCulling, Mesh};
+use occlude_core::{Backend, FrameStats, GpuCulling, Instruments, Mesh};
 
 const SIZE: u32 = 64;
 

@@ -13,7 +13,7 @@
 
 use occlude_core::{
     Aabb, Backend, Camera, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling, GpuCullingUnsupported,
-    OracleView, QueryHandle,
+    Instruments, QueryHandle,
 };
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -72,17 +72,14 @@ impl Backend for DrawLog<'_> {
     fn end_frame(&mut self) -> FrameStats {
         self.inner.end_frame()
     }
-    fn depth_image(&mut self, out: &mut Vec<f32>) {
-        self.inner.depth_image(out);
-    }
-    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.inner.oracle(camera, candidates)
-    }
     fn failure(&self) -> Option<String> {
         self.inner.failure()
     }
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         self.inner.gpu_culling()
+    }
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        self.inner.instruments()
     }
 }
 
@@ -107,5 +104,17 @@ impl CullingMethod for Ideal {
         for instances in self.calls.borrow().iter() {
             backend.draw(instances);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use occlude_core::mock::assert_forwards_every_call;
+
+    /// The draw log forwards every call of the backend interface.
+    #[test]
+    fn forwards_every_call() {
+        assert_forwards_every_call(|mock| DrawLog::new(Box::new(mock), DrawCalls::default()));
     }
 }

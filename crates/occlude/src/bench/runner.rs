@@ -8,7 +8,7 @@ use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
-use occlude_core::{Backend, Camera, CullingMethod, FrameContext, FrameStats, Hierarchy, Scene};
+use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, Scene};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::collections::BTreeMap;
@@ -145,24 +145,6 @@ impl<'s> Lane<'s> {
     }
 }
 
-/// Renders one frame of `method` on `backend` (prepare, `begin_frame`,
-/// render, `end_frame`) and returns its statistics: how `bench` and
-/// `view` both drive a method.
-pub fn render_frame(
-    method: &mut dyn CullingMethod,
-    backend: &mut dyn Backend,
-    scene: &Scene,
-    hierarchy: &Hierarchy,
-    camera: &Camera,
-    drawn: &mut DrawnSet,
-) -> FrameStats {
-    let mut ctx = FrameContext::new(scene, hierarchy, *camera, drawn);
-    method.prepare(&mut ctx, backend);
-    backend.begin_frame(camera);
-    method.render(&mut ctx, backend);
-    backend.end_frame()
-}
-
 /// Far clipping distance of every camera in `scene`: beyond the whole scene
 /// seen from anywhere in it.
 pub fn far_plane(scene: &Scene) -> f32 {
@@ -283,7 +265,7 @@ fn run_scene_here(
     'frames: for (k, camera) in cameras.iter().enumerate() {
         let stats = reference.frame(scene, &hierarchy, camera);
         reference.frames.push(stats);
-        reference.backend.depth_image(&mut expected);
+        depth_image(reference.backend.as_mut(), &mut expected)?;
         if let Some(e) = reference.backend.failure() {
             aborted = Some(format!("frame {k}, method vfc: {e}"));
             break;
@@ -292,7 +274,7 @@ fn run_scene_here(
         for lane in &mut lanes {
             lane.built.method.set_debug(dump);
             let mut stats = lane.frame(scene, &hierarchy, camera);
-            lane.backend.depth_image(&mut image);
+            depth_image(lane.backend.as_mut(), &mut image)?;
             if let Some(e) = lane.backend.failure() {
                 aborted = Some(format!("frame {k}, method {}: {e}", lane.built.method.name()));
                 break 'frames;
@@ -340,9 +322,12 @@ fn run_scene_here(
     })
 }
 
-/// Pixels whose depth bits differ between two images.
-pub fn differing_pixels(a: &[f32], b: &[f32]) -> u64 {
-    a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count() as u64
+/// The depth image of `backend`'s last frame, for the correctness rule;
+/// an error for a backend without [`occlude_core::Instruments`].
+fn depth_image(backend: &mut dyn Backend, out: &mut Vec<f32>) -> Result<()> {
+    let instruments = backend.instruments().context("the backend has no depth image to check")?;
+    instruments.depth_image(out);
+    Ok(())
 }
 
 impl BenchRun {

@@ -4,7 +4,7 @@
 //! (the CHC paper's Figure 4).
 //!
 //! The method renders into the backend's off-screen target exactly as in
-//! `occlude bench` (`bench::runner::render_frame`); after the frame the
+//! `occlude bench` (`occlude_core::render_frame`); after the frame the
 //! viewer draws the query boxes (`boxes`) and the statistics (`overlay`) over
 //! that image and copies it to the window (`present`). Query boxes and their
 //! results are caught by `recorder::RecordingBackend`, an

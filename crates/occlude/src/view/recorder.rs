@@ -7,7 +7,7 @@
 
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable,
+    IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
 };
 use std::collections::HashMap;
 
@@ -191,14 +191,6 @@ impl<B: Backend> Backend for RecordingBackend<B> {
         self.inner.end_frame()
     }
 
-    fn depth_image(&mut self, out: &mut Vec<f32>) {
-        self.inner.depth_image(out);
-    }
-
-    fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.inner.oracle(camera, candidates)
-    }
-
     fn failure(&self) -> Option<String> {
         self.inner.failure()
     }
@@ -206,6 +198,10 @@ impl<B: Backend> Backend for RecordingBackend<B> {
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         self.inner.gpu_culling()?;
         Ok(self)
+    }
+
+    fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        self.inner.instruments()
     }
 }
 
@@ -287,10 +283,17 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
 mod tests {
     use super::*;
     use crate::bench::config::NEAR_PLANE;
-    use crate::bench::runner::render_frame;
     use occlude_core::methods::{create, DrawnSet, MethodOptions};
+    use occlude_core::mock::assert_forwards_every_call;
+    use occlude_core::render_frame;
     use occlude_core::{Hierarchy, HierarchyKind};
     use occlude_soft::{GpuModel, SoftBackend};
+
+    /// The recorder forwards every call of the backend interface.
+    #[test]
+    fn forwards_every_call() {
+        assert_forwards_every_call(RecordingBackend::new);
+    }
 
     /// CHC on the soft backend through the recorder: every query is
     /// recorded, every one CHC read has its result, and the statistics are
@@ -350,7 +353,7 @@ mod tests {
             let b = render_frame(wrapped.0.method.as_mut(), &mut wrapped.1, &scene, &hierarchy, camera, &mut wrapped.2);
             let v = render_frame(vfc.0.method.as_mut(), &mut vfc.1, &scene, &hierarchy, camera, &mut vfc.2);
             plain.1.depth_image(&mut plain_depth);
-            wrapped.1.depth_image(&mut wrapped_depth);
+            wrapped.1.inner_mut().depth_image(&mut wrapped_depth);
             assert!(plain_depth == wrapped_depth, "frame {k}: recording changed the image");
             assert_eq!((a.triangles, a.query_boxes), (b.triangles, b.query_boxes), "frame {k}");
             fewer_than_vfc |= b.triangles < v.triangles;

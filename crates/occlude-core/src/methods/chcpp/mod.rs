@@ -336,3 +336,51 @@ impl CullingMethod for Chcpp {
         self.flush_render_queue(ctx, backend, &mut q);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_rig::{assert_draws_exactly, method, queried_alone, Rig};
+    use crate::mock::Call;
+
+    /// Without the random delay, a visible leaf goes `nav` frames without a
+    /// query between two queries.
+    #[test]
+    fn a_visible_leaf_is_requeried_every_nav_plus_one_frames() {
+        let rig = Rig::row(4);
+        let leaf = *rig.hierarchy.bounds(rig.leaf_of(0));
+        let mut mock = rig.mock();
+        let mut chcpp = method("chcpp", &["chcpp.nav=3", "chcpp.random=off", "chcpp.tight=off"]);
+        let frames = rig.run(&mut chcpp, &mut mock, 10);
+        let queried: Vec<usize> =
+            frames.iter().enumerate().skip(1).filter(|(_, c)| queried_alone(c, &leaf)).map(|(f, _)| f + 1).collect();
+        assert_eq!(queried, [5, 9]);
+        for calls in &frames {
+            assert_draws_exactly(calls, &[0, 1, 2, 3]);
+        }
+    }
+
+    /// Nodes that stay hidden frame after frame are grouped into
+    /// multiqueries (several boxes, one query) that come back empty, and
+    /// never drawn.
+    #[test]
+    fn persistently_hidden_nodes_share_multiqueries() {
+        let rig = Rig::row(8);
+        let mut mock = rig.mock();
+        for hidden in [1, 3, 5, 7] {
+            mock.set_visible(hidden, false);
+        }
+        let frames = rig.run(&mut method("chcpp", &["chcpp.tight=off"]), &mut mock, 6);
+        let mut grouped_and_empty = 0;
+        for calls in &frames {
+            assert_draws_exactly(calls, &[0, 2, 4, 6]);
+            for call in calls {
+                if let Call::IssueQuery { query, boxes } = call {
+                    let empty =
+                        calls.iter().any(|c| matches!(c, Call::Result { query: q, value: 0, .. } if q == query));
+                    grouped_and_empty += usize::from(boxes.len() > 1 && empty);
+                }
+            }
+        }
+        assert!(grouped_and_empty > 0, "no multiquery of hidden nodes");
+    }
+}

@@ -278,8 +278,10 @@ impl CullingMethod for OccupancyMap {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_rig::{assert_draws_exactly, method, queries, Rig, BEHIND, SIDE, WALL};
     use super::*;
     use crate::methods::{create, MethodOptions};
+    use crate::mock::Call;
 
     fn read(opts: &[&str]) -> Result<OmParams, OptionError> {
         let opts = MethodOptions::parse(opts).unwrap();
@@ -315,5 +317,23 @@ mod tests {
         assert_eq!(om.map.height(), 1);
         om.reset_map(0.001);
         assert_eq!(om.map.height(), MAX_MAP_CELLS);
+    }
+
+    /// Frame one, map empty: the wall in front and the cube beside it reach
+    /// clear cells and are drawn without a query; the cube behind the wall
+    /// is covered, so it is queried (stage 2), and not drawn when the
+    /// query finds it hidden.
+    #[test]
+    fn draws_uncovered_nodes_without_queries_and_queries_covered_ones() {
+        let rig = Rig::wall();
+        let mut mock = rig.mock();
+        mock.set_visible(BEHIND, false);
+        let calls = &rig.run(&mut method("om", &[]), &mut mock, 1)[0];
+        assert_draws_exactly(calls, &[WALL, SIDE]);
+        let behind = *rig.hierarchy.bounds(rig.leaf_of(BEHIND));
+        assert_eq!(queries(calls), [&[behind][..]]);
+        let first_query = calls.iter().position(|c| matches!(c, Call::IssueQuery { .. })).unwrap();
+        let wall_drawn = calls.iter().position(|c| matches!(c, Call::Draw(i) if i.contains(&WALL))).unwrap();
+        assert!(wall_drawn < first_query, "the wall is drawn before the query behind it");
     }
 }
