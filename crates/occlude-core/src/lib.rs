@@ -12,6 +12,7 @@ pub mod depth_pyramid;
 pub mod geometry;
 pub mod gpu_culling;
 pub mod hierarchy;
+pub mod item_buffer;
 pub mod methods;
 pub mod path;
 pub mod query_box;
@@ -26,6 +27,7 @@ pub use gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
 };
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, NO_ITEM};
 pub use methods::{CullingMethod, FrameContext};
 
 pub use path::{CameraPath, Keyframe, Sampling};

@@ -12,6 +12,7 @@
 
 use crate::context::GpuContext;
 use crate::culling::{CullOp, Culling};
+use crate::item_buffer::ItemPass;
 use crate::queries::{
     encode_resolve, read_values, GpuTimes, PassKind, PassTimer, QueryPool, Readback, QUERIES_PER_SET,
 };
@@ -21,7 +22,7 @@ use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
+    IdList, ItemCounts, ItemLayout, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
 };
 use std::ops::Range;
 use std::sync::Arc;
@@ -187,6 +188,8 @@ pub struct WgpuBackend<'s> {
     wait: Duration,
     /// GPU-resident culling's resources, made by the first `create_*`.
     pub(crate) culling: Option<Culling>,
+    /// The item buffer's pipelines and image, made by the first item pass.
+    item_pass: Option<ItemPass>,
 }
 
 impl<'s> WgpuBackend<'s> {
@@ -223,6 +226,7 @@ impl<'s> WgpuBackend<'s> {
             frame_start: Instant::now(),
             wait: Duration::ZERO,
             culling: None,
+            item_pass: None,
         }
     }
 
@@ -248,6 +252,29 @@ impl<'s> WgpuBackend<'s> {
     /// Width and height of the render target in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.target.width, self.target.height)
+    }
+
+    /// Item pass of the hierarchical item buffer (module `item_buffer`),
+    /// outside any frame's clock: draws `layout`'s instances from `camera`
+    /// (each object's with one instanced draw) and counts every slot's,
+    /// object's and tile's visible pixels on the GPU. Its depth image
+    /// replaces the backend's, as after an oracle pass. Needs compute
+    /// shaders: an adapter that cannot run GPU-resident culling is refused;
+    /// a failed read-back fails the backend and answers zero counts.
+    pub fn item_buffer(&mut self, camera: &Camera, layout: &ItemLayout) -> Result<ItemCounts, GpuCullingUnsupported> {
+        self.ctx().gpu_culling_support()?;
+        self.start(camera);
+        let gpu = Arc::clone(&self.gpu);
+        let pass = self.item_pass.get_or_insert_with(|| ItemPass::new(&gpu, &self.target));
+        let counts = pass.run(&gpu, &self.target, &self.camera_buffer, layout).unwrap_or_else(|e| {
+            gpu.ctx.fail(e);
+            ItemCounts::reduce(layout, vec![0; layout.bins()])
+        });
+        // The target holds the item pass's depth: nothing clears it before
+        // it is read.
+        self.cleared = true;
+        self.camera = None;
+        Ok(counts)
     }
 
     /// Pixels of the image: what a query that cannot be answered reports, so

@@ -729,7 +729,7 @@ impl Culling {
 }
 
 /// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.
-fn workgroups(threads: u32) -> (u32, u32) {
+pub(crate) fn workgroups(threads: u32) -> (u32, u32) {
     let groups = threads.div_ceil(GROUP_SIZE).max(1);
     let x = groups.min(MAX_GROUPS_PER_DIMENSION);
     (x, groups.div_ceil(x))

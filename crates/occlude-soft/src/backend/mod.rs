@@ -11,6 +11,7 @@
 //! the rasterizer, their costs on the GPU time line.
 
 mod culling;
+mod item_buffer;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
