@@ -49,6 +49,42 @@ pub enum ItemBufferError {
     NoInstance(u32),
 }
 
+/// How a backend counts the pixels of occlusion queries (`occlude bench
+/// --queries`). Both give every query its exact count of box fragments that
+/// pass the depth test; they differ in how the GPU is asked, and so in cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum QueryMode {
+    /// One hardware occlusion query per query.
+    #[default]
+    Hardware,
+    /// The queries recorded between two submissions counted as one batch:
+    /// their boxes drawn as one pass without depth writes, each fragment
+    /// passing the depth test adding one to its query's bin with an atomic
+    /// (the item buffer's histogram, counted at the fragment because the
+    /// boxes of a batch overlap), the bins read back together.
+    Hib,
+}
+
+impl std::str::FromStr for QueryMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "hardware" => Ok(Self::Hardware),
+            "hib" => Ok(Self::Hib),
+            _ => Err(format!("unknown query mode '{s}': expected 'hardware' or 'hib'")),
+        }
+    }
+}
+
+impl std::fmt::Display for QueryMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Hardware => "hardware",
+            Self::Hib => "hib",
+        })
+    }
+}
+
 /// Which instances an item pass draws, grouped into objects (one per mesh,
 /// in mesh order; its instances in the order given), and the tile level:
 /// the meaning of every item ID.
@@ -249,6 +285,15 @@ mod tests {
         assert_eq!(ItemLayout::new(&s, &[7], 0), Err(ItemBufferError::NoInstance(7)));
         assert_eq!(ItemLayout::new(&s, &[0], MAX_LEVEL + 1), Err(ItemBufferError::Level(MAX_LEVEL + 1)));
         assert!(matches!(ItemLayout::new(&s, &[0; 70_000], MAX_LEVEL), Err(ItemBufferError::TooManyBins { .. })));
+    }
+
+    #[test]
+    fn query_modes_parse_and_print() {
+        for mode in [QueryMode::Hardware, QueryMode::Hib] {
+            assert_eq!(mode.to_string().parse::<QueryMode>(), Ok(mode));
+        }
+        assert_eq!(QueryMode::default(), QueryMode::Hardware);
+        assert!("occlusion".parse::<QueryMode>().unwrap_err().contains("'hardware' or 'hib'"));
     }
 
     #[test]

@@ -27,7 +27,7 @@ pub use gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
 };
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
-pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, NO_ITEM};
+pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, QueryMode, NO_ITEM};
 pub use methods::{CullingMethod, FrameContext};
 
 pub use path::{CameraPath, Keyframe, Sampling};

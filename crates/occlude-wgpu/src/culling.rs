@@ -174,6 +174,16 @@ impl CullingScene {
     pub fn list_pipeline(&self) -> &wgpu::RenderPipeline {
         &self.render.list
     }
+
+    /// The counted-query render pipeline (vertex stage of the query boxes).
+    pub fn count_pipeline(&self) -> &wgpu::RenderPipeline {
+        &self.render.count
+    }
+
+    /// A bind group of `counts` as counted queries' group 1.
+    pub fn counts_group(&self, ctx: &GpuContext, counts: &wgpu::Buffer) -> wgpu::BindGroup {
+        bind_group(ctx, "query counts", &self.render.counts_layout, &[(2, counts)])
+    }
 }
 
 /// A flag buffer and the bind group through which box-test fragments set it.

@@ -33,12 +33,17 @@ pub(crate) struct CullingPipelines {
     pub flags_layout: wgpu::BindGroupLayout,
     /// Group 1 of list draws: every instance's colour.
     pub colors_layout: wgpu::BindGroupLayout,
+    /// Group 1 of counted queries: their counts.
+    pub counts_layout: wgpu::BindGroupLayout,
     /// Box tests: the query pipeline, its fragments setting the box's flag
     /// after the depth test.
     pub test: wgpu::RenderPipeline,
     /// List draws: the draw pipeline, the colour read per instance (one
     /// multi-draw has one bind group).
     pub list: wgpu::RenderPipeline,
+    /// Counted queries (`--queries hib`): the query pipeline, its fragments
+    /// adding to their query's count after the depth test.
+    pub count: wgpu::RenderPipeline,
 }
 
 /// How one pipeline differs from the others.
@@ -134,6 +139,7 @@ impl Pipelines {
         // Bindings as in shader.wgsl and cull.wgsl.
         let flags_layout = group1("box-test flags", 0, false);
         let colors_layout = group1("instance colours", 1, true);
+        let counts_layout = group1("query counts", 2, false);
         let build = |group1: &wgpu::BindGroupLayout, v: Variant| {
             let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(v.label),
@@ -147,7 +153,16 @@ impl Pipelines {
             Variant { label: "box tests", fragment_entry: "fs_test_box", fragment_module: Some(cull_module), ..QUERY },
         );
         let list = build(&colors_layout, Variant { label: "list draws", fragment_entry: "fs_listed", ..DRAW });
-        CullingPipelines { flags_layout, colors_layout, test, list }
+        let count = build(
+            &counts_layout,
+            Variant {
+                label: "counted queries",
+                fragment_entry: "fs_count_box",
+                fragment_module: Some(cull_module),
+                ..QUERY
+            },
+        );
+        CullingPipelines { flags_layout, colors_layout, counts_layout, test, list, count }
     }
 }
 

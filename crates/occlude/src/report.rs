@@ -349,6 +349,7 @@ mod tests {
             fps: None,
             resolution: [160, 120],
             backend: "soft".into(),
+            queries: "hardware".into(),
             adapter: None,
             aborted: None,
             gpu_model: "modern".into(),
