@@ -123,16 +123,7 @@ impl CullingScene {
             label: Some("occlude culling shaders"),
             source: wgpu::ShaderSource::Wgsl(include_str!("cull.wgsl").into()),
         });
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
             .instances
             .iter()
@@ -736,6 +727,23 @@ impl Culling {
             drawn: words[4..].to_vec(),
         }))
     }
+}
+
+/// The compute pipeline of `entry` in `module`, its layout derived from
+/// the shader.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
 }
 
 /// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.

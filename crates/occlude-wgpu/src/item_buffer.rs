@@ -17,7 +17,8 @@
 //! then the bins and totals are read back.
 
 use crate::context::GpuContext;
-use crate::culling::workgroups;
+use crate::culling::{compute_pipeline, workgroups};
+use crate::pipelines::{build_pipeline, layout_entry, Variant, DRAW};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;
@@ -32,6 +33,8 @@ const ITEM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// backend's size, made on first use.
 pub(crate) struct ItemPass {
     render: wgpu::RenderPipeline,
+    /// Group 0 of the item pass.
+    group: wgpu::BindGroupLayout,
     histogram: wgpu::ComputePipeline,
     reduce: wgpu::ComputePipeline,
     items: wgpu::TextureView,
@@ -47,56 +50,25 @@ impl ItemPass {
             label: Some("item buffer shaders"),
             source: wgpu::ShaderSource::Wgsl(include_str!("item_buffer.wgsl").into()),
         });
-        let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        let (vertex, fragment) = (wgpu::ShaderStages::VERTEX, wgpu::ShaderStages::FRAGMENT);
+        let storage_read = wgpu::BufferBindingType::Storage { read_only: true };
+        // Bindings as in item_buffer.wgsl.
+        let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("item pass"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_item"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 12,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: crate::pipelines::DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_item"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: ITEM_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
+            entries: &[
+                layout_entry(0, vertex, wgpu::BufferBindingType::Uniform),
+                layout_entry(1, vertex, storage_read),
+                layout_entry(2, vertex, storage_read),
+                layout_entry(3, fragment, wgpu::BufferBindingType::Uniform),
+            ],
         });
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("item pass"),
+            bind_group_layouts: &[Some(&group)],
+            immediate_size: 0,
+        });
+        let variant = Variant { label: "item pass", vertex_entry: "vs_item", fragment_entry: "fs_item", ..DRAW };
+        let render = build_pipeline(device, &layout, &module, ITEM_FORMAT, variant);
         let items = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("item image"),
             size: wgpu::Extent3d { width: target.width, height: target.height, depth_or_array_layers: 1 },
@@ -109,9 +81,10 @@ impl ItemPass {
         });
         let order = scrambled(target.width * target.height);
         Self {
-            histogram: compute("cs_histogram"),
-            reduce: compute("cs_reduce"),
+            histogram: compute_pipeline(device, &module, "cs_histogram"),
+            reduce: compute_pipeline(device, &module, "cs_reduce"),
             render,
+            group,
             items: items.create_view(&Default::default()),
             order: storage(&gpu.ctx, "item pixel order", &order, wgpu::BufferUsages::empty()),
         }
@@ -182,7 +155,7 @@ impl ItemPass {
             });
             let group = entries(
                 ctx,
-                &self.render.get_bind_group_layout(0),
+                &self.group,
                 &[
                     (0, camera.as_entire_binding()),
                     (1, gpu.transforms.as_entire_binding()),

@@ -47,21 +47,21 @@ pub(crate) struct CullingPipelines {
 }
 
 /// How one pipeline differs from the others.
-struct Variant<'a> {
-    label: &'a str,
-    vertex_entry: &'a str,
-    fragment_entry: &'a str,
+pub(crate) struct Variant<'a> {
+    pub label: &'a str,
+    pub vertex_entry: &'a str,
+    pub fragment_entry: &'a str,
     /// Module of the fragment entry, when not the scene shaders'.
-    fragment_module: Option<&'a wgpu::ShaderModule>,
-    instance_vertices: bool,
-    depth_write: bool,
-    compare: wgpu::CompareFunction,
-    cull_back: bool,
-    color: bool,
+    pub fragment_module: Option<&'a wgpu::ShaderModule>,
+    pub instance_vertices: bool,
+    pub depth_write: bool,
+    pub compare: wgpu::CompareFunction,
+    pub cull_back: bool,
+    pub color: bool,
 }
 
 /// Instances, depth test less, depth writes on, shaded colour.
-const DRAW: Variant<'static> = Variant {
+pub(crate) const DRAW: Variant<'static> = Variant {
     label: "draw",
     vertex_entry: "vs_instance",
     fragment_entry: "fs_shaded",
@@ -166,7 +166,8 @@ impl Pipelines {
     }
 }
 
-fn layout_entry(
+/// A bind-group layout entry of a buffer.
+pub(crate) fn layout_entry(
     binding: u32,
     visibility: wgpu::ShaderStages,
     ty: wgpu::BufferBindingType,
@@ -179,7 +180,9 @@ fn layout_entry(
     }
 }
 
-fn build_pipeline(
+/// A render pipeline of `module` (and `v.fragment_module`) as `v` says,
+/// drawing into a `color_format` target and the depth format.
+pub(crate) fn build_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
