@@ -68,8 +68,11 @@ fn exact_bins(scene: &Scene, camera: &Camera, layout: &ItemLayout, view: &Oracle
 
 /// What holds on both backends: the totals are the histogram's sums, every
 /// tile counts the covered pixels of the oracle's image, every instance at
-/// most its depth-equal query's pixels, and exactly those where no two
-/// instances tie at a pixel. Returns whether the frame had ties.
+/// most its depth-equal query's count, and exactly that on a frame where no
+/// pixel has two fragments at the image's depth (the query counts
+/// fragments: one instance's coincident faces count a pixel twice, and so do
+/// two instances tied there, which the item buffer gives to the first).
+/// Returns whether the frame had such pixels.
 fn check_totals(what: &str, layout: &ItemLayout, counts: &ItemCounts, oracle: &OracleView) -> bool {
     assert_eq!(counts, &ItemCounts::reduce(layout, counts.bins.clone()), "{what}: totals are not the bins' sums");
     let covered = covered_per_tile(layout, oracle);
@@ -103,7 +106,7 @@ fn soft_item_buffer_counts_every_instance_and_tile_exactly() {
             tied += usize::from(check_totals(&what, &layout, &counts, &oracle));
         }
         assert!(instanced, "{name}: no object had two instances in view");
-        eprintln!("soft {name}: {tied} of {} frames with instances tied at a pixel", cfg.frames);
+        eprintln!("soft {name}: {tied} of {} frames with a pixel covered twice at its depth", cfg.frames);
     }
 }
 
@@ -128,6 +131,6 @@ fn gpu_item_buffer_counts_every_instance_and_tile_exactly() {
             assert!(bits(&depth) == bits(&oracle.depth), "{what}: the item pass's depth differs from the draws'");
             tied += usize::from(check_totals(&what, &layout, &counts, &oracle));
         }
-        eprintln!("wgpu {name}: {tied} of {} frames with instances tied at a pixel", cfg.frames);
+        eprintln!("wgpu {name}: {tied} of {} frames with a pixel covered twice at its depth", cfg.frames);
     }
 }
