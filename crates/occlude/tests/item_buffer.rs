@@ -67,22 +67,22 @@ fn exact_bins(scene: &Scene, camera: &Camera, layout: &ItemLayout, view: &Oracle
 }
 
 /// What holds on both backends: the totals are the histogram's sums, every
-/// tile counts the covered pixels of the oracle's image, every instance at
-/// most its depth-equal query's count, and exactly that on a frame where no
-/// pixel has two fragments at the image's depth (the query counts
-/// fragments: one instance's coincident faces count a pixel twice, and so do
-/// two instances tied there, which the item buffer gives to the first).
-/// Returns whether the frame had such pixels.
+/// tile counts the covered pixels of the oracle's image, and every instance
+/// its depth-equal query's count less at most the frame's excess
+/// fragments (fragments at the image's depth beyond one a pixel: the query
+/// counts fragments, so one instance's coincident faces count a pixel
+/// twice, and so do two instances tied there, which the item buffer gives
+/// to the first), exactly that count on a frame without them. Returns
+/// whether the frame had excess fragments.
 fn check_totals(what: &str, layout: &ItemLayout, counts: &ItemCounts, oracle: &OracleView) -> bool {
     assert_eq!(counts, &ItemCounts::reduce(layout, counts.bins.clone()), "{what}: totals are not the bins' sums");
     let covered = covered_per_tile(layout, oracle);
     assert_eq!(counts.tiles, covered, "{what}: per-tile counts");
-    let ties = oracle.pixels.iter().sum::<u64>() != covered.iter().sum::<u64>();
+    let excess = oracle.pixels.iter().sum::<u64>() - covered.iter().sum::<u64>();
     for (s, (&hib, &query)) in counts.instances.iter().zip(&oracle.pixels).enumerate() {
-        assert!(hib <= query, "{what}: slot {s} counted {hib} pixels, its query {query}");
-        assert!(ties || hib == query, "{what}: slot {s} counted {hib} pixels, its query {query}");
+        assert!(hib <= query && query - hib <= excess, "{what}: slot {s} counted {hib} pixels, its query {query}");
     }
-    ties
+    excess > 0
 }
 
 #[test]
