@@ -183,7 +183,7 @@ impl DepthPyramid {
     }
 
     /// Rebuilds every level from `depth` (`width * height` values, row by
-    /// row from the top, as `Backend::depth_image` gives them).
+    /// row from the top, as `Instruments::depth_image` gives them).
     ///
     /// # Panics
     /// If `depth` has not the pyramid's size.

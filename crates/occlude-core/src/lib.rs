@@ -60,6 +60,7 @@ pub mod geometry;
 pub mod gpu_culling;
 pub mod hierarchy;
 pub mod host_culling;
+pub mod item_buffer;
 pub mod methods;
 pub mod mock;
 pub mod path;
@@ -78,6 +79,7 @@ pub use gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
 };
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, QueryMode, NO_ITEM};
 pub use methods::{CullingMethod, DrawnSet, FrameContext};
 
 pub use path::{CameraPath, Keyframe, Sampling};

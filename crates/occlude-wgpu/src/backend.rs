@@ -11,7 +11,8 @@
 //! waits, and that wait is the frame's wait time (CHC paper, section 3).
 
 use crate::context::GpuContext;
-use crate::culling::{CullOp, Culling};
+use crate::culling::{CullOp, Culling, CullingScene};
+use crate::item_buffer::ItemPass;
 use crate::queries::{
     encode_resolve, read_values, GpuTimes, PassKind, PassTimer, QueryPool, Readback, QUERIES_PER_SET,
 };
@@ -21,7 +22,8 @@ use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, BoxSet, Camera, ExpandInto, Flags, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, Instruments, ItemRange, OracleView, Pyramid, QueryHandle, RangeTable, RenderState, Scene,
+    IdList, Instruments, ItemCounts, ItemLayout, ItemRange, OracleView, Pyramid, QueryHandle, QueryMode, RangeTable,
+    RenderState, Scene,
 };
 use std::ops::Range;
 use std::sync::Arc;
@@ -51,6 +53,9 @@ enum Op {
     BoxQuery { slot: u32, boxes: Range<u32> },
     /// Occlusion query `slot` over an instance drawn with depth test equal.
     EqualQuery { slot: u32, instance: u32 },
+    /// Counted query `slot` ([`QueryMode::Hib`]) over boxes of the box
+    /// buffer: no occlusion query, its fragments count themselves.
+    CountedQuery { slot: u32, boxes: Range<u32> },
     /// A GPU-resident culling command: a compute pass, and for box tests and
     /// list draws a draw in the render pass after it.
     Cull(CullOp),
@@ -71,6 +76,7 @@ impl Op {
             Op::Draw(_) => Bound::Draw,
             Op::BoxQuery { .. } => Bound::Query,
             Op::EqualQuery { .. } => Bound::Oracle,
+            Op::CountedQuery { .. } => Bound::Counted,
             Op::Cull(CullOp::TestBoxes { .. }) => Bound::BoxTest,
             // List draws; the other culling ops draw nothing.
             Op::Cull(_) => Bound::ListDraw,
@@ -81,7 +87,7 @@ impl Op {
     fn pass_kind(&self) -> PassKind {
         match self.pipeline() {
             Bound::Draw | Bound::ListDraw => PassKind::Render,
-            Bound::Query | Bound::Oracle | Bound::BoxTest => PassKind::Cull,
+            Bound::Query | Bound::Oracle | Bound::BoxTest | Bound::Counted => PassKind::Cull,
         }
     }
 }
@@ -153,6 +159,7 @@ enum Bound {
     Oracle,
     BoxTest,
     ListDraw,
+    Counted,
 }
 
 impl Bound {
@@ -187,6 +194,21 @@ pub struct WgpuBackend<'s> {
     wait: Duration,
     /// GPU-resident culling's resources, made by the first `create_*`.
     pub(crate) culling: Option<Culling>,
+    /// The item buffer's pipelines and image, made by the first item pass.
+    item_pass: Option<ItemPass>,
+    query_mode: QueryMode,
+    /// Counted queries' resources, made when [`QueryMode::Hib`] is chosen.
+    counted: Option<CountedQueries>,
+}
+
+/// What counted queries ([`QueryMode::Hib`]) draw with: the pipeline, and
+/// per query slot of a set a 64-bit count (two words, low first) that the
+/// boxes' passing fragments add to, cleared before each submission and
+/// copied to its read-back where hardware queries are resolved.
+struct CountedQueries {
+    scene: Arc<CullingScene>,
+    buffer: wgpu::Buffer,
+    group: wgpu::BindGroup,
 }
 
 impl<'s> WgpuBackend<'s> {
@@ -223,6 +245,9 @@ impl<'s> WgpuBackend<'s> {
             frame_start: Instant::now(),
             wait: Duration::ZERO,
             culling: None,
+            item_pass: None,
+            query_mode: QueryMode::Hardware,
+            counted: None,
         }
     }
 
@@ -248,6 +273,53 @@ impl<'s> WgpuBackend<'s> {
     /// Width and height of the render target in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.target.width, self.target.height)
+    }
+
+    /// Answers occlusion queries in `mode` from now on. [`QueryMode::Hib`]
+    /// counts each submission's queries in its render pass, every box
+    /// fragment that passes the depth test adding one to its query's count
+    /// with an atomic (early depth test forced), the counts read back as
+    /// hardware queries' are: the same exact counts where the adapter's
+    /// occlusion queries are exact, and exact where they are not. It needs
+    /// what GPU-resident culling needs, and is refused otherwise.
+    pub fn set_query_mode(&mut self, mode: QueryMode) -> Result<(), GpuCullingUnsupported> {
+        if mode == QueryMode::Hib && self.counted.is_none() {
+            self.ctx().gpu_culling_support()?;
+            let scene = self.gpu.culling(self.scene);
+            let buffer = self.ctx().device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("query counts"),
+                size: u64::from(QUERIES_PER_SET) * 8,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = scene.counts_group(self.ctx(), &buffer);
+            self.counted = Some(CountedQueries { scene, buffer, group });
+        }
+        self.query_mode = mode;
+        Ok(())
+    }
+
+    /// Item pass of the hierarchical item buffer (module `item_buffer`),
+    /// outside any frame's clock: draws `layout`'s instances from `camera`
+    /// (each object's with one instanced draw) and counts every slot's,
+    /// object's and tile's visible pixels on the GPU. Its depth image
+    /// replaces the backend's, as after an oracle pass. Needs compute
+    /// shaders: an adapter that cannot run GPU-resident culling is refused;
+    /// a failed read-back fails the backend and answers zero counts.
+    pub fn item_buffer(&mut self, camera: &Camera, layout: &ItemLayout) -> Result<ItemCounts, GpuCullingUnsupported> {
+        self.ctx().gpu_culling_support()?;
+        self.start(camera);
+        let gpu = Arc::clone(&self.gpu);
+        let pass = self.item_pass.get_or_insert_with(|| ItemPass::new(&gpu, &self.target));
+        let counts = pass.run(&gpu, &self.target, &self.camera_buffer, layout).unwrap_or_else(|e| {
+            gpu.ctx.fail(e);
+            ItemCounts::reduce(layout, vec![0; layout.bins()])
+        });
+        // The target holds the item pass's depth: nothing clears it before
+        // it is read.
+        self.cleared = true;
+        self.camera = None;
+        Ok(counts)
     }
 
     /// Pixels of the image: what a query that cannot be answered reports, so
@@ -301,7 +373,20 @@ impl<'s> WgpuBackend<'s> {
         let set_index = self.recorded_set.take();
         let set = set_index.map(|k| self.pool.set(ctx, k as usize).clone());
         let ops = std::mem::take(&mut self.ops);
+        let slots = ops.iter().filter_map(|op| match op {
+            Op::BoxQuery { slot, .. } | Op::EqualQuery { slot, .. } | Op::CountedQuery { slot, .. } => Some(*slot),
+            Op::Draw(_) | Op::Cull(_) => None,
+        });
+        let (first, count) = match slots.clone().min() {
+            Some(first) => (first, slots.count() as u32),
+            None => (0, 0),
+        };
+        let counted = self.counted.as_ref().filter(|_| ops.iter().any(|op| matches!(op, Op::CountedQuery { .. })));
+        let counted_bytes = (u64::from(first % QUERIES_PER_SET) * 8, u64::from(count) * 8);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        if let Some(c) = counted {
+            encoder.clear_buffer(&c.buffer, counted_bytes.0, Some(counted_bytes.1));
+        }
         for segment in segments(&ops, !self.cleared) {
             let range = match segment {
                 Segment::Compute(k) => {
@@ -333,22 +418,23 @@ impl<'s> WgpuBackend<'s> {
                 occlusion_query_set: set.as_ref(),
                 multiview_mask: None,
             });
-            let frame =
-                Encoding { gpu: &gpu, scene: self.scene, frame: &self.frame_group, culling: self.culling.as_ref() };
+            let frame = Encoding {
+                gpu: &gpu,
+                scene: self.scene,
+                frame: &self.frame_group,
+                culling: self.culling.as_ref(),
+                counted: self.counted.as_ref(),
+            };
             encode_ops(&mut pass, &frame, &ops[range]);
             self.cleared = true;
         }
-        let slots = ops.iter().filter_map(|op| match op {
-            Op::BoxQuery { slot, .. } | Op::EqualQuery { slot, .. } => Some(*slot),
-            Op::Draw(_) | Op::Cull(_) => None,
-        });
-        let (first, count) = match slots.clone().min() {
-            Some(first) => (first, slots.count() as u32),
-            None => (0, 0),
-        };
         let readback = (count > 0).then(|| self.pool.readback(ctx));
-        let bytes = match (&readback, &set) {
-            (Some(r), Some(set)) => encode_resolve(&mut encoder, set, first % QUERIES_PER_SET, count, r),
+        let bytes = match (&readback, &set, counted) {
+            (Some(r), _, Some(c)) => {
+                encoder.copy_buffer_to_buffer(&c.buffer, counted_bytes.0, &r.staging, 0, counted_bytes.1);
+                counted_bytes.1
+            }
+            (Some(r), Some(set), None) => encode_resolve(&mut encoder, set, first % QUERIES_PER_SET, count, r),
             _ => 0,
         };
         ctx.queue.submit([encoder.finish()]);
@@ -516,6 +602,7 @@ struct Encoding<'a> {
     /// Group 0 of instance draws and queries.
     frame: &'a wgpu::BindGroup,
     culling: Option<&'a Culling>,
+    counted: Option<&'a CountedQueries>,
 }
 
 /// Encodes the draws of `ops` into `pass`, binding pipelines, index buffers
@@ -537,8 +624,16 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
                 (Bound::ListDraw, Some(c)) => (c.scene().list_pipeline(), &gpu.indices),
                 // Culling ops are recorded only once culling exists.
                 (Bound::BoxTest | Bound::ListDraw, None) => continue,
+                (Bound::Counted, _) => match enc.counted {
+                    Some(c) => (c.scene.count_pipeline(), &gpu.box_indices),
+                    // Counted queries are recorded only once their resources exist.
+                    None => continue,
+                },
             };
             pass.set_pipeline(pipeline);
+            if let (Bound::Counted, Some(c)) = (want, enc.counted) {
+                pass.set_bind_group(1, &c.group, &[]);
+            }
             pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
             if !want.material_group() || bound.is_some_and(|b| !b.material_group()) {
                 material = None;
@@ -565,6 +660,7 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
                     pass.end_occlusion_query();
                 }
             }
+            Op::CountedQuery { boxes, .. } => pass.draw_indexed(0..BOX_INDEX_COUNT, 0, boxes.clone()),
             Op::BoxQuery { slot, boxes } => {
                 if material.is_none() {
                     // The query pipeline's layout includes the material group.
@@ -610,13 +706,26 @@ impl Backend for WgpuBackend<'_> {
             self.queries.push(QueryState::Ready(self.all_pixels()));
             return QueryHandle(self.queries.len() as u32 - 1);
         };
-        let handle = self.record_query(|slot| Op::BoxQuery { slot, boxes: 0..0 });
+        let counted = self.query_mode == QueryMode::Hib;
+        let handle = self.record_query(|slot| {
+            if counted {
+                Op::CountedQuery { slot, boxes: 0..0 }
+            } else {
+                Op::BoxQuery { slot, boxes: 0..0 }
+            }
+        });
         let first = self.boxes.len() as u32;
+        // A counted query's boxes carry its slot in the set, the count
+        // their fragments add to.
+        let id = match self.ops.last() {
+            Some(Op::CountedQuery { slot, .. }) => f32::from_bits(slot % QUERIES_PER_SET),
+            _ => 0.0,
+        };
         self.boxes.extend(padded.iter().map(|b| {
             let (lo, hi) = (b.min, b.max);
-            [lo.x, lo.y, lo.z, 0.0, hi.x, hi.y, hi.z, 0.0]
+            [lo.x, lo.y, lo.z, id, hi.x, hi.y, hi.z, 0.0]
         }));
-        if let Some(Op::BoxQuery { boxes, .. }) = self.ops.last_mut() {
+        if let Some(Op::BoxQuery { boxes, .. } | Op::CountedQuery { boxes, .. }) = self.ops.last_mut() {
             *boxes = first..self.boxes.len() as u32;
         }
         handle

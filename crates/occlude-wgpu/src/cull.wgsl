@@ -111,6 +111,9 @@ struct Stats {
 
 // The box-test fragments' flags (the render pass's group 1).
 @group(1) @binding(0) var<storage, read_write> box_flags: array<u32>;
+// Counted queries (`--queries hib`): per query slot a 64-bit count of its
+// boxes' fragments that passed the depth test, low word first.
+@group(1) @binding(2) var<storage, read_write> query_counts: array<atomic<u32>>;
 
 const GROUP_SIZE: u32 = 64u;
 
@@ -176,6 +179,18 @@ fn cs_test_boxes(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroup
 @fragment @early_depth_test(force)
 fn fs_test_box(@location(0) @interpolate(flat) id: u32) -> @location(0) vec4<f32> {
     box_flags[id] = 1u;
+    return vec4<f32>(0.0);
+}
+
+// Counted queries: a fragment of a query's box that passed the depth test
+// (forced early, as for box tests) adds one to the query's count, carrying
+// into the high word. Boxes of one query or of several may overlap: each
+// fragment counts, as a hardware occlusion query counts them.
+@fragment @early_depth_test(force)
+fn fs_count_box(@location(0) @interpolate(flat) slot: u32) -> @location(0) vec4<f32> {
+    if atomicAdd(&query_counts[2u * slot], 1u) == 0xffffffffu {
+        atomicAdd(&query_counts[2u * slot + 1u], 1u);
+    }
     return vec4<f32>(0.0);
 }
 

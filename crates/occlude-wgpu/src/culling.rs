@@ -123,16 +123,7 @@ impl CullingScene {
             label: Some("occlude culling shaders"),
             source: wgpu::ShaderSource::Wgsl(include_str!("cull.wgsl").into()),
         });
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
             .instances
             .iter()
@@ -173,6 +164,16 @@ impl CullingScene {
     /// The list-draw render pipeline (vertex stage of the draws).
     pub fn list_pipeline(&self) -> &wgpu::RenderPipeline {
         &self.render.list
+    }
+
+    /// The counted-query render pipeline (vertex stage of the query boxes).
+    pub fn count_pipeline(&self) -> &wgpu::RenderPipeline {
+        &self.render.count
+    }
+
+    /// A bind group of `counts` as counted queries' group 1.
+    pub fn counts_group(&self, ctx: &GpuContext, counts: &wgpu::Buffer) -> wgpu::BindGroup {
+        bind_group(ctx, "query counts", &self.render.counts_layout, &[(2, counts)])
     }
 }
 
@@ -728,8 +729,25 @@ impl Culling {
     }
 }
 
+/// The compute pipeline of `entry` in `module`, its layout derived from
+/// the shader.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
 /// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.
-fn workgroups(threads: u32) -> (u32, u32) {
+pub(crate) fn workgroups(threads: u32) -> (u32, u32) {
     let groups = threads.div_ceil(GROUP_SIZE).max(1);
     let x = groups.min(MAX_GROUPS_PER_DIMENSION);
     (x, groups.div_ceil(x))

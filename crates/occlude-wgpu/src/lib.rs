@@ -19,6 +19,7 @@ mod backend;
 mod context;
 mod culling;
 mod depth_raster;
+mod item_buffer;
 mod pipelines;
 mod queries;
 mod readback;

@@ -33,30 +33,35 @@ pub(crate) struct CullingPipelines {
     pub flags_layout: wgpu::BindGroupLayout,
     /// Group 1 of list draws: every instance's colour.
     pub colors_layout: wgpu::BindGroupLayout,
+    /// Group 1 of counted queries: their counts.
+    pub counts_layout: wgpu::BindGroupLayout,
     /// Box tests: the query pipeline, its fragments setting the box's flag
     /// after the depth test.
     pub test: wgpu::RenderPipeline,
     /// List draws: the draw pipeline, the colour read per instance (one
     /// multi-draw has one bind group).
     pub list: wgpu::RenderPipeline,
+    /// Counted queries (`--queries hib`): the query pipeline, its fragments
+    /// adding to their query's count after the depth test.
+    pub count: wgpu::RenderPipeline,
 }
 
 /// How one pipeline differs from the others.
-struct Variant<'a> {
-    label: &'a str,
-    vertex_entry: &'a str,
-    fragment_entry: &'a str,
+pub(crate) struct Variant<'a> {
+    pub label: &'a str,
+    pub vertex_entry: &'a str,
+    pub fragment_entry: &'a str,
     /// Module of the fragment entry, when not the scene shaders'.
-    fragment_module: Option<&'a wgpu::ShaderModule>,
-    instance_vertices: bool,
-    depth_write: bool,
-    compare: wgpu::CompareFunction,
-    cull_back: bool,
-    color: bool,
+    pub fragment_module: Option<&'a wgpu::ShaderModule>,
+    pub instance_vertices: bool,
+    pub depth_write: bool,
+    pub compare: wgpu::CompareFunction,
+    pub cull_back: bool,
+    pub color: bool,
 }
 
 /// Instances, depth test less, depth writes on, shaded colour.
-const DRAW: Variant<'static> = Variant {
+pub(crate) const DRAW: Variant<'static> = Variant {
     label: "draw",
     vertex_entry: "vs_instance",
     fragment_entry: "fs_shaded",
@@ -134,6 +139,7 @@ impl Pipelines {
         // Bindings as in shader.wgsl and cull.wgsl.
         let flags_layout = group1("box-test flags", 0, false);
         let colors_layout = group1("instance colours", 1, true);
+        let counts_layout = group1("query counts", 2, false);
         let build = |group1: &wgpu::BindGroupLayout, v: Variant| {
             let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(v.label),
@@ -147,11 +153,21 @@ impl Pipelines {
             Variant { label: "box tests", fragment_entry: "fs_test_box", fragment_module: Some(cull_module), ..QUERY },
         );
         let list = build(&colors_layout, Variant { label: "list draws", fragment_entry: "fs_listed", ..DRAW });
-        CullingPipelines { flags_layout, colors_layout, test, list }
+        let count = build(
+            &counts_layout,
+            Variant {
+                label: "counted queries",
+                fragment_entry: "fs_count_box",
+                fragment_module: Some(cull_module),
+                ..QUERY
+            },
+        );
+        CullingPipelines { flags_layout, colors_layout, counts_layout, test, list, count }
     }
 }
 
-fn layout_entry(
+/// A bind-group layout entry of a buffer.
+pub(crate) fn layout_entry(
     binding: u32,
     visibility: wgpu::ShaderStages,
     ty: wgpu::BufferBindingType,
@@ -164,7 +180,9 @@ fn layout_entry(
     }
 }
 
-fn build_pipeline(
+/// A render pipeline of `module` (and `v.fragment_module`) as `v` says,
+/// drawing into a `color_format` target and the depth format.
+pub(crate) fn build_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,

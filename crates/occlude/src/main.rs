@@ -138,6 +138,11 @@ struct BenchArgs {
     /// real GPU; times measured).
     #[arg(long, default_value = "soft")]
     backend: BackendKind,
+    /// How occlusion queries are counted: hardware (one occlusion query
+    /// each) or hib (the queries of a submission counted in one pass with
+    /// atomics, as the hierarchical item buffer counts; exact on any GPU).
+    #[arg(long, default_value = "hardware")]
+    queries: occlude_core::QueryMode,
     /// Simulated GPU: a preset (gpu-2004, modern) or a TOML file.
     #[arg(long, default_value = "modern")]
     gpu_model: String,
@@ -292,6 +297,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
             .or(args.paper.as_deref().and_then(bench::paper::default_resolution))
             .unwrap_or(DEFAULT_RESOLUTION),
         backend: args.backend,
+        queries: args.queries,
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
         ..args.scene.config()?

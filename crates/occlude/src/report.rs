@@ -349,6 +349,7 @@ mod tests {
             fps: None,
             resolution: [160, 120],
             backend: "soft".into(),
+            queries: "hardware".into(),
             adapter: None,
             aborted: None,
             gpu_model: "modern".into(),
@@ -445,6 +446,12 @@ mod tests {
         let one = dir.join("one.json");
         std::fs::write(&one, serde_json::to_string(&report("city")).unwrap()).unwrap();
         assert_eq!(load(&one).unwrap(), vec![report("city")]);
+        // A report from before `--queries` loads as counted by hardware.
+        let mut old = serde_json::to_value(report("city")).unwrap();
+        old.as_object_mut().unwrap().remove("queries");
+        let before = dir.join("before.json");
+        std::fs::write(&before, old.to_string()).unwrap();
+        assert_eq!(load(&before).unwrap()[0].queries, "hardware");
         let many = dir.join("many.json");
         std::fs::write(&many, serde_json::to_string(&[report("city"), report("plant")]).unwrap()).unwrap();
         assert_eq!(load(&many).unwrap().len(), 2);

@@ -25,6 +25,7 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--fps", "0"], "--fps 0 is out of range");
     assert_usage_error(&["bench", "--resolution", "12by4"], "12by4");
     assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
+    assert_usage_error(&["bench", "--queries", "occlusion"], "expected 'hardware' or 'hib'");
     assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
     assert_usage_error(&["bench", "--method-opt", "sw.tav=2"], "no parameter 'tav'");
     assert_usage_error(&["bench", "--plot", "frames.jpg"], "frames.jpg");
@@ -104,6 +105,7 @@ fn short_run_prints_table_and_writes_json_and_csv() {
         assert!(v.get(key).is_some(), "JSON lacks top-level key {key}");
     }
     assert_eq!(v["scene"], "city");
+    assert_eq!(v["queries"], "hardware", "the default query counting");
     assert_eq!(v["frames"], 5);
     assert_eq!(v["fps"], 30.0, "the default frame rate");
     let methods = v["methods"].as_array().unwrap();

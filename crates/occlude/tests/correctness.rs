@@ -380,3 +380,49 @@ fn conservative_methods_match_vfc_with_cameras_from_matrices() {
     let sw = culled.iter().find(|(m, _)| m == "sw").unwrap().1;
     assert!(sw > 0, "sw never drew fewer objects than vfc: the cameras test no occlusion");
 }
+
+/// `--queries hib` on the soft backend: the query methods (`sw`, `chc`,
+/// `chcpp`, `om`) give vfc's image on every frame of every `small` scene.
+/// The methods that wait for each result (`sw`, `om`) cull exactly as with
+/// hardware queries, frame by frame: the counts are exact either way. `chc`
+/// and `chcpp` read results as they become available, which is later in a
+/// batch, and so take other paths. `chc.nvp=25` compares the counts with
+/// its threshold: it draws less than `chc` and misses pixels.
+#[test]
+fn query_methods_with_hib_counts_match_vfc_and_hardware_queries() {
+    use occlude_core::QueryMode;
+    for name in SCENE_NAMES {
+        let scene = small(name);
+        let nvp = Variant { method: "chc".into(), options: MethodOptions::parse(&["chc.nvp=25"]).unwrap() };
+        let run = |queries| {
+            let cfg = BenchConfig {
+                methods: ["vfc", "sw", "chc", "chcpp", "om"].map(String::from).to_vec(),
+                resolution: (320, 240),
+                queries,
+                ..config(name, HierarchyKind::Bvh)
+            };
+            run_scene_with_variants(&scene, &cfg, std::slice::from_ref(&nvp), &ProgressBar::hidden()).unwrap()
+        };
+        let (hardware, hib) = (run(QueryMode::Hardware), run(QueryMode::Hib));
+        let culled = |f: &FrameStats| (f.queries, f.query_boxes, f.draw_calls, f.triangles);
+        let sum = |frames: &[FrameStats], v: fn(&FrameStats) -> f64| frames.iter().map(v).sum::<f64>();
+        for (a, b) in hardware.methods.iter().zip(&hib.methods) {
+            for (f, (x, y)) in a.frames.iter().zip(&b.frames).enumerate() {
+                assert_eq!(y.missing_pixels, 0, "{name}/{}: frame {f} differs from vfc with hib counts", b.name);
+                if ["sw", "om"].contains(&a.name.as_str()) {
+                    assert_eq!(culled(x), culled(y), "{name}/{}: frame {f} culled otherwise with hib counts", a.name);
+                }
+            }
+            if a.frames.iter().any(|f| f.queries > 0) {
+                let frame_ms = |frames| sum(frames, |f| f.frame_ms);
+                assert_ne!(frame_ms(&a.frames), frame_ms(&b.frames), "{name}/{}: hib costs nothing else", a.name);
+            }
+        }
+        let (chc, approximate) = (&hib.methods[2].frames, &hib.variants[0].frames);
+        assert!(
+            sum(approximate, |f| f.triangles as f64) < sum(chc, |f| f.triangles as f64),
+            "{name}: nvp=25 drew as much"
+        );
+        assert!(sum(approximate, |f| f.missing_pixels as f64) > 0.0, "{name}: nvp=25 missed nothing");
+    }
+}

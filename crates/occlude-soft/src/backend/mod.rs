@@ -6,11 +6,23 @@
 //! frame). The GPU time line is then replayed: each command starts at
 //! max(issued, GPU free) and costs its fixed part plus its fragments. Pixel
 //! counts are always exact; only the times are modelled. The GPU-resident
-//! culling commands ([`occlude_core::GpuCulling`], in `culling.rs`) run the
-//! same way: their compute steps on the CPU, their box tests and draws on
+//! culling commands ([`occlude_core::GpuCulling`], in `culling.rs`) run
+//! the same way: their compute steps on the CPU, their box tests and draws on
 //! the rasterizer, their costs on the GPU time line.
+//!
+//! Query pixel counts are exact in both [`QueryMode`]s; the mode changes what
+//! they cost. `Hardware`: per query `cpu_query_us`, `gpu_query_box_us` per
+//! box, the result readable `query_latency_us` after its query ends. `Hib`
+//! (the queries between two submissions counted as one batch in one pass,
+//! as the wgpu backend does): per query `cpu_query_us`, per box `gpu_box_us`
+//! (a box of an instanced draw, no query around it), per passing fragment
+//! `gpu_box_fragment_ns` on top of the depth test (the counting atomic); per
+//! batch `cpu_dispatch_us`, `gpu_draw_call_us` and `gpu_dispatch_us` (its
+//! draw and the clearing of its counts); every result of the batch readable
+//! `readback_us` after the batch's last box.
 
 mod culling;
+mod item_buffer;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
@@ -20,7 +32,7 @@ use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
     Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, Instruments,
-    OracleView, QueryHandle, RenderState, Scene,
+    OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
 use std::time::Instant;
 
@@ -46,6 +58,8 @@ struct QueryState {
     pending: bool,
     /// Treated as visible without rasterizing (a box touches the near region).
     forced_visible: bool,
+    /// Counted in a batch ([`QueryMode::Hib`]): readable when the batch is.
+    batched: bool,
     available_at_us: f64,
     pixels: u64,
 }
@@ -77,6 +91,10 @@ pub struct SoftBackend<'s> {
     queries: Vec<QueryState>,
     frame_start: Instant,
     device: HostResources,
+    query_mode: QueryMode,
+    /// Whether a [`QueryMode::Hib`] batch has been started since the last
+    /// submission (its fixed costs charged).
+    batch_open: bool,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -100,7 +118,15 @@ impl<'s> SoftBackend<'s> {
             queries: Vec::new(),
             frame_start: Instant::now(),
             device: HostResources::default(),
+            query_mode: QueryMode::Hardware,
+            batch_open: false,
         }
+    }
+
+    /// Answers occlusion queries in `mode` from now on: the same exact
+    /// counts, at the costs of that mode (module documentation).
+    pub fn set_query_mode(&mut self, mode: QueryMode) {
+        self.query_mode = mode;
     }
 
     /// The cost model in use.
@@ -174,15 +200,20 @@ impl<'s> SoftBackend<'s> {
             return Vec::new();
         }
         let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &self.commands);
+        let (mut batch, mut batch_end) = (Vec::new(), 0.0);
         for (op, r) in self.ops.iter().zip(&results) {
             let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
             let end = self.clock.gpu_command(op.issued_us, cost_us);
             charge_gpu_time(&mut self.count.stats, op.cull, cost_us);
             match op.query {
-                Some(q) => {
-                    let q = &mut self.queries[q as usize];
+                Some(handle) => {
+                    let q = &mut self.queries[handle as usize];
                     q.pending = false;
                     q.available_at_us = end + self.model.query_latency_us;
+                    if q.batched {
+                        batch.push(handle);
+                        batch_end = end;
+                    }
                     q.pixels = if q.forced_visible {
                         u64::from(self.depth.width()) * u64::from(self.depth.height())
                     } else {
@@ -194,6 +225,10 @@ impl<'s> SoftBackend<'s> {
                 None => {}
             }
         }
+        for handle in batch {
+            self.queries[handle as usize].available_at_us = batch_end + self.model.readback_us;
+        }
+        self.batch_open = false;
         self.triangles.clear();
         self.commands.clear();
         self.ops.clear();
@@ -235,6 +270,7 @@ impl Backend for SoftBackend<'_> {
         self.count.begin_frame();
         self.pending_state_us = 0.0;
         self.queries.clear();
+        self.batch_open = false;
         self.frame_start = Instant::now();
     }
 
@@ -259,12 +295,22 @@ impl Backend for SoftBackend<'_> {
         for b in padded.iter().flatten() {
             self.push_box_triangles(b);
         }
-        self.queries.push(QueryState { pending: true, forced_visible, available_at_us: 0.0, pixels: 0 });
+        let batched = self.query_mode == QueryMode::Hib;
+        self.queries.push(QueryState { pending: true, forced_visible, batched, available_at_us: 0.0, pixels: 0 });
+        let m = &self.model;
+        let (mut fixed_us, passed_ns) = match self.query_mode {
+            QueryMode::Hardware => (m.gpu_query_box_us * boxes.len() as f64, 0.0),
+            QueryMode::Hib => (m.gpu_box_us * boxes.len() as f64, m.gpu_box_fragment_ns),
+        };
+        if batched && !std::mem::replace(&mut self.batch_open, true) {
+            fixed_us += m.gpu_draw_call_us + m.gpu_dispatch_us;
+            self.clock.cpu_work(self.model.cpu_dispatch_us);
+        }
         let op = GpuOp {
             issued_us: self.clock.cpu,
-            fixed_us: self.model.gpu_query_box_us * boxes.len() as f64,
+            fixed_us,
             fragment_ns: self.model.gpu_query_fragment_ns,
-            passed_ns: 0.0,
+            passed_ns,
             query: Some(handle),
             cull: true,
         };

@@ -31,6 +31,7 @@
 mod avx2;
 mod bin;
 mod clip;
+mod fragments;
 mod hiz;
 mod setup;
 #[cfg(target_arch = "x86_64")]
@@ -58,6 +59,7 @@ use span::RasterTri;
 use split::Tiles;
 use tile::{raster_tile, Commands, Kernel, TILE};
 
+pub use fragments::Fragments;
 pub use setup::SUBPIXEL_BITS;
 
 /// Largest supported depth-buffer width and height, in pixels. Keeps the fixed-point

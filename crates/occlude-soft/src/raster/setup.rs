@@ -101,13 +101,11 @@ pub(super) struct SetupTri {
 
 impl SetupTri {
     /// The edge functions, set up at the bounding box's top-left pixel.
-    #[cfg(test)]
     pub fn edges(&self) -> [Edge; 3] {
         edges_at(&self.verts, self.x0, self.y0)
     }
 
     /// The depth plane along the pixel row `y0 + dy`.
-    #[cfg(test)]
     pub fn row_plane(&self, dy: i32) -> RowPlane {
         RowPlane::of(self.z_origin, self.z_dx, self.z_dy, dy)
     }

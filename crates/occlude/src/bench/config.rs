@@ -4,7 +4,7 @@ use super::ideal::{IDEAL, SOURCE};
 use anyhow::{bail, Context, Result};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
-use occlude_core::{CameraPath, HierarchyKind, Sampling};
+use occlude_core::{CameraPath, HierarchyKind, QueryMode, Sampling};
 use occlude_scenes::{ImportOptions, Size};
 use occlude_soft::GpuModel;
 use std::path::Path;
@@ -87,6 +87,8 @@ pub struct BenchConfig {
     pub build: BuildOptions,
     /// Backend that renders and answers queries.
     pub backend: BackendKind,
+    /// How the backend counts occlusion queries' pixels (`--queries`).
+    pub queries: QueryMode,
     /// Cost model of the simulated GPU (soft backend).
     pub gpu_model: GpuModel,
     /// Method parameters (`--method-opt method.key=value`).
@@ -113,6 +115,7 @@ impl Default for BenchConfig {
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions::default(),
             backend: BackendKind::Soft,
+            queries: QueryMode::Hardware,
             gpu_model: GpuModel::modern(),
             options: MethodOptions::default(),
             import: ImportOptions::default(),

@@ -321,6 +321,7 @@ mod tests {
             fps: None,
             resolution: [64, 48],
             backend: "soft".into(),
+            queries: "hardware".into(),
             adapter: None,
             aborted: None,
             gpu_model: "gf6800".into(),

@@ -8,7 +8,9 @@ use super::summary::{BenchReport, SceneStats};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
-use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, Scene};
+use occlude_core::{
+    differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene,
+};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::collections::BTreeMap;
@@ -47,23 +49,36 @@ enum Renderer {
 }
 
 impl Renderer {
-    /// Opens the GPU and uploads `scene` when `kind` asks for wgpu.
-    fn new(kind: BackendKind, scene: &Scene) -> Result<Self> {
-        Ok(match kind {
+    /// Opens the GPU and uploads `scene` when `config` asks for wgpu; an
+    /// adapter that cannot count queries as `config.queries` asks is
+    /// refused.
+    fn new(config: &BenchConfig, scene: &Scene) -> Result<Self> {
+        Ok(match config.backend {
             BackendKind::Soft => Self::Soft,
             BackendKind::Wgpu => {
                 let ctx = Arc::new(GpuContext::new()?);
+                if config.queries == QueryMode::Hib {
+                    ctx.gpu_culling_support()?;
+                }
                 Self::Wgpu(Arc::new(GpuScene::new(ctx, scene)?))
             }
         })
     }
 
-    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Box<dyn Backend + 's> {
+    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Result<Box<dyn Backend + 's>> {
         let (w, h) = config.resolution;
-        match self {
-            Self::Soft => Box::new(SoftBackend::new(scene, w, h, config.gpu_model.clone())),
-            Self::Wgpu(gpu) => Box::new(WgpuBackend::new(Arc::clone(gpu), scene, w, h)),
-        }
+        Ok(match self {
+            Self::Soft => {
+                let mut soft = SoftBackend::new(scene, w, h, config.gpu_model.clone());
+                soft.set_query_mode(config.queries);
+                Box::new(soft)
+            }
+            Self::Wgpu(gpu) => {
+                let mut backend = WgpuBackend::new(Arc::clone(gpu), scene, w, h);
+                backend.set_query_mode(config.queries)?;
+                Box::new(backend)
+            }
+        })
     }
 
     fn adapter(&self) -> Option<String> {
@@ -223,8 +238,8 @@ fn run_scene_here(
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
-    let renderer = Renderer::new(config.backend, scene)?;
-    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config));
+    let renderer = Renderer::new(config, scene)?;
+    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config)?);
     // `ideal` replays the draw calls `sw` (listed before it) made in the frame.
     let replayed = config.methods.iter().any(|m| m == IDEAL);
     let calls = DrawCalls::default();
@@ -233,7 +248,7 @@ fn run_scene_here(
         .iter()
         .filter(|m| m.as_str() != "vfc")
         .map(|m| {
-            let backend = renderer.backend(scene, config);
+            let backend = renderer.backend(scene, config)?;
             Ok(match m.as_str() {
                 IDEAL => {
                     let built = BuiltMethod { method: Box::new(Ideal::new(Rc::clone(&calls))), params: Vec::new() };
@@ -246,7 +261,9 @@ fn run_scene_here(
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    lanes.extend(variant_methods.into_iter().map(|built| Lane::new(built, renderer.backend(scene, config))));
+    for built in variant_methods {
+        lanes.push(Lane::new(built, renderer.backend(scene, config)?));
+    }
     for lane in &mut lanes {
         let method = lane.built.method.as_ref();
         if let Err(e) = check_support(method, lane.backend.as_mut()) {

@@ -129,6 +129,10 @@ pub struct BenchReport {
     pub resolution: [u32; 2],
     /// `soft` (simulated clock) or `wgpu`.
     pub backend: String,
+    /// How occlusion queries were counted: `hardware` or `hib` (reports
+    /// that predate the choice were `hardware`).
+    #[serde(default = "hardware_queries")]
+    pub queries: String,
     /// The GPU adapter of a `wgpu` run (name, driver, graphics API).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adapter: Option<String>,
@@ -146,6 +150,10 @@ pub struct BenchReport {
     pub scene_stats: SceneStats,
     /// One entry per method, in the order asked for.
     pub methods: Vec<MethodSummary>,
+}
+
+fn hardware_queries() -> String {
+    occlude_core::QueryMode::Hardware.to_string()
 }
 
 fn mean(frames: &[FrameStats], f: impl Fn(&FrameStats) -> f64) -> f64 {
@@ -227,6 +235,7 @@ impl BenchReport {
             fps: config.fps,
             resolution: [config.resolution.0, config.resolution.1],
             backend: config.backend.to_string(),
+            queries: config.queries.to_string(),
             adapter: run.adapter.clone(),
             aborted: run.aborted.clone(),
             gpu_model: match config.backend {

@@ -10,7 +10,7 @@ pub fn render(report: &BenchReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves, built in {:.1} ms), {} frames{} at {}x{}, backend {}, GPU model {}",
+        "scene {} ({}, seed {}): {} triangles, {} instances, {} {} nodes ({} leaves, built in {:.1} ms), {} frames{} at {}x{}, backend {}, queries {}, GPU model {}",
         report.scene,
         report.size,
         report.seed,
@@ -25,6 +25,7 @@ pub fn render(report: &BenchReport) -> String {
         report.resolution[0],
         report.resolution[1],
         report.backend,
+        report.queries,
         report.gpu_model,
     );
     let (headers, rows) = cells(report);

@@ -6,7 +6,7 @@
 //! the fastest call (the least disturbed on a shared machine).
 //!
 //! ```sh
-//! cargo build --release -p occlude-moc --example fill_calls
+//! cargo build --release -p occlude-moc --example moc_fill_calls
 //! scripts/raster-icount.sh target/release/examples/fill_calls 10 25
 //! ```
 
@@ -25,7 +25,7 @@ fn main() {
             ("--calls", Some(v)) => calls = v,
             ("--threads", Some(v)) => threads = v,
             _ => {
-                eprintln!("fill_calls: expected --leg N, --calls K, --threads T (each at least 1)");
+                eprintln!("moc_fill_calls: expected --leg N, --calls K, --threads T (each at least 1)");
                 std::process::exit(2);
             }
         }
