@@ -11,6 +11,7 @@ pub mod camera;
 pub mod depth_pyramid;
 pub mod geometry;
 pub mod gpu_culling;
+pub mod gvq;
 pub mod hierarchy;
 pub mod methods;
 pub mod path;
