@@ -21,10 +21,11 @@
 //! and not counted: a count is never above the exact count, and no other
 //! object's count is disturbed).
 //!
-//! Every lookup that shares no channel holds, in its channel, only the
-//! pixels of its own object: an object whose lookups share nothing and
-//! drop nothing is counted exactly (up to the pixels the rectangle of its
-//! box holds, which are all of its pixels).
+//! Lookups that share no channel never overlap in one channel, so a
+//! lookup holds, in its channel, only its own object's pixels and those of
+//! shared lookups over it. An object with no piece shared or left out and
+//! no shared lookup over its lookups is counted exactly
+//! ([`RegionPlan::counted_exactly`]): its rectangle holds all its pixels.
 
 use super::conflict::{Colouring, ConflictGraph};
 use super::rect::PixelRect;
@@ -135,6 +136,23 @@ pub struct RegionPlan {
 }
 
 impl RegionPlan {
+    /// Whether object `v`'s count is exact (module documentation): none of
+    /// its pieces shared or left out, and no other object's shared lookup
+    /// over one of its lookups in the same channel.
+    pub fn counted_exactly(&self, v: usize) -> bool {
+        let set = &self.sets[v];
+        let mixes = |l: &Lookup| {
+            self.sets.iter().enumerate().any(|(w, other)| {
+                w != v
+                    && other
+                        .lookups
+                        .iter()
+                        .any(|o| o.shared && o.channel == l.channel && o.rect.intersect(&l.rect).is_some())
+            })
+        };
+        set.dropped.is_empty() && set.lookups.iter().all(|l| !l.shared && !mixes(l))
+    }
+
     /// The channel image: per pixel of a `width`-wide image, the channel
     /// its owner (an object index into [`Self::sets`], or `u32::MAX` for
     /// none) renders it in.

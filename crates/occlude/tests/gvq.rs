@@ -1,0 +1,85 @@
+//! Granular visibility queries with summed area tables (issue 19, item 1)
+//! on the soft backend, on frames of the `small` scenes' walkthroughs:
+//! the counts keep the paper's guarantees against the exact counts, and
+//! the exact counts are the oracle's.
+
+use occlude::bench::config::NEAR_PLANE;
+use occlude::bench::runner::far_plane;
+use occlude_core::gvq::{RegionMode, SatConfig};
+use occlude_core::{Backend, Camera, Sampling, Scene};
+use occlude_scenes::{generate, Size};
+use occlude_soft::sat::SoftSat;
+use occlude_soft::{GpuModel, SoftBackend};
+
+const RESOLUTION: (u32, u32) = (128, 96);
+
+/// The scenes checked, each with `frames` cameras spread over its walkthrough.
+fn scenes(frames: usize) -> Vec<(Scene, Vec<Camera>)> {
+    ["teapots", "city", "plant", "figures", "rooms"]
+        .into_iter()
+        .map(|name| {
+            let scene = generate(name, Size::Small, 1).unwrap();
+            let aspect = RESOLUTION.0 as f32 / RESOLUTION.1 as f32;
+            let cameras = scene.path.sample_with(Sampling::Spread(frames), aspect, NEAR_PLANE, far_plane(&scene));
+            (scene, cameras)
+        })
+        .collect()
+}
+
+#[test]
+fn sat_counts_keep_the_region_sets_guarantees() {
+    let mut exact_checked = 0;
+    let mut conflict_frames = 0;
+    for (scene, cameras) in scenes(6) {
+        let mut sat = SoftSat::new(RESOLUTION.0, RESOLUTION.1);
+        for (f, camera) in cameras.iter().enumerate() {
+            for targets in [1, 2] {
+                for mode in [RegionMode::Conservative, RegionMode::Approximate] {
+                    let config = SatConfig { targets, mode, ..SatConfig::default() };
+                    let frame = sat.query(&scene, camera, &config);
+                    conflict_frames += usize::from(frame.plan.conflicts > 0);
+                    for i in 0..frame.plan.sets.len() {
+                        let (count, exact) = (frame.counts[i], frame.exact[i]);
+                        let at = format!("{} frame {f}, {targets} targets, {mode:?}, object {i}", scene.name);
+                        match mode {
+                            RegionMode::Conservative => assert!(count >= exact, "{at}: {count} < {exact}"),
+                            RegionMode::Approximate => assert!(count <= exact, "{at}: {count} > {exact}"),
+                        }
+                        if frame.plan.counted_exactly(i) {
+                            assert_eq!(count, exact, "{at}: nothing shared, left out or shared over it");
+                            exact_checked += usize::from(exact > 0);
+                        }
+                    }
+                    if frame.plan.conflicts == 0 {
+                        assert_eq!(frame.errors.wrong, 0, "{} frame {f}: no conflict, every count exact", scene.name);
+                    }
+                }
+            }
+        }
+    }
+    assert!(exact_checked > 100, "only {exact_checked} visible objects were checked exact");
+    assert!(conflict_frames > 0, "no frame had a conflict object: the split was not exercised");
+}
+
+#[test]
+fn exact_counts_are_the_oracles_pixel_counts() {
+    for (scene, cameras) in scenes(4) {
+        let mut sat = SoftSat::new(RESOLUTION.0, RESOLUTION.1);
+        let mut backend = SoftBackend::new(&scene, RESOLUTION.0, RESOLUTION.1, GpuModel::modern());
+        let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
+        for (f, camera) in cameras.iter().enumerate() {
+            let frame = sat.query(&scene, camera, &SatConfig::default());
+            let oracle = backend.oracle(camera, &all);
+            // The oracle counts a pixel for every object at its depth; the
+            // owner is the first of them drawn.
+            for (i, (&owned, &seen)) in frame.exact.iter().zip(&oracle.pixels).enumerate() {
+                assert!(owned <= seen, "{} frame {f}, object {i}: owns {owned} of {seen} pixels", scene.name);
+                assert_eq!(owned > 0, seen > 0, "{} frame {f}, object {i}: owns {owned} of {seen} pixels", scene.name);
+            }
+            let covered = oracle.depth.iter().filter(|&&d| d < 1.0).count() as u64;
+            assert_eq!(frame.exact.iter().sum::<u64>(), covered, "{} frame {f}: every covered pixel owned", scene.name);
+            let ties: u64 = oracle.pixels.iter().sum::<u64>() - covered;
+            assert!(ties * 50 <= covered, "{} frame {f}: {ties} tied pixels of {covered}", scene.name);
+        }
+    }
+}
