@@ -128,28 +128,31 @@ impl SoftSat {
         owners
     }
 
-    /// Every instance of `scene` queried from `camera` as `config` says,
-    /// beside its exact count.
-    pub fn query(&mut self, scene: &Scene, camera: &Camera, config: &SatConfig) -> SatFrame {
+    /// Every instance of `scene` queried from `camera` with each of
+    /// `configs` (one owner image for all of them), beside its exact count.
+    pub fn query(&mut self, scene: &Scene, camera: &Camera, configs: &[SatConfig]) -> Vec<SatFrame> {
         let (w, h) = (self.depth.width(), self.depth.height());
         let view_projection = camera.view_projection();
         let rects: Vec<Option<PixelRect>> =
             scene.instances.iter().map(|inst| PixelRect::of_box(&view_projection, w, h, &inst.bounds)).collect();
-        let plan = plan(&rects, config);
         let owners = self.owners(scene, camera, &rects);
         let mut exact = vec![0u64; rects.len()];
         for &o in owners.iter().filter(|&&o| o != NO_OWNER) {
             exact[o as usize] += 1;
         }
-        let start = Instant::now();
-        let sat = SummedAreaTable::from_channel_image(w, h, plan.channels, &plan.channel_image(&owners, w));
-        let counts: Vec<u64> = plan.sets.iter().map(|s| sat.count_set(s)).collect();
-        let sat_ms = start.elapsed().as_secs_f64() * 1e3;
         let queried: Vec<usize> = (0..rects.len()).filter(|&i| rects[i].is_some()).collect();
-        let errors = count_errors(
-            &queried.iter().map(|&i| counts[i]).collect::<Vec<_>>(),
-            &queried.iter().map(|&i| exact[i]).collect::<Vec<_>>(),
-        );
-        SatFrame { plan, counts, exact, errors, sat_ms }
+        let queried_exact: Vec<u64> = queried.iter().map(|&i| exact[i]).collect();
+        configs
+            .iter()
+            .map(|config| {
+                let plan = plan(&rects, config);
+                let start = Instant::now();
+                let sat = SummedAreaTable::from_channel_image(w, h, plan.channels, &plan.channel_image(&owners, w));
+                let counts: Vec<u64> = plan.sets.iter().map(|s| sat.count_set(s)).collect();
+                let sat_ms = start.elapsed().as_secs_f64() * 1e3;
+                let errors = count_errors(&queried.iter().map(|&i| counts[i]).collect::<Vec<_>>(), &queried_exact);
+                SatFrame { plan, counts, exact: exact.clone(), errors, sat_ms }
+            })
+            .collect()
     }
 }

@@ -28,31 +28,38 @@ fn scenes(frames: usize) -> Vec<(Scene, Vec<Camera>)> {
 
 #[test]
 fn sat_counts_keep_the_region_sets_guarantees() {
+    let configs: Vec<SatConfig> = [1, 2]
+        .into_iter()
+        .flat_map(|targets| {
+            [RegionMode::Conservative, RegionMode::Approximate].map(|mode| SatConfig {
+                targets,
+                mode,
+                ..SatConfig::default()
+            })
+        })
+        .collect();
     let mut exact_checked = 0;
     let mut conflict_frames = 0;
     for (scene, cameras) in scenes(6) {
         let mut sat = SoftSat::new(RESOLUTION.0, RESOLUTION.1);
         for (f, camera) in cameras.iter().enumerate() {
-            for targets in [1, 2] {
-                for mode in [RegionMode::Conservative, RegionMode::Approximate] {
-                    let config = SatConfig { targets, mode, ..SatConfig::default() };
-                    let frame = sat.query(&scene, camera, &config);
-                    conflict_frames += usize::from(frame.plan.conflicts > 0);
-                    for i in 0..frame.plan.sets.len() {
-                        let (count, exact) = (frame.counts[i], frame.exact[i]);
-                        let at = format!("{} frame {f}, {targets} targets, {mode:?}, object {i}", scene.name);
-                        match mode {
-                            RegionMode::Conservative => assert!(count >= exact, "{at}: {count} < {exact}"),
-                            RegionMode::Approximate => assert!(count <= exact, "{at}: {count} > {exact}"),
-                        }
-                        if frame.plan.counted_exactly(i) {
-                            assert_eq!(count, exact, "{at}: nothing shared, left out or shared over it");
-                            exact_checked += usize::from(exact > 0);
-                        }
+            for (config, frame) in configs.iter().zip(sat.query(&scene, camera, &configs)) {
+                let SatConfig { targets, mode, .. } = *config;
+                conflict_frames += usize::from(frame.plan.conflicts > 0);
+                for i in 0..frame.plan.sets.len() {
+                    let (count, exact) = (frame.counts[i], frame.exact[i]);
+                    let at = format!("{} frame {f}, {targets} targets, {mode:?}, object {i}", scene.name);
+                    match mode {
+                        RegionMode::Conservative => assert!(count >= exact, "{at}: {count} < {exact}"),
+                        RegionMode::Approximate => assert!(count <= exact, "{at}: {count} > {exact}"),
                     }
-                    if frame.plan.conflicts == 0 {
-                        assert_eq!(frame.errors.wrong, 0, "{} frame {f}: no conflict, every count exact", scene.name);
+                    if frame.plan.counted_exactly(i) {
+                        assert_eq!(count, exact, "{at}: nothing shared, left out or shared over it");
+                        exact_checked += usize::from(exact > 0);
                     }
+                }
+                if frame.plan.conflicts == 0 {
+                    assert_eq!(frame.errors.wrong, 0, "{} frame {f}: no conflict, every count exact", scene.name);
                 }
             }
         }
@@ -68,7 +75,7 @@ fn exact_counts_are_the_oracles_pixel_counts() {
         let mut backend = SoftBackend::new(&scene, RESOLUTION.0, RESOLUTION.1, GpuModel::modern());
         let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
         for (f, camera) in cameras.iter().enumerate() {
-            let frame = sat.query(&scene, camera, &SatConfig::default());
+            let frame = sat.query(&scene, camera, &[SatConfig::default()]).remove(0);
             let oracle = backend.oracle(camera, &all);
             // The oracle counts a pixel for every object at its depth; the
             // owner is the first of them drawn.
