@@ -95,14 +95,8 @@ impl ConflictGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gvq::rect::tests::rect_strategy;
     use proptest::prelude::*;
-
-    fn rect_strategy() -> impl Strategy<Value = Option<PixelRect>> {
-        prop_oneof![
-            1 => Just(None),
-            9 => (0u32..60, 0u32..60, 1u32..30, 1u32..30).prop_map(|(x, y, w, h)| Some(PixelRect::new(x, y, x + w, y + h))),
-        ]
-    }
 
     #[test]
     fn overlapping_rectangles_are_neighbours_and_touching_ones_are_not() {

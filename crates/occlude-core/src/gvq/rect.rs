@@ -96,9 +96,18 @@ impl PixelRect {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use glam::Vec3;
+    use proptest::prelude::*;
+
+    /// A rectangle within about 80 x 80 pixels, or (one in ten) none.
+    pub(crate) fn rect_strategy() -> impl Strategy<Value = Option<PixelRect>> {
+        prop_oneof![
+            1 => Just(None),
+            9 => (0u32..50, 0u32..50, 1u32..30, 1u32..30).prop_map(|(x, y, w, h)| Some(PixelRect::new(x, y, x + w, y + h))),
+        ]
+    }
 
     #[test]
     fn subtract_partitions_the_rectangle() {

@@ -303,14 +303,8 @@ fn least_overlapped(rect: &PixelRect, placed: &[Lookup], channels: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gvq::rect::tests::rect_strategy;
     use proptest::prelude::*;
-
-    fn rect_strategy() -> impl Strategy<Value = Option<PixelRect>> {
-        prop_oneof![
-            1 => Just(None),
-            9 => (0u32..50, 0u32..50, 1u32..30, 1u32..30).prop_map(|(x, y, w, h)| Some(PixelRect::new(x, y, x + w, y + h))),
-        ]
-    }
 
     fn config(targets: u32, mode: RegionMode, max_pieces: u32) -> SatConfig {
         SatConfig { targets, mode, max_pieces }
