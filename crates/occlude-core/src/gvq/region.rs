@@ -207,14 +207,16 @@ pub fn plan(rects: &[Option<PixelRect>], config: &SatConfig) -> RegionPlan {
     let conflicts = colouring.conflicts();
     for &v in &conflicts {
         let rect = rects[v as usize].expect("a conflict object has a rectangle");
-        let mut pieces = split(rect, &placed, config.max_pieces as usize);
+        // The lookups over the rectangle, the only ones its pieces can meet.
+        let over: Vec<Lookup> = placed.iter().filter(|l| l.rect.intersect(&rect).is_some()).copied().collect();
+        let mut pieces = split(rect, &over, config.max_pieces as usize);
         merge(&mut pieces, all);
         for p in pieces {
             let free = all & !p.occupied;
             let lookup = if free != 0 {
                 Lookup { rect: p.rect, channel: free.trailing_zeros(), shared: false }
             } else if config.mode == RegionMode::Conservative {
-                Lookup { rect: p.rect, channel: least_overlapped(&p.rect, &placed, channels), shared: true }
+                Lookup { rect: p.rect, channel: least_overlapped(&p.rect, &over, channels), shared: true }
             } else {
                 sets[v as usize].dropped.push(p.rect);
                 continue;
@@ -240,12 +242,12 @@ fn ms_since(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
 }
 
-/// `rect` split against every lookup of `placed` over it (figure 3 b, c),
+/// `rect` split against the lookups of `placed` (figure 3 b, c),
 /// into at most `max_pieces` pieces (past that, lookups only mark the
 /// pieces they touch).
 fn split(rect: PixelRect, placed: &[Lookup], max_pieces: usize) -> Vec<Piece> {
     let mut pieces = vec![Piece { rect, occupied: 0 }];
-    for l in placed.iter().filter(|l| l.rect.intersect(&rect).is_some()) {
+    for l in placed {
         let bit = 1 << l.channel;
         let mut next = Vec::with_capacity(pieces.len() + 4);
         for p in pieces {
