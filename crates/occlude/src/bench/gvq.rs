@@ -84,6 +84,10 @@ pub struct GvqRow {
     pub rel_error_pct: f64,
     /// The paper's.
     pub published_rel_error_pct: Option<f64>,
+    /// Relative error of the summed counts, percent
+    /// (`CountErrors::rel_error_of_sums_pct`; the paper gives none).
+    #[serde(default)]
+    pub rel_error_of_sums_pct: f64,
     /// Frames averaged.
     pub frames: usize,
 }
@@ -112,6 +116,7 @@ impl GvqRow {
             published_abs_error_px: p.and_then(|r| r.abs_error_px),
             rel_error_pct: mean(|s| s.errors.rel_error_pct),
             published_rel_error_pct: p.and_then(|r| r.rel_error_pct),
+            rel_error_of_sums_pct: mean(|s| s.errors.rel_error_of_sums_pct),
             frames: frames.len(),
         }
     }
@@ -131,7 +136,7 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
         "Granular visibility queries — Table 2: summed-area-table queries, per frame ({w}x{h}, {} target(s), \
          soft backend, CPU ms measured; paper's figures in brackets)\n\
          objects  mode          queries  conflicts  (paper)  lookups  overlap ms (paper)  colouring ms (paper)  \
-         split+merge ms (paper)  abs err px (paper)  rel err % (paper)\n",
+         split+merge ms (paper)  abs err px (paper)  rel err % (paper)  rel err of sums %\n",
         configs[0].targets
     );
     let mut rows = Vec::new();
@@ -153,7 +158,7 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
             let paper = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v}"));
             let _ = writeln!(
                 text,
-                "{:>7}  {:<12} {:>8.1} {:>10.1} {:>8} {:>8.1} {:>11.3} {:>6} {:>13.3} {:>6} {:>15.3} {:>6} {:>11.2} {:>6} {:>10.2} {:>6}",
+                "{:>7}  {:<12} {:>8.1} {:>10.1} {:>8} {:>8.1} {:>11.3} {:>6} {:>13.3} {:>6} {:>15.3} {:>6} {:>11.2} {:>6} {:>10.2} {:>6} {:>18.2}",
                 row.objects,
                 format!("{:?}", row.mode).to_lowercase(),
                 row.queries,
@@ -170,6 +175,7 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
                 paper(row.published_abs_error_px),
                 row.rel_error_pct,
                 paper(row.published_rel_error_pct),
+                row.rel_error_of_sums_pct,
             );
             rows.push(row);
         }
