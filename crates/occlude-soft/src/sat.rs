@@ -12,7 +12,6 @@
 //! Its histogram is the exact per-object count; the channel image built
 //! from it gives `occlude_core::gvq::SummedAreaTable`'s counts.
 
-use crate::backend::push_instance_triangles;
 use crate::raster::{Command, CommandKind, DepthBuffer, Rasterizer};
 use glam::Vec4;
 use occlude_core::gvq::{count_errors, plan, CountErrors, PixelRect, RegionPlan, SatConfig, SummedAreaTable};
@@ -109,7 +108,7 @@ impl SoftSat {
         for (i, rect) in rects.iter().enumerate() {
             let Some(rect) = rect else { continue };
             self.triangles.clear();
-            push_instance_triangles(scene, &view_projection, i as u32, &mut self.clip, &mut self.triangles);
+            scene.push_clip_triangles(i as u32, &view_projection, &mut self.clip, &mut self.triangles);
             let draw = Command { kind: CommandKind::Draw, triangles: 0..self.triangles.len() as u32, cull_back: false };
             if self.rasterizer.execute(&mut self.depth, &self.triangles, &[draw])[0].passed == 0 {
                 continue;

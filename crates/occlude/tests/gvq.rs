@@ -1,15 +1,17 @@
 //! Granular visibility queries with summed area tables (issue 19, item 1)
 //! on the soft backend, on frames of the `small` scenes' walkthroughs:
 //! the counts keep the paper's guarantees against the exact counts, and
-//! the exact counts are the oracle's.
+//! the exact counts are the oracle's; and on the wgpu backend (lavapipe
+//! with `OCCLUDE_REQUIRE_GPU=1`) the same plans count the same.
 
 use occlude::bench::config::NEAR_PLANE;
 use occlude::bench::runner::far_plane;
-use occlude_core::gvq::{RegionMode, SatConfig};
+use occlude_core::gvq::{RegionMode, SatConfig, SummedAreaTable};
 use occlude_core::{Backend, Camera, Sampling, Scene};
 use occlude_scenes::{generate, Size};
 use occlude_soft::sat::SoftSat;
 use occlude_soft::{GpuModel, SoftBackend};
+use occlude_wgpu::{GpuContext, GpuSat};
 
 const RESOLUTION: (u32, u32) = (128, 96);
 
@@ -89,4 +91,45 @@ fn exact_counts_are_the_oracles_pixel_counts() {
             assert!(ties * 50 <= covered, "{} frame {f}: {ties} tied pixels of {covered}", scene.name);
         }
     }
+}
+
+/// The wgpu backend's counts of the soft backend's plans: its prefix sums
+/// and lookups are exact on its own image (they equal the CPU's summed
+/// area table of the image read back), and they equal soft's counts except
+/// where the two rasterizers round vertex positions differently, by at
+/// most `ROUNDING_PIXELS` per object (as `tests/gpu.rs` allows the
+/// oracles); the differences are printed.
+#[test]
+fn wgpu_counts_equal_the_soft_backends_on_the_same_frames() {
+    const ROUNDING_PIXELS: u64 = 8;
+    let Some(ctx) = GpuContext::for_test("wgpu_counts_equal_the_soft_backends_on_the_same_frames") else { return };
+    let (w, h) = RESOLUTION;
+    let (mut compared, mut differing, mut worst) = (0, 0, (0u64, String::new()));
+    for (scene, cameras) in scenes(3) {
+        let mut soft = SoftSat::new(w, h);
+        for targets in [1, 2] {
+            let gpu = GpuSat::new(ctx.clone(), w, h, targets);
+            for (f, camera) in cameras.iter().enumerate() {
+                let config = SatConfig { targets, ..SatConfig::default() };
+                let frame = soft.query(&scene, camera, &[config]).remove(0);
+                let counted = gpu.query(&scene, camera, &frame.plan).unwrap();
+                let at = format!("{} frame {f}, {targets} targets", scene.name);
+                let sat = SummedAreaTable::from_channel_image(w, h, frame.plan.channels, &counted.channel_image);
+                let on_cpu: Vec<u64> = frame.plan.sets.iter().map(|s| sat.count_set(s)).collect();
+                assert_eq!(counted.counts, on_cpu, "{at}: GPU sums against the CPU's on the GPU's image");
+                for (i, (&g, &s)) in counted.counts.iter().zip(&frame.counts).enumerate() {
+                    let d = g.abs_diff(s);
+                    let what = format!("{at}, object {i}: wgpu {g}, soft {s}");
+                    assert!(d <= ROUNDING_PIXELS, "{what}");
+                    compared += usize::from(s > 0);
+                    differing += usize::from(d > 0);
+                    if d > worst.0 {
+                        worst = (d, what);
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared > 100, "only {compared} visible objects compared");
+    eprintln!("wgpu against soft: {differing} of {compared} visible objects' counts differ; worst: {}", worst.1);
 }

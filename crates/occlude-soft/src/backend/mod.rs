@@ -134,7 +134,7 @@ impl<'s> SoftBackend<'s> {
 
     /// Appends the clip-space triangles of instance `i`.
     fn push_instance_triangles(&mut self, i: u32) {
-        push_instance_triangles(self.scene, &self.view_projection, i, &mut self.clip_scratch, &mut self.triangles);
+        self.scene.push_clip_triangles(i, &self.view_projection, &mut self.clip_scratch, &mut self.triangles);
     }
 
     /// Appends the 12 outward, counter-clockwise triangles of a box in clip
@@ -336,22 +336,4 @@ impl Backend for SoftBackend<'_> {
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
         Ok(self)
     }
-}
-
-/// Appends the clip-space triangles of `scene`'s instance `i` seen through
-/// `view_projection` to `triangles` (`clip`: scratch for its vertices).
-pub(crate) fn push_instance_triangles(
-    scene: &Scene,
-    view_projection: &Mat4,
-    i: u32,
-    clip: &mut Vec<Vec4>,
-    triangles: &mut Vec<[Vec4; 3]>,
-) {
-    let inst = &scene.instances[i as usize];
-    let mesh = &scene.meshes[inst.mesh as usize];
-    let mvp = *view_projection * inst.transform;
-    clip.clear();
-    clip.extend(mesh.positions.iter().map(|p| mvp * p.extend(1.0)));
-    triangles
-        .extend(mesh.indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]));
 }

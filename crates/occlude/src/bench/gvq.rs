@@ -126,7 +126,9 @@ impl GvqRow {
 /// documentation); returns the printed table and its JSON.
 pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
     if base.backend != BackendKind::Soft {
-        anyhow::bail!("--paper gvq runs on the soft backend only: the summed area tables are not built on wgpu yet");
+        anyhow::bail!(
+            "--paper gvq runs on the soft backend only (the wgpu backend's counts, occlude_wgpu::GpuSat, are tested against it but not benchmarked yet)"
+        );
     }
     let published = published::table("gvq", "Table 2");
     let configs =
