@@ -25,7 +25,7 @@
 
 use crate::backend::{frame_group, BOX_BYTES};
 use crate::context::GpuContext;
-use crate::pipelines::CullingPipelines;
+use crate::pipelines::{compute_pipeline, CullingPipelines};
 use crate::queries::PassTimer;
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
@@ -123,16 +123,7 @@ impl CullingScene {
             label: Some("occlude culling shaders"),
             source: wgpu::ShaderSource::Wgsl(include_str!("cull.wgsl").into()),
         });
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
             .instances
             .iter()

@@ -16,7 +16,7 @@ use occlude_core::gvq::{RegionPlan, CHANNELS_PER_TARGET, MAX_TARGETS, NO_CHANNEL
 use occlude_core::{Camera, Scene};
 
 use crate::context::GpuContext;
-use crate::pipelines::DEPTH_FORMAT;
+use crate::pipelines::{compute_pipeline, texture_2d, DEPTH_FORMAT};
 use crate::readback::{take_bytes, Mapping};
 
 /// The colour targets' format: one 8-bit channel per colour.
@@ -137,29 +137,9 @@ impl GpuSat {
             multiview_mask: None,
             cache: None,
         });
-        let compute = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let (rows, columns, count) = (compute("rows"), compute("columns"), compute("count"));
-        let texture = |label: &str, format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let texture = |label: &str, format, usage| texture_2d(device, label, (width, height), format, usage);
         let colour_usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
