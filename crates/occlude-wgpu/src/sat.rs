@@ -309,9 +309,11 @@ impl GpuSat {
         self.ctx.queue.submit([encoder.finish()]);
 
         Mapping::start(&counts_staging, count_bytes.max(4)).wait(&self.ctx)?;
-        let raw = take_bytes(&counts_staging, count_bytes)?;
-        let counts =
-            raw.chunks_exact(4).map(|b| u64::from(u32::from_le_bytes(b.try_into().expect("4 bytes")))).collect();
+        let raw = take_bytes(&counts_staging, count_bytes.max(4))?;
+        let counts = raw[..count_bytes as usize]
+            .chunks_exact(4)
+            .map(|b| u64::from(u32::from_le_bytes(b.try_into().expect("4 bytes"))))
+            .collect();
         let mut channel_image = vec![NO_CHANNEL; (w * h) as usize];
         for (k, out) in images.iter().enumerate() {
             Mapping::start(out, image_bytes).wait(&self.ctx)?;
