@@ -58,6 +58,7 @@ pub mod depth_pyramid;
 pub mod frame;
 pub mod geometry;
 pub mod gpu_culling;
+pub mod gvq;
 pub mod hierarchy;
 pub mod host_culling;
 pub mod item_buffer;

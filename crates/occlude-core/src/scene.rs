@@ -2,7 +2,7 @@
 
 use crate::geometry::Aabb;
 use crate::path::CameraPath;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use thiserror::Error;
 
 /// An indexed triangle mesh in its own (object) space.
@@ -117,6 +117,26 @@ impl Scene {
             material_count: 0,
             path: Default::default(),
         }
+    }
+
+    /// Appends the clip-space triangles of instance `i` seen through
+    /// `view_projection` to `triangles` (`clip`: scratch for its vertices),
+    /// as every CPU-side rasterization of the scene computes them.
+    pub fn push_clip_triangles(
+        &self,
+        i: u32,
+        view_projection: &Mat4,
+        clip: &mut Vec<Vec4>,
+        triangles: &mut Vec<[Vec4; 3]>,
+    ) {
+        let inst = &self.instances[i as usize];
+        let mesh = &self.meshes[inst.mesh as usize];
+        let mvp = *view_projection * inst.transform;
+        clip.clear();
+        clip.extend(mesh.positions.iter().map(|p| mvp * p.extend(1.0)));
+        triangles.extend(
+            mesh.indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]),
+        );
     }
 
     /// Adds a mesh and returns its index.

@@ -25,6 +25,7 @@ pub mod import;
 pub mod newell;
 mod plant;
 mod rooms;
+pub mod scattered;
 pub use occlude_core::rng;
 pub mod shapes;
 mod teapots;

@@ -7,6 +7,7 @@ pub mod backend;
 pub mod clock;
 pub mod gpu_model;
 pub mod raster;
+pub mod sat;
 pub mod workload;
 
 pub use backend::SoftBackend;

@@ -25,7 +25,7 @@
 
 use crate::backend::{frame_group, BOX_BYTES};
 use crate::context::GpuContext;
-use crate::pipelines::CullingPipelines;
+use crate::pipelines::{compute_pipeline, CullingPipelines};
 use crate::queries::PassTimer;
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
@@ -727,23 +727,6 @@ impl Culling {
             drawn: words[4..].to_vec(),
         }))
     }
-}
-
-/// The compute pipeline of `entry` in `module`, its layout derived from
-/// the shader.
-pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
-    entry: &str,
-) -> wgpu::ComputePipeline {
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: None,
-        module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
 }
 
 /// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use glam::Vec4;
 
 use crate::context::GpuContext;
-use crate::pipelines::DEPTH_FORMAT;
+use crate::pipelines::{texture_2d, DEPTH_FORMAT};
 use crate::queries::{encode_resolve, read_values, QueryPool, QUERIES_PER_SET};
 use crate::readback::Mapping;
 
@@ -86,16 +86,8 @@ impl DepthRaster {
     /// `height` if it is not, and waits until the GPU has done so.
     pub fn clear(&mut self, width: u32, height: u32) -> Result<(), String> {
         if !matches!(self.depth, Some((_, w, h)) if (w, h) == (width, height)) {
-            let texture = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("depth raster"),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: DEPTH_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            });
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            let texture = texture_2d(&self.ctx.device, "depth raster", (width, height), DEPTH_FORMAT, usage);
             self.depth = Some((texture.create_view(&Default::default()), width, height));
         }
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());

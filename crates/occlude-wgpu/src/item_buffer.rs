@@ -17,8 +17,8 @@
 //! then the bins and totals are read back.
 
 use crate::context::GpuContext;
-use crate::culling::{compute_pipeline, workgroups};
-use crate::pipelines::{build_pipeline, layout_entry, Variant, DRAW};
+use crate::culling::workgroups;
+use crate::pipelines::{build_pipeline, compute_pipeline, layout_entry, Variant, DRAW};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;

@@ -12,6 +12,7 @@
 //! where the device has what it needs.
 //! [`DepthRaster`] is bare depth rasterization of clip-space triangles, for
 //! comparing the GPU with the soft rasterizer on the same triangles.
+//! [`GpuSat`] is granular visibility queries' summed-area-table counts.
 
 #![warn(missing_docs)]
 
@@ -23,10 +24,12 @@ mod item_buffer;
 mod pipelines;
 mod queries;
 mod readback;
+mod sat;
 mod scene_buffers;
 mod target;
 
 pub use backend::WgpuBackend;
 pub use context::{best_adapter, GpuContext, GpuError, REQUIRED_DOWNLEVEL};
 pub use depth_raster::DepthRaster;
+pub use sat::{GpuSat, GpuSatFrame};
 pub use scene_buffers::{GpuScene, COLOR_FORMAT};

@@ -3,7 +3,7 @@
 //! back for screenshots.
 
 use crate::context::GpuContext;
-use crate::pipelines::DEPTH_FORMAT;
+use crate::pipelines::{texture_2d, DEPTH_FORMAT};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::COLOR_FORMAT;
 
@@ -20,21 +20,11 @@ pub(crate) struct RenderTarget {
 impl RenderTarget {
     /// A target of `width` x `height` pixels.
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
-        let texture = |label: &str, format: wgpu::TextureFormat| {
-            ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                // Sampled too: the viewer draws the colour image to its window.
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        };
+        // Sampled too: the viewer draws the colour image to its window.
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING;
+        let texture = |label: &str, format| texture_2d(&ctx.device, label, (width, height), format, usage);
         let color = texture("colour", COLOR_FORMAT);
         let depth = texture("depth", DEPTH_FORMAT);
         Self {

@@ -344,7 +344,10 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
         progress.finish_and_clear();
         print!("{}", result.text);
         if let Some(path) = &args.json {
-            bench::output::write_json(&result.tables, path)?;
+            match &result.gvq {
+                Some(gvq) => bench::output::write_json(gvq, path)?,
+                None => bench::output::write_json(&result.tables, path)?,
+            }
             eprintln!("wrote {}", path.display());
         }
         return Ok(());

@@ -161,15 +161,7 @@ impl<'s> SoftBackend<'s> {
 
     /// Appends the clip-space triangles of instance `i`.
     fn push_instance_triangles(&mut self, i: u32) {
-        let inst = &self.scene.instances[i as usize];
-        let mesh = &self.scene.meshes[inst.mesh as usize];
-        let mvp = self.view_projection * inst.transform;
-        let clip = &mut self.clip_scratch;
-        clip.clear();
-        clip.extend(mesh.positions.iter().map(|p| mvp * p.extend(1.0)));
-        self.triangles.extend(
-            mesh.indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]),
-        );
+        self.scene.push_clip_triangles(i, &self.view_projection, &mut self.clip_scratch, &mut self.triangles);
     }
 
     /// Appends the 12 outward, counter-clockwise triangles of a box in clip

@@ -4,6 +4,7 @@
 
 pub mod config;
 pub mod dump;
+pub mod gvq;
 pub mod ideal;
 pub mod output;
 pub mod paper;

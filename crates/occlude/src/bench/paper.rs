@@ -1,4 +1,4 @@
-//! `occlude bench --paper chc|chcpp|om|ioc`: a paper's experiments on our
+//! `occlude bench --paper chc|chcpp|om|ioc|gvq`: a paper's experiments on our
 //! teapots, city and plant scenes (`paper` size unless told otherwise, the
 //! whole walkthrough at the frame rate), printed in the shape of its tables,
 //! each of our rows beside the published figures (`published.toml`) with
@@ -22,6 +22,8 @@
 //!   the poster's figure) and Figure 4 (frame time of VFC, ROC, IOC and the
 //!   ideal set; the poster gives that one as a chart, without figures, and
 //!   its NOCULL has no method here).
+//! - `gvq` (granular visibility queries, section 4.1): Table 2, in
+//!   [`super::gvq`].
 
 use super::config::BenchConfig;
 use super::ideal::IDEAL;
@@ -39,7 +41,7 @@ use occlude_soft::GpuModel;
 use std::fmt::Write;
 
 /// Papers whose experiments `--paper` can run.
-pub const PAPERS: [&str; 4] = ["chc", "chcpp", "om", "ioc"];
+pub const PAPERS: [&str; 5] = ["chc", "chcpp", "om", "ioc", "gvq"];
 
 /// The scenes of the CHC papers' tables, in the CHC paper's order.
 const CHC_SCENES: &[&str] = &["teapots", "city", "plant"];
@@ -114,6 +116,9 @@ pub struct PaperResult {
     pub text: String,
     /// The tables and every run's report, for `--json`.
     pub tables: PaperTables,
+    /// `--paper gvq`'s tables, whose rows have columns of their own;
+    /// `--json` writes them instead of `tables` (which is then empty).
+    pub gvq: Option<super::gvq::GvqTables>,
 }
 
 /// The size `--paper` runs at unless told otherwise: the papers' scenes
@@ -121,10 +126,15 @@ pub struct PaperResult {
 pub const DEFAULT_SIZE: Size = Size::Paper;
 
 /// The image size of `paper`'s runs unless told otherwise: the occupancy-map
-/// paper's 800 x 600 (its section 5); the CHC papers state none, so the
+/// paper's 800 x 600 (its section 5), the granular-visibility-queries
+/// paper's 512 x 512 query target; the CHC papers state none, so the
 /// default 1024 x 768 stays.
 pub fn default_resolution(paper: &str) -> Option<(u32, u32)> {
-    (paper == "om").then_some((800, 600))
+    match paper {
+        "om" => Some((800, 600)),
+        "gvq" => Some(super::gvq::RESOLUTION),
+        _ => None,
+    }
 }
 
 /// Runs the experiments of `paper` with the size, seed, frames and
@@ -136,6 +146,14 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
         "chcpp" => &CHCPP,
         "om" => &OM,
         "ioc" => return run_ioc(base, progress),
+        "gvq" => {
+            let (text, gvq) = super::gvq::run(base, progress)?;
+            return Ok(PaperResult {
+                text,
+                tables: PaperTables { paper: "gvq".into(), ..PaperTables::default() },
+                gvq: Some(gvq),
+            });
+        }
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
     };
     run_experiment(experiment, base, progress)
@@ -186,7 +204,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
     }
     let tables = vec![Table::new(e.tables[0], published[0], compared), Table::new(e.tables[1], published[1], varied)];
     let text = tables.iter().map(|t| t.render(e.title)).collect::<Vec<_>>().join("\n");
-    Ok(PaperResult { text, tables: PaperTables { paper: e.paper.to_string(), tables, reports } })
+    Ok(PaperResult { text, tables: PaperTables { paper: e.paper.to_string(), tables, reports }, gvq: None })
 }
 
 /// The IOC poster's scenes, as its tables name them.
@@ -255,7 +273,7 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
     // The poster's tables stay text: their published figures are GPU times
     // of parts of the frame, not the rows of [`Table`].
     let tables = PaperTables { paper: "ioc".into(), tables: Vec::new(), reports };
-    Ok(PaperResult { text: format!("{table}\n{figure}"), tables })
+    Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None })
 }
 
 fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {

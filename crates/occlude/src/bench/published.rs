@@ -38,6 +38,20 @@ pub struct PublishedRow {
     pub triangles: Option<f64>,
     /// Speedup over view-frustum culling.
     pub speedup: Option<f64>,
+    /// Objects in the scene (granular visibility queries' rows).
+    pub objects: Option<u32>,
+    /// Conflict objects.
+    pub conflicts: Option<f64>,
+    /// CPU time of the overlap test, ms.
+    pub overlap_ms: Option<f64>,
+    /// CPU time of the colouring, ms.
+    pub colouring_ms: Option<f64>,
+    /// CPU time of split and merge, ms.
+    pub split_merge_ms: Option<f64>,
+    /// Mean absolute pixel-count error, pixels.
+    pub abs_error_px: Option<f64>,
+    /// Mean relative pixel-count error, percent.
+    pub rel_error_pct: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -82,5 +96,11 @@ mod tests {
         let t2 = table("chc", "Table 2").expect("CHC Table 2");
         assert_eq!(t2.row("teapots", "chc", "chc.tav=2 chc.nvp=25").unwrap().frame_ms, Some(55.90));
         assert!(table("chc", "Table 9").is_none() && table("om", "Table 1").is_none());
+        let gvq = table("gvq", "Table 2").expect("GVQ Table 2");
+        let row500 = gvq.rows.iter().find(|r| r.objects == Some(500)).unwrap();
+        assert_eq!(
+            (row500.conflicts, row500.split_merge_ms, row500.rel_error_pct),
+            (Some(249.0), Some(23.0), Some(11.6))
+        );
     }
 }
