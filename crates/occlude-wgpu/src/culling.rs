@@ -25,7 +25,7 @@
 
 use crate::backend::{frame_group, BOX_BYTES};
 use crate::context::GpuContext;
-use crate::pipelines::{compute_pipeline, CullingPipelines};
+use crate::pipelines::{self, compute_pipeline, CullingPipelines};
 use crate::queries::PassTimer;
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
@@ -756,11 +756,8 @@ fn bind_group(
     layout: &wgpu::BindGroupLayout,
     buffers: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = buffers
-        .iter()
-        .map(|&(binding, buffer)| wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() })
-        .collect();
-    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+    let resources: Vec<_> = buffers.iter().map(|&(binding, buffer)| (binding, buffer.as_entire_binding())).collect();
+    pipelines::bind_group(&ctx.device, label, layout, &resources)
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@
 
 use crate::context::GpuContext;
 use crate::culling::workgroups;
-use crate::pipelines::{build_pipeline, compute_pipeline, layout_entry, Variant, DRAW};
+use crate::pipelines::{bind_group, build_pipeline, compute_pipeline, layout_entry, texture_2d, Variant, DRAW};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;
@@ -69,16 +69,13 @@ impl ItemPass {
         });
         let variant = Variant { label: "item pass", vertex_entry: "vs_item", fragment_entry: "fs_item", ..DRAW };
         let render = build_pipeline(device, &layout, &module, ITEM_FORMAT, variant);
-        let items = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("item image"),
-            size: wgpu::Extent3d { width: target.width, height: target.height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ITEM_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let items = texture_2d(
+            device,
+            "item image",
+            (target.width, target.height),
+            ITEM_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let order = scrambled(target.width * target.height);
         Self {
             histogram: compute_pipeline(device, &module, "cs_histogram"),
@@ -153,8 +150,9 @@ impl ItemPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            let group = entries(
-                ctx,
+            let group = bind_group(
+                &ctx.device,
+                "item pass",
                 &self.group,
                 &[
                     (0, camera.as_entire_binding()),
@@ -176,8 +174,9 @@ impl ItemPass {
                 );
             }
         }
-        let histogram = entries(
-            ctx,
+        let histogram = bind_group(
+            &ctx.device,
+            "item pass",
             &self.histogram.get_bind_group_layout(0),
             &[
                 (3, info.as_entire_binding()),
@@ -186,8 +185,9 @@ impl ItemPass {
                 (6, bin_buffer.as_entire_binding()),
             ],
         );
-        let reduce = entries(
-            ctx,
+        let reduce = bind_group(
+            &ctx.device,
+            "item pass",
             &self.reduce.get_bind_group_layout(0),
             &[
                 (3, info.as_entire_binding()),
@@ -243,17 +243,4 @@ fn storage(ctx: &GpuContext, label: &str, words: &[u32], usage: wgpu::BufferUsag
         contents: bytemuck::cast_slice(contents),
         usage: wgpu::BufferUsages::STORAGE | usage,
     })
-}
-
-/// A bind group of `resources` at their bindings.
-fn entries(
-    ctx: &GpuContext,
-    layout: &wgpu::BindGroupLayout,
-    resources: &[(u32, wgpu::BindingResource<'_>)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = resources
-        .iter()
-        .map(|(binding, resource)| wgpu::BindGroupEntry { binding: *binding, resource: resource.clone() })
-        .collect();
-    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("item pass"), layout, entries: &entries })
 }

@@ -26,6 +26,20 @@ pub(crate) fn compute_pipeline(
     })
 }
 
+/// A bind group called `label` of `resources` at their bindings in `layout`.
+pub(crate) fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: &[(u32, wgpu::BindingResource<'_>)],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .iter()
+        .map(|(binding, resource)| wgpu::BindGroupEntry { binding: *binding, resource: resource.clone() })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+}
+
 /// A `width` x `height` 2D texture of one mip level and sample.
 pub(crate) fn texture_2d(
     device: &wgpu::Device,

@@ -16,7 +16,7 @@ use occlude_core::gvq::{RegionPlan, CHANNELS_PER_TARGET, MAX_TARGETS, NO_CHANNEL
 use occlude_core::{Camera, Scene};
 
 use crate::context::GpuContext;
-use crate::pipelines::{compute_pipeline, texture_2d, DEPTH_FORMAT};
+use crate::pipelines::{bind_group, compute_pipeline, texture_2d, DEPTH_FORMAT};
 use crate::readback::{take_bytes, Mapping};
 
 /// The colour targets' format: one 8-bit channel per colour.
@@ -233,6 +233,7 @@ impl GpuSat {
             });
             let group = bind_group(
                 device,
+                "sat",
                 &self.render.get_bind_group_layout(0),
                 &[(0, lookup_buffer.as_entire_binding()), (1, range_buffer.as_entire_binding())],
             );
@@ -246,14 +247,16 @@ impl GpuSat {
                 vec![(2, sums.as_entire_binding()), (3, size_buffer.as_entire_binding())];
             texture_entries
                 .extend(views.iter().enumerate().map(|(k, v)| (8 + k as u32, wgpu::BindingResource::TextureView(v))));
-            let rows = bind_group(device, &self.rows.get_bind_group_layout(0), &texture_entries);
+            let rows = bind_group(device, "sat", &self.rows.get_bind_group_layout(0), &texture_entries);
             let columns = bind_group(
                 device,
+                "sat",
                 &self.columns.get_bind_group_layout(0),
                 &[(2, sums.as_entire_binding()), (3, size_buffer.as_entire_binding())],
             );
             let count = bind_group(
                 device,
+                "sat",
                 &self.count.get_bind_group_layout(0),
                 &[
                     (0, lookup_buffer.as_entire_binding()),
@@ -332,17 +335,4 @@ impl GpuSat {
             None => Ok(GpuSatFrame { counts, channel_image }),
         }
     }
-}
-
-/// A bind group of `layout` with `entries` (binding, resource).
-fn bind_group(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    entries: &[(u32, wgpu::BindingResource)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = entries
-        .iter()
-        .map(|(binding, resource)| wgpu::BindGroupEntry { binding: *binding, resource: resource.clone() })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("sat"), layout, entries: &entries })
 }
