@@ -7,7 +7,7 @@
 //!
 //! ```sh
 //! cargo build --release -p occlude-moc --example moc_fill_calls
-//! scripts/raster-icount.sh target/release/examples/fill_calls 10 25
+//! scripts/raster-icount.sh target/release/examples/moc_fill_calls 10 25
 //! ```
 
 use std::time::Instant;
