@@ -24,7 +24,7 @@ frames=${FRAMES:-100}
 methods=vfc,sw,chc,chcpp,om,roc,ioc,hiz,opt
 
 if [[ ! -x $bin ]]; then
-  echo "gpu-bench: no occlude binary at $bin (cargo build --release -p occlude, or pass its path)" >&2
+  echo "gpu-bench: no occlude binary at $bin (cargo build --release -p occlude-cli, or pass its path)" >&2
   exit 2
 fi
 mkdir -p "$out"

@@ -2,7 +2,7 @@
 //! HTML and a Markdown report, bad JSON is an error naming the file with exit
 //! code 2, and the HTML page renders in a headless Chromium.
 
-use occlude::bench::plot::COLOURS;
+use occlude_cli::bench::plot::COLOURS;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};

@@ -6,9 +6,9 @@
 mod common;
 
 use indicatif::ProgressBar;
-use occlude::bench::ideal::IDEAL;
-use occlude::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
-use occlude::bench::{BenchConfig, BenchReport};
+use occlude_cli::bench::ideal::IDEAL;
+use occlude_cli::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
+use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene};
 use occlude_scenes::import::{import, ModelFormat};
@@ -128,7 +128,7 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
 }
 
 /// Runs `methods` with `options` and checks every frame against vfc.
-fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude::bench::BenchRun {
+fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude_cli::bench::BenchRun {
     let run = run_scene(scene, cfg, &ProgressBar::hidden()).unwrap();
     for m in &run.methods {
         for (f, stats) in m.frames.iter().enumerate() {
@@ -148,7 +148,8 @@ fn chc_options_save_queries_and_keep_the_image_exact() {
                 options: MethodOptions::parse(opts).unwrap(),
                 ..config(name, hierarchy)
             };
-            let queries = |run: &occlude::bench::BenchRun| run.methods[0].frames.iter().map(|f| f.queries).sum::<u64>();
+            let queries =
+                |run: &occlude_cli::bench::BenchRun| run.methods[0].frames.iter().map(|f| f.queries).sum::<u64>();
             let plain = queries(&exact_run(&scene, &with(&[])));
             let tav = queries(&exact_run(&scene, &with(&["chc.tav=3"])));
             exact_run(&scene, &with(&["chc.spec=2000", "chc.tav=1"]));

@@ -6,9 +6,9 @@
 mod common;
 
 use indicatif::ProgressBar;
-use occlude::bench::config::BackendKind;
-use occlude::bench::runner::{cameras, run_scene};
-use occlude::bench::BenchConfig;
+use occlude_cli::bench::config::BackendKind;
+use occlude_cli::bench::runner::{cameras, run_scene};
+use occlude_cli::bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, HierarchyKind, Instruments, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};

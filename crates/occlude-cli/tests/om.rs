@@ -3,8 +3,8 @@
 //! stop-and-wait for the queries its first stage saves.
 
 use indicatif::ProgressBar;
-use occlude::bench::runner::run_scene;
-use occlude::bench::{BenchConfig, BenchRun};
+use occlude_cli::bench::runner::run_scene;
+use occlude_cli::bench::{BenchConfig, BenchRun};
 use occlude_core::methods::{MethodOptions, NodeClass};
 use occlude_core::{FrameStats, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};

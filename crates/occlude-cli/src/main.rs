@@ -6,14 +6,14 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
-use occlude::bench::config::{
+use occlude_cli::bench::config::{
     load_camera_path, parse_frames, parse_resolution, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES,
     DEFAULT_METHODS, DEFAULT_RESOLUTION,
 };
-use occlude::bench::paper::PAPERS;
-use occlude::bench::plot::PlotKind;
-use occlude::bench::{self, BenchConfig};
-use occlude::output_path::parse_output_path;
+use occlude_cli::bench::paper::PAPERS;
+use occlude_cli::bench::plot::PlotKind;
+use occlude_cli::bench::{self, BenchConfig};
+use occlude_cli::output_path::parse_output_path;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::HierarchyKind;
@@ -45,7 +45,7 @@ enum Command {
     /// Measure the soft depth rasterizer on the field's workloads (fill rate of
     /// random right triangles, occlusion queries) and print MTris/s, GPix/s and
     /// queries/s.
-    RasterBench(occlude::raster_bench::RasterBenchArgs),
+    RasterBench(occlude_cli::raster_bench::RasterBenchArgs),
     /// List the procedural scenes with triangle, instance and node counts.
     Scenes {
         // Sizes to list.
@@ -180,7 +180,7 @@ struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
     // The method shown first.
-    #[arg(long, default_value = occlude::view::DEFAULT_METHOD, help = format!(
+    #[arg(long, default_value = occlude_cli::view::DEFAULT_METHOD, help = format!(
         "The method shown first: {} (keys 1-9 and 0 switch to them in that order, M to the next)",
         one_of(&METHOD_NAMES)))]
     method: String,
@@ -203,7 +203,7 @@ struct ViewArgs {
     frames: usize,
     /// Where key R writes the recorded camera path (JSON for
     /// `bench --camera-path`).
-    #[arg(long, value_name = "FILE", default_value = occlude::view::DEFAULT_RECORD_FILE, value_parser = parse_output_path)]
+    #[arg(long, value_name = "FILE", default_value = occlude_cli::view::DEFAULT_RECORD_FILE, value_parser = parse_output_path)]
     record: PathBuf,
 }
 
@@ -277,7 +277,7 @@ fn run_failure(e: anyhow::Error) -> Failure {
         c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)
             || no_adapter(c)
             || c.is::<occlude_core::GpuCullingUnsupported>()
-            || c.is::<occlude::view::ViewError>()
+            || c.is::<occlude_cli::view::ViewError>()
     };
     if e.chain().any(input) {
         Failure::Usage(e)
@@ -338,7 +338,7 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
 }
 
 fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
-    let progress = occlude::progress::bar(0, "frames");
+    let progress = occlude_cli::progress::bar(0, "frames");
     if let Some(paper) = &args.paper {
         let result = bench::paper::run(paper, config, &progress)?;
         progress.finish_and_clear();
@@ -416,10 +416,10 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
         })
         .transpose()
         .map_err(usage)?;
-    let config = occlude::calibrate::CalibrateConfig { resolution: args.resolution, repeats: args.repeats, check };
+    let config = occlude_cli::calibrate::CalibrateConfig { resolution: args.resolution, repeats: args.repeats, check };
     let progress = ProgressBar::new_spinner();
     progress.enable_steady_tick(std::time::Duration::from_millis(200));
-    let calibration = occlude::calibrate::calibrate(&config, &progress).map_err(run_failure)?;
+    let calibration = occlude_cli::calibrate::calibrate(&config, &progress).map_err(run_failure)?;
     progress.finish_and_clear();
     let text = calibration.to_toml().map_err(Failure::Run)?;
     print!("{text}");
@@ -433,7 +433,7 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
 /// `occlude view`: bad options, no display or no GPU adapter are the user's
 /// (exit code 2).
 fn view(args: &ViewArgs) -> Result<(), Failure> {
-    let config = occlude::view::ViewConfig {
+    let config = occlude_cli::view::ViewConfig {
         scene: BenchConfig {
             frames: args.frames,
             resolution: args.resolution,
@@ -447,7 +447,7 @@ fn view(args: &ViewArgs) -> Result<(), Failure> {
         record: args.record.clone(),
     };
     config.validate().map_err(Failure::Usage)?;
-    occlude::view::run(&config).map_err(run_failure)
+    occlude_cli::view::run(&config).map_err(run_failure)
 }
 
 /// `occlude report`: unreadable or malformed input is the user's (exit code
@@ -455,12 +455,12 @@ fn view(args: &ViewArgs) -> Result<(), Failure> {
 fn report(args: &ReportArgs) -> Result<(), Failure> {
     let mut reports = Vec::new();
     for path in &args.files {
-        reports.extend(occlude::report::load(path).map_err(Failure::Usage)?);
+        reports.extend(occlude_cli::report::load(path).map_err(Failure::Usage)?);
     }
-    occlude::report::write_html(&reports, &args.out).map_err(Failure::Run)?;
+    occlude_cli::report::write_html(&reports, &args.out).map_err(Failure::Run)?;
     eprintln!("wrote {}", args.out.display());
     if let Some(path) = &args.markdown {
-        for written in occlude::report::write_markdown(&reports, path).map_err(Failure::Run)? {
+        for written in occlude_cli::report::write_markdown(&reports, path).map_err(Failure::Run)? {
             eprintln!("wrote {}", written.display());
         }
     }
@@ -486,8 +486,8 @@ fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
     } else {
         vec![size.parse::<Size>().map_err(|e| Failure::Usage(e.into()))?]
     };
-    let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude::scenes::rows(s, seed)).collect();
-    print!("{}", occlude::scenes::render(&rows));
+    let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude_cli::scenes::rows(s, seed)).collect();
+    print!("{}", occlude_cli::scenes::render(&rows));
     Ok(())
 }
 
@@ -498,7 +498,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report(args),
         Command::Calibrate(args) => calibrate(args),
         Command::View(args) => view(args),
-        Command::RasterBench(args) => occlude::raster_bench::run(args).map_err(run_failure),
+        Command::RasterBench(args) => occlude_cli::raster_bench::run(args).map_err(run_failure),
         Command::Scenes { size, seed } => scenes(size, *seed),
     };
     match outcome {

@@ -8,8 +8,8 @@
 //! warnings. `tests/gpu.rs` runs the same methods on the wgpu backend.
 
 use indicatif::ProgressBar;
-use occlude::bench::runner::{run_scene, BenchRun};
-use occlude::bench::BenchConfig;
+use occlude_cli::bench::runner::{run_scene, BenchRun};
+use occlude_cli::bench::BenchConfig;
 use occlude_core::depth_pyramid::level_sizes;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};

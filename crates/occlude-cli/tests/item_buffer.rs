@@ -6,9 +6,9 @@
 //! image and its depth-equal occlusion queries (the oracle pass), and on the
 //! soft backend every pixel's owner found fragment by fragment.
 
-use occlude::bench::config::BackendKind;
-use occlude::bench::runner::cameras;
-use occlude::bench::BenchConfig;
+use occlude_cli::bench::config::BackendKind;
+use occlude_cli::bench::runner::cameras;
+use occlude_cli::bench::BenchConfig;
 use occlude_core::{Backend, Camera, Instruments, ItemCounts, ItemLayout, OracleView, Scene};
 use occlude_scenes::{generate, Size, SCENE_NAMES};
 use occlude_soft::raster::Fragments;

@@ -2,8 +2,8 @@
 //! files, so that both backends are held to the same rule by the same code.
 
 use glam::Mat4;
-use occlude::bench::runner::{cameras, far_plane};
-use occlude::bench::BenchConfig;
+use occlude_cli::bench::runner::{cameras, far_plane};
+use occlude_cli::bench::BenchConfig;
 use occlude_core::methods::{check_support, create, DrawnSet};
 use occlude_core::{differing_pixels, render_frame, Backend, Camera, Hierarchy, Scene};
 
