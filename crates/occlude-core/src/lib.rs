@@ -66,6 +66,7 @@ pub mod methods;
 pub mod mock;
 pub mod path;
 pub mod query_box;
+pub mod recording;
 pub mod rng;
 pub mod scene;
 pub mod stats;

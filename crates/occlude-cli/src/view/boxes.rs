@@ -10,8 +10,8 @@
 //! `ioc` is one level of the hierarchy (the IOC poster's Figure 4).
 
 use super::present::draw_over;
-use super::recorder::{QueryOutcome, RecordedBoxTest, RecordedQuery};
 use occlude_core::query_box::BOX_TRIANGLES;
+use occlude_core::recording::{QueryOutcome, RecordedBoxTest, RecordedQuery};
 use occlude_core::{Aabb, Camera};
 use wgpu::util::DeviceExt;
 

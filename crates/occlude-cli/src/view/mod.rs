@@ -7,7 +7,7 @@
 //! `occlude bench` (`occlude_core::render_frame`); after the frame the
 //! viewer draws the query boxes (`boxes`) and the statistics (`overlay`) over
 //! that image and copies it to the window (`present`). Query boxes and their
-//! results are caught by `recorder::RecordingBackend`, an
+//! results are caught by `occlude_core::recording::RecordingBackend`, an
 //! [`occlude_core::Backend`] wrapper, so no method knows it is being watched.
 //! The window and its event loop are in `app`; the fly camera and walkthrough
 //! playback in `camera_control`; key bindings in `input`; recording a
@@ -21,7 +21,6 @@ mod input;
 mod overlay;
 mod path_recorder;
 mod present;
-mod recorder;
 
 use crate::bench::BenchConfig;
 use anyhow::{bail, Result};
