@@ -23,6 +23,8 @@ mod depth_raster;
 mod item_buffer;
 mod pipelines;
 mod queries;
+mod query_book;
+mod query_boxes;
 mod readback;
 mod sat;
 mod scene_buffers;
