@@ -106,7 +106,8 @@ impl QueryBook {
     }
 
     /// The queries recorded since the last submission, forgetting their set
-    /// (the submission about to be made takes them).
+    /// (the submission about to be made takes them, and hands its read-back
+    /// to [`QueryBook::submitted`]).
     pub fn take_pending(&mut self) -> Option<Pending> {
         let set = self.recorded_set.take()?;
         let mut slots = self.queries.iter().filter_map(|q| match q {
@@ -191,5 +192,30 @@ impl QueryBook {
             ctx.fail(e);
             Vec::new()
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pending_queries_are_the_recorded_slots_of_one_set() {
+        let mut book = QueryBook::default();
+        assert_eq!(book.take_pending(), None);
+        let (a, slot_a) = book.record();
+        let known = book.answered(7);
+        let (b, slot_b) = book.record();
+        assert_eq!((slot_a, slot_b), (0, 1));
+        assert!(book.is_recorded(a) && book.is_recorded(b) && !book.is_recorded(known));
+        assert!(!book.starts_new_set());
+        assert_eq!(book.take_pending(), Some(Pending { set: 0, first: 0, count: 2 }));
+
+        // The last slot of a set: the next query starts another set (its
+        // slot is the set's first), so the recorded ones are submitted first.
+        let mut book = QueryBook { next_slot: 2 * QUERIES_PER_SET - 1, ..QueryBook::default() };
+        book.record();
+        assert!(book.starts_new_set());
+        assert_eq!(book.take_pending(), Some(Pending { set: 1, first: QUERIES_PER_SET - 1, count: 1 }));
     }
 }

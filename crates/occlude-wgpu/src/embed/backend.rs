@@ -422,3 +422,21 @@ where
         self.state.ctx.failure()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attachments_need_a_depth_format_and_an_ordering_test() {
+        use wgpu::CompareFunction::{Always, Equal, GreaterEqual, Less};
+        use wgpu::TextureFormat::{Depth24Plus, Depth24PlusStencil8, Depth32Float, Rgba8Unorm};
+        let ok = |depth, compare| Attachments { color: None, depth, compare }.check().is_ok();
+        assert!(ok(Depth32Float, Less) && ok(Depth24Plus, GreaterEqual) && ok(Depth24PlusStencil8, Less));
+        assert!(!ok(Rgba8Unorm, Less) && !ok(Depth32Float, Always) && !ok(Depth32Float, Equal));
+        let reverse = Attachments { color: None, depth: Depth32Float, compare: GreaterEqual };
+        assert!(reverse.reverse_z() && reverse.far_depth() == 0.0);
+        let forward = Attachments { compare: Less, ..reverse };
+        assert!(!forward.reverse_z() && forward.far_depth() == 1.0);
+    }
+}
