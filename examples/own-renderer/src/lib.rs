@@ -218,6 +218,13 @@ impl Renderer {
         (view, projection)
     }
 
+    /// Waits until the GPU has finished everything submitted (to time a
+    /// frame from its start to the GPU being idle).
+    pub fn wait_idle(&self) -> Result<(), Box<dyn Error>> {
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        Ok(())
+    }
+
     /// The last frame's colour image, RGBA8 rows from the top (blocking).
     pub fn color_image(&self) -> Result<Vec<u8>, Box<dyn Error>> {
         self.read(&self.color, wgpu::TextureAspect::All)

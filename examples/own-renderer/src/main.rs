@@ -1,13 +1,15 @@
 //! Runs the example renderer off-screen: a walk past the walls, culling off
-//! or with an occlude method, printing what each frame drew, and writes the
-//! last frame as a PNG.
+//! or with occlude methods (several in one run, one after the other),
+//! printing what each frame drew and how long it took until the GPU was
+//! idle, and writes the last frame as a PNG.
 //!
-//! `cargo run --release -p own-renderer -- [--culling off|chcpp|chc|om|sw|vfc]
+//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc]
 //! [--frames N] [--grid N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
 
 use own_renderer::{open_device, Options, Renderer};
 use std::error::Error;
 use std::path::PathBuf;
+use std::time::Instant;
 
 fn main() {
     if let Err(e) = run() {
@@ -39,11 +41,25 @@ fn run() -> Result<(), Box<dyn Error>> {
     }
     let (device, queue) = open_device()?;
     let mut renderer = Renderer::new(device, queue, options);
-    renderer.set_culling((culling != "off").then_some(culling.as_str()))?;
-    for frame in 0..frames {
-        let t = if frames > 1 { frame as f32 / (frames - 1) as f32 } else { 0.0 };
-        let drawn = renderer.render(t)?;
-        println!("frame {frame}: culling {culling}, drew {drawn} of {} instances", renderer.instance_count());
+    for mode in culling.split(',') {
+        renderer.set_culling((mode != "off").then_some(mode))?;
+        let (mut total_ms, mut total_drawn) = (0.0, 0);
+        for frame in 0..frames {
+            let t = if frames > 1 { frame as f32 / (frames - 1) as f32 } else { 0.0 };
+            let start = Instant::now();
+            let drawn = renderer.render(t)?;
+            renderer.wait_idle()?;
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            total_ms += ms;
+            total_drawn += drawn;
+            let n = renderer.instance_count();
+            println!("frame {frame}: culling {mode}, drew {drawn} of {n} instances in {ms:.2} ms");
+        }
+        let drawn = total_drawn as f64 / f64::from(frames);
+        println!(
+            "culling {mode}: {drawn:.0} instances drawn and {:.2} ms per frame on average",
+            total_ms / f64::from(frames)
+        );
     }
     renderer.save_png(&out)?;
     println!("wrote {}", out.display());
