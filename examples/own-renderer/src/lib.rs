@@ -6,8 +6,8 @@
 //! and calls this renderer's draw code for them, inside its own passes on
 //! this renderer's device and attachments.
 //!
-//! The lines that integrate occlude are between the `occlude:` markers
-//! (counted in the README).
+//! The lines that integrate occlude are marked `occlude:` (counted in
+//! the README).
 
 use glam::{Mat4, Vec3};
 use occlude::wgpu::embed::{Attachments, Culler, FrameTarget};
@@ -190,8 +190,7 @@ impl Renderer {
         // occlude: the frame's camera and views; occlude's method draws the
         // instances it finds visible with this renderer's draw code.
         let camera = Camera::from_matrices(view, projection, self.options.reverse_z)?;
-        let size = (self.options.size, self.options.size);
-        let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth, size };
+        let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
         let mut drawn = 0u64;
         culler.render(&camera, target, |pass, instances| {
             bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);

@@ -106,21 +106,36 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let colour_as_depth = Attachments { depth: wgpu::TextureFormat::Rgba8Unorm, ..attachments };
     assert!(matches!(new(colour_as_depth, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
 
+    let mut culler = Culler::new(&device, &queue, attachments, &bounds, "chcpp").unwrap();
+    let view = |format, size| {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        texture.create_view(&Default::default())
+    };
+    let depth = view(depth_format, 8);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+
+    // Views other than the attachments say: an error, nothing drawn.
+    let mut drawn = Vec::new();
+    let other_depth = view(wgpu::TextureFormat::Depth24Plus, 8);
+    let color = view(wgpu::TextureFormat::Rgba8Unorm, 8);
+    for wrong in [FrameTarget { depth: &other_depth, ..target }, FrameTarget { color: Some(&color), ..target }] {
+        let result = culler.render(&forward, wrong, |_, instances| drawn.extend_from_slice(instances));
+        assert!(matches!(result, Err(EmbedError::Attachments(_))), "{result:?}");
+    }
+    assert!(drawn.is_empty());
+
     // A reverse-Z camera over a forward depth test is an error, and the
     // frame still draws what is in view.
-    let mut culler = Culler::new(&device, &queue, attachments, &bounds, "chcpp").unwrap();
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d { width: 8, height: 8, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: depth_format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let depth = texture.create_view(&Default::default());
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth, size: (8, 8) };
     let reverse = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_infinite_reverse_rh(1.0, 1.0, 0.1), true);
     let mut drawn = Vec::new();
     let result = culler.render(&reverse.unwrap(), target, |_, instances| drawn.extend_from_slice(instances));

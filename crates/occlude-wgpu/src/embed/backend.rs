@@ -71,8 +71,10 @@ impl Attachments {
     }
 }
 
-/// The views one frame draws into, as the renderer made them (formats as in
-/// its [`Attachments`]).
+/// The views one frame draws into, as the renderer made them: views of
+/// whole single-sample 2D textures of the same size, in the formats of its
+/// [`Attachments`] (a colour view may be the sRGB or linear twin of the
+/// colour format).
 #[derive(Clone, Copy, Debug)]
 pub struct FrameTarget<'a> {
     /// The colour view, when [`Attachments::color`] names a format.
@@ -80,10 +82,49 @@ pub struct FrameTarget<'a> {
     /// The colour the frame's first pass clears `color` to.
     pub clear_color: wgpu::Color,
     /// The depth view; the frame's first pass clears it to
-    /// [`Attachments::far_depth`].
+    /// [`Attachments::far_depth`]. Its texture's size is the frame's
+    /// ([`Backend::resolution`]).
     pub depth: &'a wgpu::TextureView,
-    /// Width and height of the views in pixels ([`Backend::resolution`]).
-    pub size: (u32, u32),
+}
+
+impl FrameTarget<'_> {
+    /// Width and height of the depth texture in pixels.
+    fn size(&self) -> (u32, u32) {
+        let texture = self.depth.texture();
+        (texture.width(), texture.height())
+    }
+
+    /// Whether the views are what `attachments` says and of one size, so
+    /// that occlude's passes on them are valid.
+    fn check(&self, attachments: &Attachments) -> Result<(), EmbedError> {
+        let depth = self.depth.texture();
+        let wrong = |what: String| Err(EmbedError::Attachments(what));
+        if depth.format() != attachments.depth {
+            return wrong(format!("the depth view is {:?}, not {:?}", depth.format(), attachments.depth));
+        }
+        let color = self.color.map(|v| v.texture());
+        let same = |a: wgpu::TextureFormat, b: wgpu::TextureFormat| a.remove_srgb_suffix() == b.remove_srgb_suffix();
+        match (color, attachments.color) {
+            (None, None) => {}
+            (Some(c), Some(format)) if same(c.format(), format) => {
+                if c.size() != depth.size() || c.sample_count() != 1 {
+                    return wrong(format!(
+                        "the colour view ({:?}, {} samples) is not the depth view's size ({:?}) with one sample",
+                        c.size(),
+                        c.sample_count(),
+                        depth.size()
+                    ));
+                }
+            }
+            (c, format) => {
+                return wrong(format!("the colour view is {:?}, not {:?}", c.map(|c| c.format()), format));
+            }
+        }
+        if depth.sample_count() != 1 || depth.dimension() != wgpu::TextureDimension::D2 {
+            return wrong("the depth view is not of a single-sample 2D texture".into());
+        }
+        Ok(())
+    }
 }
 
 /// A recorded command, waiting for the next submission.
@@ -179,12 +220,15 @@ impl QueryBackend {
     /// called inside occlude's render passes with the instances to draw (in
     /// order, possibly several times a frame); it must set its own pipeline,
     /// bind groups and buffers each time, since occlude's query boxes are
-    /// drawn in the same pass between calls.
-    pub fn frame<'a, F>(&'a mut self, target: FrameTarget<'a>, draw: F) -> EmbeddedFrame<'a, F>
+    /// drawn in the same pass between calls, and begin no occlusion query
+    /// of its own. Views that are not what the [`Attachments`] say are an
+    /// error.
+    pub fn frame<'a, F>(&'a mut self, target: FrameTarget<'a>, draw: F) -> Result<EmbeddedFrame<'a, F>, EmbedError>
     where
         F: FnMut(&mut wgpu::RenderPass<'_>, &[u32]),
     {
-        EmbeddedFrame { state: self, target, draw }
+        target.check(&self.attachments)?;
+        Ok(EmbeddedFrame { state: self, target, draw })
     }
 }
 
@@ -226,7 +270,8 @@ where
     /// Pixels of the image: what a query that cannot be answered reports,
     /// so that a failure never hides geometry.
     fn all_pixels(&self) -> u64 {
-        u64::from(self.target.size.0) * u64::from(self.target.size.1)
+        let (width, height) = self.target.size();
+        u64::from(width) * u64::from(height)
     }
 
     /// Submits everything recorded as one render pass (the frame's first
@@ -397,7 +442,7 @@ where
     }
 
     fn resolution(&self) -> (u32, u32) {
-        self.target.size
+        self.target.size()
     }
 
     /// Submits the rest of the frame and waits for the read-backs still in

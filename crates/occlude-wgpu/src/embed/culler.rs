@@ -55,14 +55,15 @@ impl Culler {
     /// depth test says) into `target`: the method decides what to draw,
     /// `draw(pass, instances)` draws it with the renderer's pipelines (see
     /// [`QueryBackend::frame`]). Returns what the frame drew and queried.
-    /// A camera whose depth order differs from the attachments', or a
-    /// read-back that failed, is an error; that frame's image is still
-    /// complete (every query counted as visible).
+    /// Views that are not what the attachments say are an error, and
+    /// nothing is drawn. A camera whose depth order differs from the
+    /// attachments', or a read-back that failed, is an error too, but that
+    /// frame's image is complete (every query counted as visible).
     pub fn render<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, draw: F) -> Result<FrameStats, EmbedError>
     where
         F: FnMut(&mut wgpu::RenderPass<'_>, &[u32]),
     {
-        let mut frame = self.backend.frame(target, draw);
+        let mut frame = self.backend.frame(target, draw)?;
         let stats =
             render_frame(self.method.as_mut(), &mut frame, &self.scene, &self.hierarchy, camera, &mut self.drawn);
         match occlude_core::Backend::failure(&frame) {

@@ -78,7 +78,7 @@
 //! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
 //! let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
 //! let camera = Camera::from_matrices(view, projection, false)?;
-//! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth, size: (256, 256) };
+//! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth };
 //! let stats = culler.render(&camera, target, |pass, instances| {
 //!     pass.set_pipeline(pipeline);
 //!     for &i in instances {
