@@ -2,6 +2,7 @@
 
 use crate::geometry::Aabb;
 use crate::path::CameraPath;
+use crate::query_box::BOX_TRIANGLES;
 use glam::{Mat4, Vec3, Vec4};
 use thiserror::Error;
 
@@ -88,6 +89,10 @@ pub enum SceneError {
     /// An instance transform is not finite.
     #[error("instance {0} has a non-finite transform")]
     NonFiniteTransform(usize),
+    /// A box given to [`Scene::from_bounds`] is not finite or has a
+    /// minimum above its maximum.
+    #[error("instance {0}'s bounds are not a finite box with min <= max")]
+    BadBounds(usize),
 }
 
 /// A complete scene: meshes, their instances and a default walkthrough.
@@ -117,6 +122,30 @@ impl Scene {
             material_count: 0,
             path: Default::default(),
         }
+    }
+
+    /// A scene of boxes only, for culling geometry that a renderer keeps
+    /// itself: instance `i` is `bounds[i]`, drawn (by [`Scene::push_clip_triangles`]
+    /// and the software backends) as that box's 12 triangles, material 0. Culling
+    /// needs no more than the boxes: queries and the hierarchy read
+    /// [`Instance::bounds`], kept exactly as given. Each instance counts 12
+    /// triangles in statistics and cost estimates. An empty list or a bad
+    /// box is an error.
+    pub fn from_bounds(name: impl Into<String>, bounds: &[Aabb]) -> Result<Self, SceneError> {
+        let mut scene = Scene::new(name);
+        let corners = Aabb::new(Vec3::ZERO, Vec3::ONE).corners().to_vec();
+        let indices = BOX_TRIANGLES.iter().flatten().map(|&c| u32::from(c)).collect();
+        let cube = scene.add_mesh(Mesh::new(corners, indices));
+        for (i, b) in bounds.iter().enumerate() {
+            if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()) {
+                return Err(SceneError::BadBounds(i));
+            }
+            let transform = Mat4::from_translation(b.min) * Mat4::from_scale(b.max - b.min);
+            scene.instances.push(Instance { mesh: cube, transform, material: 0, bounds: *b });
+        }
+        scene.material_count = 1;
+        scene.validate()?;
+        Ok(scene)
     }
 
     /// Appends the clip-space triangles of instance `i` seen through
@@ -226,5 +255,24 @@ mod tests {
             Err(SceneError::IndexOutOfRange { mesh: 0, index: 7, vertices: 3 })
         );
         assert_eq!(triangle_scene(Vec3::Y, vec![]).validate(), Err(SceneError::Empty("t".into())));
+    }
+
+    #[test]
+    fn scenes_from_bounds_keep_the_boxes_and_refuse_bad_ones() {
+        let boxes = [Aabb::new(Vec3::new(-1.5, 0.1, 3.0), Vec3::new(2.25, 0.7, 3.0)), Aabb::new(Vec3::ONE, Vec3::ONE)];
+        let scene = Scene::from_bounds("boxes", &boxes).unwrap();
+        assert_eq!(scene.instances.len(), 2);
+        assert_eq!(scene.triangle_count(), 24);
+        for (inst, b) in scene.instances.iter().zip(&boxes) {
+            assert_eq!(inst.bounds, *b);
+            // The drawn box is the given one, up to rounding of the transform.
+            let drawn = scene.meshes[inst.mesh as usize].bounds.transformed(&inst.transform);
+            assert!((drawn.min - b.min).abs().max_element() < 1e-6 && (drawn.max - b.max).abs().max_element() < 1e-6);
+        }
+        let inverted = Aabb::new(Vec3::ONE, Vec3::ZERO);
+        assert_eq!(Scene::from_bounds("b", &[boxes[0], inverted]).unwrap_err(), SceneError::BadBounds(1));
+        let infinite = Aabb::new(Vec3::ZERO, Vec3::splat(f32::INFINITY));
+        assert_eq!(Scene::from_bounds("b", &[infinite]).unwrap_err(), SceneError::BadBounds(0));
+        assert_eq!(Scene::from_bounds("b", &[]).unwrap_err(), SceneError::Empty("b".into()));
     }
 }

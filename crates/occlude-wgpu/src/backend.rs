@@ -13,11 +13,10 @@
 use crate::context::GpuContext;
 use crate::culling::{CullOp, Culling, CullingScene};
 use crate::item_buffer::ItemPass;
-use crate::queries::{
-    encode_resolve, read_values, GpuTimes, PassKind, PassTimer, QueryPool, Readback, QUERIES_PER_SET,
-};
-use crate::readback::Mapping;
-use crate::scene_buffers::{GpuScene, BOX_INDEX_COUNT};
+use crate::queries::{encode_resolve, GpuTimes, PassKind, PassTimer, QUERIES_PER_SET};
+use crate::query_book::{Pending, QueryBook};
+use crate::query_boxes::{camera_buffer, write_camera, BoxRows, BOX_INDEX_COUNT};
+use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;
 use occlude_core::query_box::{query_boxes, QUERY_DEPTH_BIAS};
 use occlude_core::{
@@ -27,22 +26,10 @@ use occlude_core::{
 };
 use std::ops::Range;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Background of the colour image.
 const CLEAR_COLOR: wgpu::Color = wgpu::Color { r: 0.62, g: 0.74, b: 0.86, a: 1.0 };
-
-/// Bytes of one query box in the box buffer (min, a slot, max, padding), as
-/// `QueryBox` in `shader.wgsl` and `Box` in `cull.wgsl`.
-pub(crate) const BOX_BYTES: u64 = 32;
-
-/// Floats of the camera uniform, `Camera` in `shader.wgsl`: the
-/// view-projection matrix (16) and the query depth bias (padded to a vec4).
-const CAMERA_UNIFORM_FLOATS: usize = 16 + 4;
-
-/// The box buffer's first size: room for a few boxes; it grows to the next
-/// power of two of what a submission needs.
-const INITIAL_BOX_BUFFER_BYTES: u64 = 8 * BOX_BYTES;
 
 /// A recorded command, waiting for the next submission.
 #[derive(Clone, Debug)]
@@ -132,25 +119,6 @@ fn pass_kind(ops: &[Op]) -> PassKind {
     }
 }
 
-/// Where a query's answer is.
-#[derive(Clone, Copy, Debug)]
-enum QueryState {
-    /// Recorded, not yet submitted; `slot` is its place in the frame's query sets.
-    Recorded { slot: u32 },
-    /// Submitted with batch `batch`, at position `index` of its values.
-    InFlight { batch: usize, index: usize },
-    /// Read back.
-    Ready(u64),
-}
-
-/// The queries of one submission, read back together.
-struct Batch {
-    readback: Option<Readback>,
-    mapping: Mapping,
-    bytes: u64,
-    values: Vec<u64>,
-}
-
 /// Which pipeline a pass has bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Bound {
@@ -176,22 +144,15 @@ pub struct WgpuBackend<'s> {
     gpu: Arc<GpuScene>,
     target: RenderTarget,
     camera_buffer: wgpu::Buffer,
-    box_buffer: wgpu::Buffer,
     frame_group: wgpu::BindGroup,
-    pool: QueryPool,
     timer: Option<PassTimer>,
     camera: Option<Camera>,
     ops: Vec<Op>,
-    boxes: Vec<[f32; 8]>,
-    /// Query set of the recorded queries, if any are recorded.
-    recorded_set: Option<u32>,
-    next_slot: u32,
-    queries: Vec<QueryState>,
-    batches: Vec<Batch>,
+    boxes: BoxRows,
+    book: QueryBook,
     cleared: bool,
     count: FrameCounter,
     frame_start: Instant,
-    wait: Duration,
     /// GPU-resident culling's resources, made by the first `create_*`.
     pub(crate) culling: Option<Culling>,
     /// The item buffer's pipelines and image, made by the first item pass.
@@ -216,34 +177,23 @@ impl<'s> WgpuBackend<'s> {
     /// `height` pixels.
     pub fn new(gpu: Arc<GpuScene>, scene: &'s Scene, width: u32, height: u32) -> Self {
         let ctx = Arc::clone(&gpu.ctx);
-        let camera_buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("camera"),
-            size: (CAMERA_UNIFORM_FLOATS * std::mem::size_of::<f32>()) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let box_buffer = box_buffer(&ctx, INITIAL_BOX_BUFFER_BYTES);
-        let frame_group = frame_group(&gpu, &camera_buffer, &box_buffer);
+        let camera_buffer = camera_buffer(&ctx.device);
+        let boxes = BoxRows::new(&ctx.device);
+        let frame_group = frame_group(&gpu, &camera_buffer, &boxes.buffer);
         Self {
             scene,
             target: RenderTarget::new(&ctx, width, height),
             camera_buffer,
-            box_buffer,
             frame_group,
-            pool: QueryPool::default(),
             timer: PassTimer::new(&ctx),
             gpu,
             camera: None,
             ops: Vec::new(),
-            boxes: Vec::new(),
-            recorded_set: None,
-            next_slot: 0,
-            queries: Vec::new(),
-            batches: Vec::new(),
+            boxes,
+            book: QueryBook::default(),
             cleared: false,
             count: FrameCounter::new(scene.instances.len()),
             frame_start: Instant::now(),
-            wait: Duration::ZERO,
             culling: None,
             item_pass: None,
             query_mode: QueryMode::Hardware,
@@ -332,31 +282,23 @@ impl<'s> WgpuBackend<'s> {
     fn start(&mut self, camera: &Camera) {
         self.settle();
         self.camera = Some(*camera);
-        let mut uniform = [0f32; CAMERA_UNIFORM_FLOATS];
-        uniform[..16].copy_from_slice(&camera.view_projection().to_cols_array());
-        uniform[16] = QUERY_DEPTH_BIAS;
-        self.gpu.ctx.queue.write_buffer(&self.camera_buffer, 0, bytemuck::cast_slice(&uniform));
+        write_camera(&self.gpu.ctx.queue, &self.camera_buffer, &camera.view_projection(), QUERY_DEPTH_BIAS);
         if let Some(culling) = &self.culling {
             culling.set_camera(camera);
         }
         self.cleared = false;
-        self.next_slot = 0;
-        self.queries.clear();
+        self.book.start_frame();
     }
 
     /// Records a query op, submitting first when its slot starts a new query
     /// set (a render pass has one set).
     fn record_query(&mut self, make: impl FnOnce(u32) -> Op) -> QueryHandle {
-        let slot = self.next_slot;
-        self.next_slot += 1;
-        let set = slot / QUERIES_PER_SET;
-        if self.recorded_set.is_some_and(|s| s != set) {
+        if self.book.starts_new_set() {
             self.flush();
         }
-        self.recorded_set = Some(set);
+        let (handle, slot) = self.book.record();
         self.ops.push(make(slot));
-        self.queries.push(QueryState::Recorded { slot });
-        QueryHandle(self.queries.len() as u32 - 1)
+        handle
     }
 
     /// Submits everything recorded (render passes, and compute passes of
@@ -370,19 +312,12 @@ impl<'s> WgpuBackend<'s> {
         self.upload_boxes();
         let gpu = Arc::clone(&self.gpu);
         let ctx = &gpu.ctx;
-        let set_index = self.recorded_set.take();
-        let set = set_index.map(|k| self.pool.set(ctx, k as usize).clone());
+        let pending = self.book.take_pending();
+        let set = pending.map(|p| self.book.set(ctx, p.set).clone());
         let ops = std::mem::take(&mut self.ops);
-        let slots = ops.iter().filter_map(|op| match op {
-            Op::BoxQuery { slot, .. } | Op::EqualQuery { slot, .. } | Op::CountedQuery { slot, .. } => Some(*slot),
-            Op::Draw(_) | Op::Cull(_) => None,
-        });
-        let (first, count) = match slots.clone().min() {
-            Some(first) => (first, slots.count() as u32),
-            None => (0, 0),
-        };
+        let Pending { first, count, .. } = pending.unwrap_or(Pending { set: 0, first: 0, count: 0 });
         let counted = self.counted.as_ref().filter(|_| ops.iter().any(|op| matches!(op, Op::CountedQuery { .. })));
-        let counted_bytes = (u64::from(first % QUERIES_PER_SET) * 8, u64::from(count) * 8);
+        let counted_bytes = (u64::from(first) * 8, u64::from(count) * 8);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         if let Some(c) = counted {
             encoder.clear_buffer(&c.buffer, counted_bytes.0, Some(counted_bytes.1));
@@ -428,13 +363,13 @@ impl<'s> WgpuBackend<'s> {
             encode_ops(&mut pass, &frame, &ops[range]);
             self.cleared = true;
         }
-        let readback = (count > 0).then(|| self.pool.readback(ctx));
+        let readback = (count > 0).then(|| self.book.readback(ctx));
         let bytes = match (&readback, &set, counted) {
             (Some(r), _, Some(c)) => {
                 encoder.copy_buffer_to_buffer(&c.buffer, counted_bytes.0, &r.staging, 0, counted_bytes.1);
                 counted_bytes.1
             }
-            (Some(r), Some(set), None) => encode_resolve(&mut encoder, set, first % QUERIES_PER_SET, count, r),
+            (Some(r), Some(set), None) => encode_resolve(&mut encoder, set, first, count, r),
             _ => 0,
         };
         ctx.queue.submit([encoder.finish()]);
@@ -442,69 +377,26 @@ impl<'s> WgpuBackend<'s> {
         self.ops.clear();
         self.boxes.clear();
         if let Some(readback) = readback {
-            let batch = self.batches.len();
-            let mapping = Mapping::start(&readback.staging, bytes);
-            self.batches.push(Batch { readback: Some(readback), mapping, bytes, values: Vec::new() });
-            for q in &mut self.queries {
-                if let QueryState::Recorded { slot } = *q {
-                    *q = QueryState::InFlight { batch, index: (slot - first) as usize };
-                }
-            }
+            self.book.submitted(readback, bytes);
         }
     }
 
     /// Writes the recorded query boxes to the box buffer, growing it (and the
     /// bind group that names it) when they do not fit.
     fn upload_boxes(&mut self) {
-        if self.boxes.is_empty() {
-            return;
+        let ctx = &self.gpu.ctx;
+        if self.boxes.upload(&ctx.device, &ctx.queue) {
+            self.frame_group = frame_group(&self.gpu, &self.camera_buffer, &self.boxes.buffer);
         }
-        let bytes = self.boxes.len() as u64 * BOX_BYTES;
-        if bytes > self.box_buffer.size() {
-            self.box_buffer = box_buffer(self.ctx(), bytes.next_power_of_two());
-            self.frame_group = frame_group(&self.gpu, &self.camera_buffer, &self.box_buffer);
-        }
-        self.gpu.ctx.queue.write_buffer(&self.box_buffer, 0, bytemuck::cast_slice(&self.boxes));
-    }
-
-    /// Reads a finished batch's values and frees its read-back buffers.
-    fn collect(&mut self, batch: usize) {
-        let Some(readback) = self.batches[batch].readback.take() else { return };
-        let values = read_values(&readback, self.batches[batch].bytes);
-        self.pool.recycle(readback);
-        self.batches[batch].values = values.unwrap_or_else(|e| {
-            self.gpu.ctx.fail(e);
-            Vec::new()
-        });
     }
 
     /// The query's value once its batch is read; `block` waits for it.
     fn poll_query(&mut self, query: QueryHandle, block: bool) -> Option<u64> {
-        if matches!(self.queries[query.0 as usize], QueryState::Recorded { .. }) {
+        if self.book.is_recorded(query) {
             self.flush();
         }
-        let (batch, index) = match self.queries[query.0 as usize] {
-            QueryState::Ready(v) => return Some(v),
-            QueryState::InFlight { batch, index } => (batch, index),
-            QueryState::Recorded { .. } => unreachable!("flushed above"),
-        };
-        if self.batches[batch].readback.is_some() {
-            let mapping = self.batches[batch].mapping.clone();
-            if block {
-                let start = Instant::now();
-                let waited = mapping.wait(self.ctx());
-                self.wait += start.elapsed();
-                if waited.is_err() {
-                    return Some(self.all_pixels());
-                }
-            } else if !mapping.is_done(self.ctx()) {
-                return None;
-            }
-            self.collect(batch);
-        }
-        let value = self.batches[batch].values.get(index).copied().unwrap_or_else(|| self.all_pixels());
-        self.queries[query.0 as usize] = QueryState::Ready(value);
-        Some(value)
+        let unknown = self.all_pixels();
+        self.book.poll(&self.gpu.ctx, query, block, unknown)
     }
 
     /// Adds what the frame's box tests and list draws did, counted on the
@@ -559,17 +451,7 @@ impl<'s> WgpuBackend<'s> {
     /// read-back has been collected, so the next frame starts clean.
     fn settle(&mut self) {
         self.flush();
-        for batch in 0..self.batches.len() {
-            if self.batches[batch].readback.is_some() {
-                let mapping = self.batches[batch].mapping.clone();
-                if mapping.wait(self.ctx()).is_ok() {
-                    self.collect(batch);
-                } else if let Some(r) = self.batches[batch].readback.take() {
-                    self.pool.recycle(r);
-                }
-            }
-        }
-        self.batches.clear();
+        self.book.settle(&self.gpu.ctx);
     }
 }
 
@@ -583,15 +465,6 @@ pub(crate) fn frame_group(gpu: &GpuScene, camera: &wgpu::Buffer, boxes: &wgpu::B
             wgpu::BindGroupEntry { binding: 1, resource: gpu.transforms.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 2, resource: boxes.as_entire_binding() },
         ],
-    })
-}
-
-fn box_buffer(ctx: &GpuContext, size: u64) -> wgpu::Buffer {
-    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("query boxes"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
     })
 }
 
@@ -686,7 +559,6 @@ impl Backend for WgpuBackend<'_> {
     fn begin_frame(&mut self, camera: &Camera) {
         self.start(camera);
         self.count.begin_frame();
-        self.wait = Duration::ZERO;
         self.frame_start = Instant::now();
     }
 
@@ -703,8 +575,7 @@ impl Backend for WgpuBackend<'_> {
         let camera = self.camera.expect("issue_query outside a frame");
         self.count.query(boxes.len());
         let Some(padded) = query_boxes(&camera, boxes) else {
-            self.queries.push(QueryState::Ready(self.all_pixels()));
-            return QueryHandle(self.queries.len() as u32 - 1);
+            return self.book.answered(self.all_pixels());
         };
         let counted = self.query_mode == QueryMode::Hib;
         let handle = self.record_query(|slot| {
@@ -714,19 +585,15 @@ impl Backend for WgpuBackend<'_> {
                 Op::BoxQuery { slot, boxes: 0..0 }
             }
         });
-        let first = self.boxes.len() as u32;
         // A counted query's boxes carry its slot in the set, the count
         // their fragments add to.
         let id = match self.ops.last() {
             Some(Op::CountedQuery { slot, .. }) => f32::from_bits(slot % QUERIES_PER_SET),
             _ => 0.0,
         };
-        self.boxes.extend(padded.iter().map(|b| {
-            let (lo, hi) = (b.min, b.max);
-            [lo.x, lo.y, lo.z, id, hi.x, hi.y, hi.z, 0.0]
-        }));
+        let rows = self.boxes.push(&padded, id);
         if let Some(Op::BoxQuery { boxes, .. } | Op::CountedQuery { boxes, .. }) = self.ops.last_mut() {
-            *boxes = first..self.boxes.len() as u32;
+            *boxes = rows;
         }
         handle
     }
@@ -765,8 +632,8 @@ impl Backend for WgpuBackend<'_> {
         self.add_cull_stats();
         let mut s = self.count.stats;
         s.frame_ms = frame.as_secs_f64() * 1e3;
-        s.cpu_ms = cpu_end.saturating_sub(self.wait).as_secs_f64() * 1e3;
-        s.wait_ms = self.wait.as_secs_f64() * 1e3;
+        s.cpu_ms = cpu_end.saturating_sub(self.book.wait).as_secs_f64() * 1e3;
+        s.wait_ms = self.book.wait.as_secs_f64() * 1e3;
         s.gpu_ms = times.total;
         s.cull_ms = times.cull;
         s.render_ms = times.render;
@@ -901,7 +768,7 @@ impl WgpuBackend<'_> {
         self.flush();
         let start = Instant::now();
         let value = read(self.culling());
-        self.wait += start.elapsed();
+        self.book.wait += start.elapsed();
         value.unwrap_or_else(|e| {
             self.gpu.ctx.fail(e);
             T::default()

@@ -139,6 +139,25 @@ impl GpuContext {
         })
     }
 
+    /// A context over a renderer's own `device` and `queue` (handles to
+    /// the same device: wgpu's handles are reference-counted), for the
+    /// embedding (module `embed`). Unlike [`GpuContext::open`] it installs
+    /// no device-lost or uncaptured-error handler: those stay the
+    /// renderer's. Its [`GpuContext::failure`] holds only what this crate
+    /// found itself (a read-back that failed or never finished). It offers
+    /// no timestamps and no GPU-resident culling.
+    pub(crate) fn from_device(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
+        Self {
+            info: device.adapter_info(),
+            device: device.clone(),
+            queue: queue.clone(),
+            timestamps: false,
+            culling_lacks: vec!["an embedding of GPU-resident culling"],
+            multi_draw_count: false,
+            failure: Arc::new(Mutex::new(None)),
+        }
+    }
+
     /// Whether the GPU-driven methods' list draws are one
     /// `multi_draw_indexed_indirect_count` (the count read on the GPU); without
     /// it they draw the list's whole capacity, the draws past its count empty.

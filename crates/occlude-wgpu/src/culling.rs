@@ -23,12 +23,13 @@
 //! own; a pyramid box test is one dispatch applying the rules of box tests
 //! and then `DepthPyramid::test` to each box, without drawing.
 
-use crate::backend::{frame_group, BOX_BYTES};
+use crate::backend::frame_group;
 use crate::context::GpuContext;
 use crate::pipelines::{self, compute_pipeline, CullingPipelines};
 use crate::queries::PassTimer;
+use crate::query_boxes::{BOX_BYTES, BOX_INDEX_COUNT};
 use crate::readback::{take_bytes, Mapping};
-use crate::scene_buffers::{material_color, GpuScene, BOX_INDEX_COUNT};
+use crate::scene_buffers::{material_color, GpuScene};
 use occlude_core::depth_pyramid::{level_sizes, DEPTH_SLACK, PIXEL_MARGIN};
 use occlude_core::query_box::{QUERY_BOX_PAD, QUERY_DEPTH_BIAS};
 use occlude_core::{Aabb, BoxSet, Camera, ExpandInto, Flags, IdList, ItemRange, Pyramid, RangeTable, Scene};

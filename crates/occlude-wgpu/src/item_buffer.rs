@@ -18,7 +18,9 @@
 
 use crate::context::GpuContext;
 use crate::culling::workgroups;
-use crate::pipelines::{bind_group, build_pipeline, compute_pipeline, layout_entry, texture_2d, Variant, DRAW};
+use crate::pipelines::{
+    bind_group, build_pipeline, compute_pipeline, layout_entry, texture_2d, Targets, Variant, DRAW,
+};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::GpuScene;
 use crate::target::RenderTarget;
@@ -68,7 +70,7 @@ impl ItemPass {
             immediate_size: 0,
         });
         let variant = Variant { label: "item pass", vertex_entry: "vs_item", fragment_entry: "fs_item", ..DRAW };
-        let render = build_pipeline(device, &layout, &module, ITEM_FORMAT, variant);
+        let render = build_pipeline(device, Some(&layout), &module, Targets::scene(ITEM_FORMAT), variant);
         let items = texture_2d(
             device,
             "item image",

@@ -13,6 +13,8 @@
 //! [`DepthRaster`] is bare depth rasterization of clip-space triangles, for
 //! comparing the GPU with the soft rasterizer on the same triangles.
 //! [`GpuSat`] is granular visibility queries' summed-area-table counts.
+//! [`embed`] runs the query-driven methods inside a renderer's own passes,
+//! on its device and depth buffer, with its draws.
 
 #![warn(missing_docs)]
 
@@ -20,9 +22,12 @@ mod backend;
 mod context;
 mod culling;
 mod depth_raster;
+pub mod embed;
 mod item_buffer;
 mod pipelines;
 mod queries;
+mod query_book;
+mod query_boxes;
 mod readback;
 mod sat;
 mod scene_buffers;

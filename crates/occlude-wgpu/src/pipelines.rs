@@ -125,7 +125,7 @@ pub(crate) const DRAW: Variant<'static> = Variant {
 };
 
 /// Query boxes: front faces only, depth test less, no writes.
-const QUERY: Variant<'static> = Variant {
+pub(crate) const QUERY: Variant<'static> = Variant {
     label: "query boxes",
     vertex_entry: "vs_query_box",
     fragment_entry: "fs_none",
@@ -162,7 +162,7 @@ impl Pipelines {
             bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
             immediate_size: 0,
         });
-        let build = |v: Variant| build_pipeline(device, &layout, &module, color_format, v);
+        let build = |v: Variant| build_pipeline(device, Some(&layout), &module, Targets::scene(color_format), v);
         let draw = build(DRAW);
         let query = build(QUERY);
         let oracle = build(Variant {
@@ -197,7 +197,7 @@ impl Pipelines {
                 bind_group_layouts: &[Some(&self.frame_layout), Some(group1)],
                 immediate_size: 0,
             });
-            build_pipeline(device, &layout, &self.module, self.color_format, v)
+            build_pipeline(device, Some(&layout), &self.module, Targets::scene(self.color_format), v)
         };
         let test = build(
             &flags_layout,
@@ -231,13 +231,30 @@ pub(crate) fn layout_entry(
     }
 }
 
+/// The attachment formats a render pipeline draws into.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Targets {
+    /// The colour attachment's format, if the pass has one.
+    pub color: Option<wgpu::TextureFormat>,
+    /// The depth attachment's format.
+    pub depth: wgpu::TextureFormat,
+}
+
+impl Targets {
+    /// A colour target of `color` and this crate's depth format.
+    pub fn scene(color: wgpu::TextureFormat) -> Self {
+        Self { color: Some(color), depth: DEPTH_FORMAT }
+    }
+}
+
 /// A render pipeline of `module` (and `v.fragment_module`) as `v` says,
-/// drawing into a `color_format` target and the depth format.
+/// drawing into `targets`; without `layout`, its layout is derived from
+/// the bindings its entry points use.
 pub(crate) fn build_pipeline(
     device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
+    layout: Option<&wgpu::PipelineLayout>,
     module: &wgpu::ShaderModule,
-    color_format: wgpu::TextureFormat,
+    targets: Targets,
     v: Variant,
 ) -> wgpu::RenderPipeline {
     let positions = wgpu::VertexBufferLayout {
@@ -247,9 +264,10 @@ pub(crate) fn build_pipeline(
     };
     let buffers = if v.instance_vertices { vec![Some(positions)] } else { Vec::new() };
     let write_mask = if v.color { wgpu::ColorWrites::ALL } else { wgpu::ColorWrites::empty() };
+    let color_targets = &[targets.color.map(|format| wgpu::ColorTargetState { format, blend: None, write_mask })];
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(v.label),
-        layout: Some(layout),
+        layout,
         vertex: wgpu::VertexState {
             module,
             entry_point: Some(v.vertex_entry),
@@ -263,18 +281,19 @@ pub(crate) fn build_pipeline(
             ..Default::default()
         },
         depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
+            format: targets.depth,
             depth_write_enabled: Some(v.depth_write),
             depth_compare: Some(v.compare),
             stencil: Default::default(),
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
+        // Without a colour target, a depth-only pipeline (no fragment stage).
+        fragment: targets.color.map(|_| wgpu::FragmentState {
             module: v.fragment_module.unwrap_or(module),
             entry_point: Some(v.fragment_entry),
             compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState { format: color_format, blend: None, write_mask })],
+            targets: color_targets,
         }),
         multiview_mask: None,
         cache: None,

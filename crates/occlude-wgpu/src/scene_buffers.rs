@@ -6,16 +6,12 @@
 use crate::context::{GpuContext, GpuError};
 use crate::culling::CullingScene;
 use crate::pipelines::Pipelines;
-use occlude_core::query_box::BOX_TRIANGLES;
+use crate::query_boxes::box_index_buffer;
 use occlude_core::rng::mix64;
 use occlude_core::Scene;
 use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 use wgpu::util::DeviceExt;
-
-/// Indices of one query box's draw: the corners of its 12 triangles
-/// ([`BOX_TRIANGLES`]).
-pub(crate) const BOX_INDEX_COUNT: u32 = (BOX_TRIANGLES.len() * 3) as u32;
 
 /// Colour target format of the backend's off-screen render target (what a
 /// viewer drawing over [`crate::WgpuBackend::color_view`] must render to).
@@ -36,7 +32,8 @@ pub struct GpuScene {
     pub(crate) vertices: wgpu::Buffer,
     pub(crate) indices: wgpu::Buffer,
     pub(crate) transforms: wgpu::Buffer,
-    /// The [`BOX_INDEX_COUNT`] corner indices of [`BOX_TRIANGLES`], drawn once per query box.
+    /// The corner indices of a box's triangles, drawn once per query box
+    /// (`query_boxes::box_index_buffer`).
     pub(crate) box_indices: wgpu::Buffer,
     pub(crate) meshes: Vec<MeshRange>,
     /// Per instance, its material's bind group in `material_groups`.
@@ -97,8 +94,7 @@ impl GpuScene {
         let vertices = upload("vertices", bytemuck::cast_slice(&positions), wgpu::BufferUsages::VERTEX);
         let index_buffer = upload("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
         let transform_buffer = upload("transforms", bytemuck::cast_slice(&transforms), wgpu::BufferUsages::STORAGE);
-        let corners: Vec<u32> = BOX_TRIANGLES.iter().flatten().map(|&c| u32::from(c)).collect();
-        let box_indices = upload("box corners", bytemuck::cast_slice(&corners), wgpu::BufferUsages::INDEX);
+        let box_indices = box_index_buffer(device);
 
         let (instance_material, material_groups) = material_groups(&ctx, &pipelines, scene);
         Ok(Self {

@@ -67,6 +67,11 @@
 //! # fn main() {}
 //! ```
 //!
+//! A wgpu renderer need not write a [`Backend`]: `occlude::wgpu::embed`
+//! (feature `wgpu`) runs the query-driven methods inside its own render
+//! passes, on its device and depth buffer, with its draws; the repository's
+//! `examples/own-renderer` shows it.
+//!
 //! `docs/architecture.md` in the repository explains the layers; each method's
 //! module ([`methods`]) cites its paper and states its costs and limits.
 

@@ -1,0 +1,79 @@
+//! [`Culler`]: a query-driven method, its hierarchy over the renderer's
+//! instance boxes and a [`QueryBackend`], behind one call per frame.
+
+use super::{Attachments, EmbedError, FrameTarget, QueryBackend};
+use occlude_core::hierarchy::BuildOptions;
+use occlude_core::methods::{create, MethodOptions};
+use occlude_core::{render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameStats, Hierarchy, HierarchyKind, Scene};
+
+/// The methods that run embedded: those that draw and query through the
+/// [`occlude_core::Backend`] interface alone. `vfc` (frustum culling)
+/// issues no query and is the baseline the others are checked against.
+/// The GPU-driven methods (`roc`, `ioc`, `hiz`) need occlude's own scene on
+/// the GPU, `opt` an oracle pass and `moc` the meshes' triangles: none of
+/// them runs here.
+pub const QUERY_METHODS: [&str; 5] = ["vfc", "sw", "chc", "chcpp", "om"];
+
+/// A query-driven culling method running in a renderer's own passes: give
+/// it the renderer's device, attachments and per-instance boxes once, then
+/// each frame the camera, the frame's views and a callback drawing a list
+/// of instances.
+pub struct Culler {
+    backend: QueryBackend,
+    scene: Scene,
+    hierarchy: Hierarchy,
+    method: Box<dyn CullingMethod>,
+    drawn: DrawnSet,
+}
+
+impl Culler {
+    /// Culls instances whose world-space boxes are `bounds` (instance `i`
+    /// is `bounds[i]`; its draws must stay inside that box) with the method
+    /// called `method` (one of [`QUERY_METHODS`], default parameters) on
+    /// the renderer's `device` and `queue`, whose passes draw into
+    /// `attachments`. Builds a BVH over the boxes once. A method that does
+    /// not run embedded, bad boxes or attachments are an error.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        attachments: Attachments,
+        bounds: &[Aabb],
+        method: &str,
+    ) -> Result<Self, EmbedError> {
+        if !QUERY_METHODS.contains(&method) {
+            return Err(EmbedError::Unsupported(method.to_string()));
+        }
+        let method = create(method, &MethodOptions::default())?.method;
+        let scene = Scene::from_bounds("embedded", bounds)?;
+        let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
+        let backend = QueryBackend::new(device, queue, attachments, &scene)?;
+        Ok(Self { backend, scene, hierarchy, method, drawn: DrawnSet::default() })
+    }
+
+    /// Renders a frame seen by `camera` (made with [`Camera::from_matrices`]
+    /// from the renderer's own view and projection, `reverse_z` as its
+    /// depth test says) into `target`: the method decides what to draw,
+    /// `draw(pass, instances)` draws it with the renderer's pipelines (see
+    /// [`QueryBackend::frame`]). Returns what the frame drew and queried.
+    /// Views that are not what the attachments say are an error, and
+    /// nothing is drawn. A camera whose depth order differs from the
+    /// attachments', or a read-back that failed, is an error too, but that
+    /// frame's image is complete (every query counted as visible).
+    pub fn render<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, draw: F) -> Result<FrameStats, EmbedError>
+    where
+        F: FnMut(&mut wgpu::RenderPass<'_>, &[u32]),
+    {
+        let mut frame = self.backend.frame(target, draw)?;
+        let stats =
+            render_frame(self.method.as_mut(), &mut frame, &self.scene, &self.hierarchy, camera, &mut self.drawn);
+        match occlude_core::Backend::failure(&frame) {
+            Some(reason) => Err(EmbedError::Device(reason)),
+            None => Ok(stats),
+        }
+    }
+
+    /// The scene of boxes the method culls ([`Scene::from_bounds`]).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+}

@@ -1,0 +1,402 @@
+//! A small wgpu renderer of its own, off-screen: its own WGSL shader, cube
+//! vertex and index buffers and a per-instance buffer (offset, scale,
+//! colour), drawing a grid of boxes behind three walls with two gaps. With
+//! culling off it draws every box in one instanced draw; with culling on,
+//! occlude's `chcpp` (`occlude::wgpu::embed`) decides which boxes to draw
+//! and calls this renderer's draw code for them, inside its own passes on
+//! this renderer's device and attachments.
+//!
+//! The lines that integrate occlude are marked `occlude:` (counted in
+//! the README).
+
+use glam::{Mat4, Vec3};
+use occlude::wgpu::embed::{Attachments, Culler, FrameTarget};
+use occlude::{Aabb, Camera};
+use std::error::Error;
+use wgpu::util::DeviceExt;
+
+/// Colour format of the off-screen image.
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Background colour.
+const CLEAR_COLOR: wgpu::Color = wgpu::Color { r: 0.55, g: 0.7, b: 0.85, a: 1.0 };
+/// Indices of one cube: 6 faces of 2 triangles.
+const CUBE_INDICES: u32 = 36;
+/// Metres between neighbouring boxes of the grid.
+const SPACING: f32 = 2.0;
+
+/// What to render.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Image width and height in pixels.
+    pub size: u32,
+    /// The grid is `grid` x `grid` boxes.
+    pub grid: u32,
+    /// Reverse Z: depth 1 nearest, cleared to 0, test `GreaterEqual`, an
+    /// infinite far plane; otherwise depth 0 nearest, test `Less`.
+    pub reverse_z: bool,
+    /// Depth format: `Depth32Float` (whose image can be read back) or
+    /// `Depth24Plus`.
+    pub depth_format: wgpu::TextureFormat,
+}
+
+/// One instance as the vertex shader reads it (`@location(2..4)`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct InstanceData {
+    offset: [f32; 3],
+    scale: [f32; 3],
+    color: [f32; 3],
+}
+
+/// The renderer: device, pipeline, buffers and its off-screen image.
+pub struct Renderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    options: Options,
+    pipeline: wgpu::RenderPipeline,
+    uniforms: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    cube_vertices: wgpu::Buffer,
+    cube_indices: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    /// World box of each instance (what occlude culls).
+    bounds: Vec<Aabb>,
+    color: wgpu::Texture,
+    depth: wgpu::Texture,
+    /// occlude: the culling method, when culling is on.
+    culler: Option<Culler>,
+}
+
+/// A device and queue on the first adapter wgpu finds (`WGPU_BACKEND` and
+/// `WGPU_ADAPTER_NAME` narrow the choice).
+pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))?;
+    Ok(pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))?)
+}
+
+impl Renderer {
+    /// The renderer on `device`, its scene built, culling off.
+    pub fn new(device: wgpu::Device, queue: wgpu::Queue, options: Options) -> Self {
+        let data = scene(options.grid);
+        let bounds =
+            data.iter().map(|d| Aabb::new(d.offset.into(), Vec3::from(d.offset) + Vec3::from(d.scale))).collect();
+        let (vertices, indices) = cube();
+        let buffer = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        let cube_vertices = buffer("cube vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
+        let cube_indices = buffer("cube indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
+        let instances = buffer("instances", bytemuck::cast_slice(&data), wgpu::BufferUsages::VERTEX);
+        let uniforms = buffer("uniforms", &[0; 64], wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
+        let pipeline = pipeline(&device, options);
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("uniforms"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
+        });
+        let texture = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: options.size, height: options.size, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color = texture("colour", COLOR_FORMAT);
+        let depth = texture("depth", options.depth_format);
+        Self {
+            device,
+            queue,
+            options,
+            pipeline,
+            uniforms,
+            group,
+            cube_vertices,
+            cube_indices,
+            instances,
+            bounds,
+            color,
+            depth,
+            culler: None,
+        }
+    }
+
+    /// Instances in the scene (boxes and walls).
+    pub fn instance_count(&self) -> u32 {
+        self.bounds.len() as u32
+    }
+
+    /// The depth test the pipeline uses.
+    fn compare(&self) -> wgpu::CompareFunction {
+        if self.options.reverse_z {
+            wgpu::CompareFunction::GreaterEqual
+        } else {
+            wgpu::CompareFunction::Less
+        }
+    }
+
+    /// Culls with occlude's method `method` from now on (`None`: culling off).
+    pub fn set_culling(&mut self, method: Option<&str>) -> Result<(), Box<dyn Error>> {
+        // occlude: the attachments, the instance boxes and the method, once.
+        let attachments =
+            Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
+        self.culler = match method {
+            Some(method) => Some(Culler::new(&self.device, &self.queue, attachments, &self.bounds, method)?),
+            None => None,
+        };
+        // occlude: end.
+        Ok(())
+    }
+
+    /// Renders frame `t` (0 to 1 along the camera's path) and returns how
+    /// many instances it drew.
+    pub fn render(&mut self, t: f32) -> Result<u64, Box<dyn Error>> {
+        let (view, projection) = self.camera(t);
+        self.queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&(projection * view).to_cols_array()));
+        let color = self.color.create_view(&Default::default());
+        let depth = self.depth.create_view(&Default::default());
+        let Some(culler) = self.culler.as_mut() else {
+            // Culling off: one pass, every instance in one instanced draw.
+            let mut encoder = self.device.create_command_encoder(&Default::default());
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(CLEAR_COLOR), store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(if self.options.reverse_z { 0.0 } else { 1.0 }),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            let n = self.instance_count();
+            bind(&mut pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
+            pass.draw_indexed(0..CUBE_INDICES, 0, 0..n);
+            drop(pass);
+            self.queue.submit([encoder.finish()]);
+            return Ok(u64::from(n));
+        };
+        // occlude: the frame's camera and views; occlude's method draws the
+        // instances it finds visible with this renderer's draw code.
+        let camera = Camera::from_matrices(view, projection, self.options.reverse_z)?;
+        let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
+        let mut drawn = 0u64;
+        culler.render(&camera, target, |pass, instances| {
+            bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
+            for &i in instances {
+                pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
+            }
+            drawn += instances.len() as u64;
+        })?;
+        // occlude: end.
+        Ok(drawn)
+    }
+
+    /// View and projection of frame `t`: walking sideways in front of the
+    /// walls, looking down the grid.
+    fn camera(&self, t: f32) -> (Mat4, Mat4) {
+        let eye = Vec3::new(-6.0 + 12.0 * t, 1.7, 6.0);
+        let view = Mat4::look_at_rh(eye, Vec3::new(eye.x * 0.5, 1.5, -30.0), Vec3::Y);
+        let fov = 60f32.to_radians();
+        let projection = if self.options.reverse_z {
+            Mat4::perspective_infinite_reverse_rh(fov, 1.0, 0.1)
+        } else {
+            Mat4::perspective_rh(fov, 1.0, 0.1, 300.0)
+        };
+        (view, projection)
+    }
+
+    /// Waits until the GPU has finished everything submitted (to time a
+    /// frame from its start to the GPU being idle).
+    pub fn wait_idle(&self) -> Result<(), Box<dyn Error>> {
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        Ok(())
+    }
+
+    /// The last frame's colour image, RGBA8 rows from the top (blocking).
+    pub fn color_image(&self) -> Result<Vec<u8>, Box<dyn Error>> {
+        self.read(&self.color, wgpu::TextureAspect::All)
+    }
+
+    /// The last frame's depth image, rows from the top (blocking; a
+    /// `Depth24Plus` image cannot be read back and is an error).
+    pub fn depth_image(&self) -> Result<Vec<f32>, Box<dyn Error>> {
+        let bytes = self.read(&self.depth, wgpu::TextureAspect::DepthOnly)?;
+        Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
+    }
+
+    /// Writes the last frame's colour image as a PNG.
+    pub fn save_png(&self, path: &std::path::Path) -> Result<(), Box<dyn Error>> {
+        let size = self.options.size;
+        image::save_buffer(path, &self.color_image()?, size, size, image::ColorType::Rgba8)?;
+        Ok(())
+    }
+
+    /// The pixels of `texture` (4 bytes each), rows packed (blocking).
+    fn read(&self, texture: &wgpu::Texture, aspect: wgpu::TextureAspect) -> Result<Vec<u8>, Box<dyn Error>> {
+        let size = self.options.size;
+        let row = size * 4;
+        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size: u64::from(padded * size),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(size),
+                },
+            },
+            wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+        );
+        self.queue.submit([encoder.finish()]);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        receiver.recv()??;
+        let bytes = buffer.slice(..).get_mapped_range()?.to_vec();
+        Ok(bytes.chunks_exact(padded as usize).flat_map(|r| &r[..row as usize]).copied().collect())
+    }
+}
+
+/// Binds what drawing instances needs: pipeline, uniforms, the cube's
+/// vertices and indices, the instance buffer.
+fn bind(
+    pass: &mut wgpu::RenderPass<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    group: &wgpu::BindGroup,
+    vertices: &wgpu::Buffer,
+    instances: &wgpu::Buffer,
+    indices: &wgpu::Buffer,
+) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    pass.set_vertex_buffer(0, vertices.slice(..));
+    pass.set_vertex_buffer(1, instances.slice(..));
+    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint16);
+}
+
+/// The render pipeline: cube vertices (position, normal) and instances
+/// (offset, scale, colour), back faces culled, depth written and tested
+/// with `Less`, or `GreaterEqual` for reverse Z.
+fn pipeline(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("own renderer"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+    });
+    let compare = if options.reverse_z { wgpu::CompareFunction::GreaterEqual } else { wgpu::CompareFunction::Less };
+    let buffers = [
+        Some(wgpu::VertexBufferLayout {
+            array_stride: 24,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+        }),
+        Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<InstanceData>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &wgpu::vertex_attr_array![2 => Float32x3, 3 => Float32x3, 4 => Float32x3],
+        }),
+    ];
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("own renderer"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &buffers,
+        },
+        primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: options.depth_format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(COLOR_FORMAT.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// A unit cube, `[0, 1]^3`: 4 vertices per face (position, normal), two
+/// counter-clockwise triangles per face seen from outside.
+fn cube() -> (Vec<[f32; 6]>, Vec<u16>) {
+    // Each face: its normal and two edge directions whose cross product is
+    // the normal, from the face's first corner.
+    let faces: [[[f32; 3]; 4]; 6] = [
+        [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        [[-1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
+        [[0.0, -1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        [[0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
+    ];
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for [normal, origin, u, v] in faces {
+        let (o, u, v) = (Vec3::from(origin), Vec3::from(u), Vec3::from(v));
+        let base = vertices.len() as u16;
+        for corner in [o, o + u, o + u + v, o + v] {
+            let [x, y, z] = corner.to_array();
+            vertices.push([x, y, z, normal[0], normal[1], normal[2]]);
+        }
+        indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    (vertices, indices)
+}
+
+/// The instances: a `grid` x `grid` grid of boxes of varied sizes and
+/// colours behind three walls (two gaps between them), walls last.
+fn scene(grid: u32) -> Vec<InstanceData> {
+    let mut out = Vec::new();
+    let half = grid as f32 * SPACING / 2.0;
+    for gz in 0..grid {
+        for gx in 0..grid {
+            // A small integer hash gives each box its own size and colour.
+            let h = (gx.wrapping_mul(73_856_093) ^ gz.wrapping_mul(19_349_663)).wrapping_mul(2_654_435_761);
+            let unit = |shift: u32| ((h >> shift) & 0xff) as f32 / 255.0;
+            let width = 0.6 + 0.8 * unit(0);
+            let height = 0.5 + 2.5 * unit(8);
+            let x = gx as f32 * SPACING - half;
+            let z = -20.0 - gz as f32 * SPACING;
+            out.push(InstanceData {
+                offset: [x, 0.0, z],
+                scale: [width, height, width],
+                color: [0.3 + 0.7 * unit(16), 0.3 + 0.7 * unit(24), 0.3 + 0.5 * unit(4)],
+            });
+        }
+    }
+    let wall =
+        |x0: f32, x1: f32| InstanceData { offset: [x0, 0.0, -12.0], scale: [x1 - x0, 5.0, 0.5], color: [0.6; 3] };
+    let reach = half + 40.0;
+    out.extend([wall(-reach, -9.0), wall(-5.0, 5.0), wall(9.0, reach)]);
+    out
+}

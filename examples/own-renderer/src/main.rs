@@ -1,0 +1,67 @@
+//! Runs the example renderer off-screen: a walk past the walls, culling off
+//! or with occlude methods (several in one run, one after the other),
+//! printing what each frame drew and how long it took until the GPU was
+//! idle, and writes the last frame as a PNG.
+//!
+//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc]
+//! [--frames N] [--grid N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
+
+use own_renderer::{open_device, Options, Renderer};
+use std::error::Error;
+use std::path::PathBuf;
+use std::time::Instant;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("own-renderer: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), Box<dyn Error>> {
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let mut options = Options { size: 512, grid: 60, reverse_z: false, depth_format };
+    let (mut culling, mut frames, mut out) = (String::from("chcpp"), 8u32, PathBuf::from("own-renderer.png"));
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        let mut value = || args.next().ok_or_else(|| format!("{arg} needs a value"));
+        match arg.as_str() {
+            "--culling" => culling = value()?,
+            "--frames" => frames = value()?.parse()?,
+            "--grid" => options.grid = value()?.parse()?,
+            "--size" => options.size = value()?.parse()?,
+            "--out" => out = value()?.into(),
+            "--reverse-z" => options.reverse_z = true,
+            "--depth24" => options.depth_format = wgpu::TextureFormat::Depth24Plus,
+            _ => return Err(format!("unknown argument '{arg}' (see the README)").into()),
+        }
+    }
+    if frames == 0 || options.size == 0 || options.grid == 0 {
+        return Err("--frames, --size and --grid must be at least 1".into());
+    }
+    let (device, queue) = open_device()?;
+    let mut renderer = Renderer::new(device, queue, options);
+    for mode in culling.split(',') {
+        renderer.set_culling((mode != "off").then_some(mode))?;
+        let (mut total_ms, mut total_drawn) = (0.0, 0);
+        for frame in 0..frames {
+            let t = if frames > 1 { frame as f32 / (frames - 1) as f32 } else { 0.0 };
+            let start = Instant::now();
+            let drawn = renderer.render(t)?;
+            renderer.wait_idle()?;
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            total_ms += ms;
+            total_drawn += drawn;
+            let n = renderer.instance_count();
+            println!("frame {frame}: culling {mode}, drew {drawn} of {n} instances in {ms:.2} ms");
+        }
+        let drawn = total_drawn as f64 / f64::from(frames);
+        println!(
+            "culling {mode}: {drawn:.0} instances drawn and {:.2} ms per frame on average",
+            total_ms / f64::from(frames)
+        );
+    }
+    renderer.save_png(&out)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}

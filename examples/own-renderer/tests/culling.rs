@@ -1,0 +1,144 @@
+//! The example renderer with occlude's culling on draws fewer instances
+//! than with culling off, and its images are the same, bit for bit (colour
+//! and depth), on every frame of a moving camera, with forward and with
+//! reverse Z (with `Depth24Plus`, whose depth cannot be read back, the
+//! colour); and the embedding refuses what it cannot cull. Runs on any
+//! adapter (lavapipe in CI, with `OCCLUDE_REQUIRE_GPU=1`); skipped with a
+//! message where there is none, unless `OCCLUDE_REQUIRE_GPU=1`.
+
+use occlude::glam::{Mat4, Vec3};
+use occlude::wgpu::embed::{Attachments, Culler, EmbedError, FrameTarget, QUERY_METHODS};
+use occlude::{Aabb, Camera};
+use own_renderer::{open_device, Options, Renderer};
+
+/// Frames along the camera's walk.
+const FRAMES: u32 = 5;
+
+/// A device for test `test`, or `None` (after saying why) when there is no
+/// adapter and the environment does not require one.
+fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
+    match open_device() {
+        Ok(pair) => Some(pair),
+        Err(e) if std::env::var("OCCLUDE_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("{test}: OCCLUDE_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping {test}: no GPU adapter ({e})");
+            None
+        }
+    }
+}
+
+/// Renders the walk with culling off and with each query-driven method,
+/// comparing every frame's images (the depth image where it can be read
+/// back), and checks that `chcpp` draws fewer instances than culling off on
+/// every frame.
+fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::TextureFormat) {
+    let Some((device, queue)) = device(test) else { return };
+    let options = Options { size: 256, grid: 24, reverse_z, depth_format };
+    let read_depth = depth_format == wgpu::TextureFormat::Depth32Float;
+    let depth_image = |r: &Renderer| if read_depth { r.depth_image().unwrap() } else { Vec::new() };
+    let mut off = Renderer::new(device.clone(), queue.clone(), options);
+    let mut reference = Vec::new();
+    for frame in 0..FRAMES {
+        let t = frame as f32 / (FRAMES - 1) as f32;
+        let drawn = off.render(t).unwrap();
+        assert_eq!(drawn, u64::from(off.instance_count()));
+        let color = off.color_image().unwrap();
+        // The images compared show something: walls and, through the gaps,
+        // boxes, over the background (the top-left pixel).
+        let background = &color[..4];
+        let drawn_pixels = color.chunks(4).filter(|p| p != &background).count();
+        assert!(drawn_pixels > color.len() / 40, "frame {frame}: the image is nearly empty ({drawn_pixels} pixels)");
+        reference.push((color, depth_image(&off)));
+    }
+    for method in QUERY_METHODS {
+        let mut on = Renderer::new(device.clone(), queue.clone(), options);
+        on.set_culling(Some(method)).unwrap();
+        for (frame, (color, depth)) in reference.iter().enumerate() {
+            let t = frame as f32 / (FRAMES - 1) as f32;
+            let drawn = on.render(t).unwrap();
+            let got_color = on.color_image().unwrap();
+            let got_depth = depth_image(&on);
+            let differing_colors = got_color.chunks(4).zip(color.chunks(4)).filter(|(a, b)| a != b).count();
+            assert_eq!(differing_colors, 0, "{method}, frame {frame}: colour pixels differ from culling off");
+            assert_eq!(occlude::differing_pixels(&got_depth, depth), 0, "{method}, frame {frame}: depth differs");
+            if method == "chcpp" {
+                assert!(
+                    drawn < u64::from(on.instance_count()),
+                    "chcpp, frame {frame}: drew {drawn} of {} instances",
+                    on.instance_count()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn culling_keeps_the_image_and_draws_fewer_instances() {
+    let test = "culling_keeps_the_image_and_draws_fewer_instances";
+    culling_keeps_the_image(test, false, wgpu::TextureFormat::Depth32Float);
+}
+
+#[test]
+fn culling_keeps_the_image_with_reverse_z() {
+    culling_keeps_the_image("culling_keeps_the_image_with_reverse_z", true, wgpu::TextureFormat::Depth32Float);
+}
+
+#[test]
+fn culling_keeps_the_image_with_depth24plus() {
+    culling_keeps_the_image("culling_keeps_the_image_with_depth24plus", false, wgpu::TextureFormat::Depth24Plus);
+    culling_keeps_the_image("culling_keeps_the_image_with_depth24plus", true, wgpu::TextureFormat::Depth24Plus);
+}
+
+#[test]
+fn the_embedding_refuses_what_it_cannot_cull() {
+    let Some((device, queue)) = device("the_embedding_refuses_what_it_cannot_cull") else { return };
+    let depth_format = wgpu::TextureFormat::Depth32Float;
+    let attachments = Attachments { color: None, depth: depth_format, compare: wgpu::CompareFunction::Less };
+    let bounds = [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))];
+    let new = |attachments, bounds: &[Aabb], method| Culler::new(&device, &queue, attachments, bounds, method).err();
+    assert!(matches!(new(attachments, &bounds, "opt"), Some(EmbedError::Unsupported(_))));
+    assert!(matches!(new(attachments, &bounds, "roc"), Some(EmbedError::Unsupported(_))));
+    assert!(matches!(new(attachments, &[], "chcpp"), Some(EmbedError::Scene(_))));
+    let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
+    assert!(matches!(new(always, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
+    let colour_as_depth = Attachments { depth: wgpu::TextureFormat::Rgba8Unorm, ..attachments };
+    assert!(matches!(new(colour_as_depth, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
+
+    let mut culler = Culler::new(&device, &queue, attachments, &bounds, "chcpp").unwrap();
+    let view = |format, size| {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        texture.create_view(&Default::default())
+    };
+    let depth = view(depth_format, 8);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+
+    // Views other than the attachments say: an error, nothing drawn.
+    let mut drawn = Vec::new();
+    let other_depth = view(wgpu::TextureFormat::Depth24Plus, 8);
+    let color = view(wgpu::TextureFormat::Rgba8Unorm, 8);
+    for wrong in [FrameTarget { depth: &other_depth, ..target }, FrameTarget { color: Some(&color), ..target }] {
+        let result = culler.render(&forward, wrong, |_, instances| drawn.extend_from_slice(instances));
+        assert!(matches!(result, Err(EmbedError::Attachments(_))), "{result:?}");
+    }
+    assert!(drawn.is_empty());
+
+    // A reverse-Z camera over a forward depth test is an error, and the
+    // frame still draws what is in view.
+    let reverse = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_infinite_reverse_rh(1.0, 1.0, 0.1), true);
+    let mut drawn = Vec::new();
+    let result = culler.render(&reverse.unwrap(), target, |_, instances| drawn.extend_from_slice(instances));
+    assert!(matches!(result, Err(EmbedError::Device(_))), "{result:?}");
+    assert_eq!(drawn, [0]);
+}
