@@ -53,7 +53,7 @@ fn a_frame_past_the_recorded_limit_matches_one_drawn_instance_by_instance() {
     let scene = stack();
     assert!(scene.triangle_count() > 1 << 20, "{} triangles", scene.triangle_count());
     let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
-    let mut frame = |one_by_one: bool| -> (Vec<f32>, FrameStats) {
+    let frame = |one_by_one: bool| -> (Vec<f32>, FrameStats) {
         let mut backend = SoftBackend::new(&scene, 64, 48, GpuModel::modern());
         let mut image = Vec::new();
         backend.begin_frame(&camera());

@@ -21,7 +21,7 @@
 //! draw and the clearing of its counts); every result of the batch readable
 //! `readback_us` after the batch's last box.
 //!
-//! Draws are recorded until [`FLUSH_TRIANGLES`] triangles wait (outside a
+//! Draws are recorded until `FLUSH_TRIANGLES` (2^20) triangles wait (outside a
 //! `Hib` batch) and then rasterized, so that a frame drawing tens of millions
 //! of triangles (view-frustum culling of the million-instance `swarm`) holds
 //! a bounded number of them: commands run in order either way, so images,
