@@ -4,7 +4,7 @@
 //! instance at a time, so splitting the recorded work changes nothing.
 
 use glam::{Mat4, Vec3};
-use occlude_core::{Backend, Camera, CameraPath, FrameStats, Instruments, Mesh, Scene};
+use occlude_core::{Backend, Camera, CameraPath, FrameStats, Instruments, Keyframe, Mesh, Scene};
 use occlude_soft::{GpuModel, SoftBackend};
 
 /// A square sheet of `n` x `n` cells, two triangles each, facing +z.
@@ -36,16 +36,8 @@ fn stack() -> Scene {
 }
 
 fn camera() -> Camera {
-    Camera {
-        position: Vec3::ZERO,
-        target: -Vec3::Z,
-        up: Vec3::Y,
-        fov_y_deg: 60.0,
-        aspect: 4.0 / 3.0,
-        near: 0.1,
-        far: 100.0,
-        matrices: None,
-    }
+    let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
+    key.camera(4.0 / 3.0, 0.1, 100.0)
 }
 
 #[test]
