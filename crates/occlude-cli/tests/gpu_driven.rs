@@ -167,6 +167,13 @@ fn a_gpu_driven_frame_reads_nothing_back_and_counts_its_passes() {
     let reductions = level_sizes(480, 360).len() as u64 - 1;
     assert!(hiz.iter().all(|f| f.indirect_draws == 2 && f.dispatches == 7 + reductions), "{:?}", hiz[1]);
     assert!(hiz.iter().map(|f| f.query_boxes).sum::<u64>() > 0, "hiz tested no box against its pyramid");
+    // hiz's GPU time splits into early, pyramid and late passes; the others
+    // build no pyramid.
+    for f in hiz {
+        assert!(f.pyramid_ms > 0.0 && f.late_ms > 0.0 && f.pyramid_ms < f.cull_ms, "{f:?}");
+        assert!(f.pyramid_ms + f.late_ms < f.gpu_ms, "the early pass takes time too: {f:?}");
+    }
+    assert!(vfc.iter().chain(roc).chain(ioc).all(|f| f.pyramid_ms == 0.0 && f.late_ms == 0.0));
 }
 
 #[test]
