@@ -61,7 +61,7 @@ enum Command {
 /// share.
 #[derive(clap::Args)]
 struct SceneArgs {
-    /// Scene: teapots, city, plant, figures, rooms or downtown, or a model file (.gltf, .glb, .obj;
+    /// Scene: teapots, city, plant, figures, rooms, downtown or swarm, or a model file (.gltf, .glb, .obj;
     /// y-up, metres).
     #[arg(long, default_value = "city")]
     scene: String,

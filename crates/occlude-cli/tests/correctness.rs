@@ -12,7 +12,7 @@ use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene};
 use occlude_scenes::import::{import, ModelFormat};
-use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, SCENE_NAMES};
+use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, PAPER_SCENES};
 use occlude_soft::SoftBackend;
 use std::collections::HashSet;
 
@@ -37,7 +37,7 @@ fn small(scene: &str) -> Scene {
 
 #[test]
 fn conservative_methods_match_vfc_on_every_frame() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             // `ideal` (the CHC paper's ideal) is no method of its own: the
@@ -75,7 +75,7 @@ fn conservative_methods_match_vfc_on_every_frame() {
 
 #[test]
 fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             let cfg = BenchConfig { frames: 30, ..config(name, hierarchy) };
@@ -140,7 +140,7 @@ fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude_cli::bench::BenchRun {
 
 #[test]
 fn chc_options_save_queries_and_keep_the_image_exact() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             let with = |opts: &[&str]| BenchConfig {
@@ -173,7 +173,7 @@ fn chcpp_is_exact_with_every_component_on_and_off() {
         &["chcpp.b=1", "chcpp.nav=0"],
         &["chcpp.vleaf=2000", "chcpp.dmax=5", "chcpp.smax=2"],
     ];
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for opts in variants {
@@ -197,7 +197,7 @@ fn chcpp_is_exact_with_every_component_on_and_off() {
 fn moc_is_exact_with_every_occluder_choice() {
     let variants: [&[&str]; 3] =
         [&["moc.occluders=last"], &["moc.occluders=largest", "moc.count=8"], &["moc.merge=quick"]];
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for opts in variants {
@@ -392,7 +392,7 @@ fn conservative_methods_match_vfc_with_cameras_from_matrices() {
 #[test]
 fn query_methods_with_hib_counts_match_vfc_and_hardware_queries() {
     use occlude_core::QueryMode;
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         let nvp = Variant { method: "chc".into(), options: MethodOptions::parse(&["chc.nvp=25"]).unwrap() };
         let run = |queries| {

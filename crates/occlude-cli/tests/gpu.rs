@@ -11,7 +11,7 @@ use occlude_cli::bench::runner::{cameras, run_scene};
 use occlude_cli::bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, HierarchyKind, Instruments, Scene};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::{generate, Size, PAPER_SCENES};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use std::sync::Arc;
@@ -38,7 +38,7 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
     if GpuContext::for_test("every_method_matches_vfc_on_the_gpu_on_every_frame").is_none() {
         return;
     }
-    let runs = SCENE_NAMES.iter().map(|&name| (name, HierarchyKind::Bvh)).chain([("city", HierarchyKind::KdTree)]);
+    let runs = PAPER_SCENES.iter().map(|&name| (name, HierarchyKind::Bvh)).chain([("city", HierarchyKind::KdTree)]);
     for (name, hierarchy) in runs {
         let scene = small(name);
         let run = run_scene(&scene, &config(name, hierarchy, 90), &ProgressBar::hidden()).unwrap();
@@ -64,6 +64,28 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
             );
         }
     }
+}
+
+/// `hiz` on the million-instance scene at its small size (4,000 objects),
+/// frames spread over its whole walkthrough: the correctness rule and
+/// culling on the GPU.
+#[test]
+fn hiz_matches_vfc_on_the_gpu_on_every_frame_of_the_swarm() {
+    if GpuContext::for_test("hiz_matches_vfc_on_the_gpu_on_every_frame_of_the_swarm").is_none() {
+        return;
+    }
+    let scene = small("swarm");
+    let cfg =
+        BenchConfig { methods: vec!["vfc".into(), "hiz".into()], fps: None, ..config("swarm", HierarchyKind::Bvh, 60) };
+    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    assert_eq!(run.aborted, None);
+    let hiz = &run.methods[1];
+    assert_eq!(hiz.frames.len(), 60, "frames lost");
+    for (f, stats) in hiz.frames.iter().enumerate() {
+        assert_eq!(stats.missing_pixels, 0, "swarm/hiz: frame {f} differs from vfc");
+    }
+    let drawn = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+    assert!(drawn(1) * 2 < drawn(0), "swarm: hiz drew {} triangles, vfc {}", drawn(1), drawn(0));
 }
 
 /// Cameras from matrices (reverse-Z infinite, forward infinite,
@@ -128,7 +150,7 @@ fn soft_and_gpu_see_the_same_objects() {
     const ROUNDING_PIXELS: u64 = 8;
     let Some(ctx) = GpuContext::for_test("soft_and_gpu_see_the_same_objects") else { return };
     let mut worst = (0u64, String::new());
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         let cfg = config(name, HierarchyKind::Bvh, 12);
         let (w, h) = cfg.resolution;
@@ -258,7 +280,7 @@ fn query_methods_with_hib_counts_match_vfc_on_the_gpu() {
     if GpuContext::for_test("query_methods_with_hib_counts_match_vfc_on_the_gpu").is_none() {
         return;
     }
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         let cfg = BenchConfig {
             methods: ["vfc", "sw", "chc", "chcpp", "om"].map(String::from).to_vec(),

@@ -1,6 +1,7 @@
 //! The GPU-driven methods (`roc`, `ioc`, `hiz`) on the soft backend's
 //! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
-//! every `small` scene with both hierarchies, `hiz` at the resolutions
+//! every `small` scene of the papers with both hierarchies, `hiz` on
+//! the million-instance `swarm` at its small size, `hiz` at the resolutions
 //! where pyramids go wrong (odd sizes, 1x1), `ioc` over several depth
 //! ranges, with its start chosen per frame, and with and without its
 //! frustum test, `roc.mode=last` reporting the pixels it misses, the frame
@@ -13,7 +14,7 @@ use occlude_cli::bench::BenchConfig;
 use occlude_core::depth_pyramid::level_sizes;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::{generate, Size, PAPER_SCENES};
 
 fn config(scene: &str, hierarchy: HierarchyKind, methods: &[&str], options: &[&str]) -> BenchConfig {
     BenchConfig {
@@ -45,7 +46,7 @@ fn assert_exact(run: &BenchRun, what: &str) {
 
 #[test]
 fn roc_ioc_and_hiz_match_vfc_on_every_frame_and_cull() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             let r = run(&scene, &config(name, hierarchy, &["vfc", "roc", "ioc", "hiz"], &[]));
@@ -80,9 +81,25 @@ fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
     }
 }
 
+/// The million-instance scene at its small size (4,000 objects), frames
+/// spread over its whole walkthrough (the overview, the streets, the climb
+/// out), with both hierarchies.
+#[test]
+fn hiz_matches_vfc_on_every_frame_of_the_swarm() {
+    let scene = small("swarm");
+    for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        let cfg = BenchConfig { frames: 60, fps: None, ..config("swarm", hierarchy, &["vfc", "hiz"], &[]) };
+        let r = run(&scene, &cfg);
+        assert_eq!(r.methods[1].frames.len(), 60);
+        assert_exact(&r, &format!("swarm/{hierarchy}"));
+        let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+        assert!(drawn(1) * 2 < drawn(0), "swarm/{hierarchy}: hiz drew {} triangles, vfc {}", drawn(1), drawn(0));
+    }
+}
+
 #[test]
 fn ioc_is_exact_over_every_depth_range() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for (start, bottom) in [("0", "deepest"), ("0", "0"), ("2", "3"), ("deepest", "deepest"), ("6", "deepest-1")] {
             let options = [format!("ioc.start={start}"), format!("ioc.bottom={bottom}")];
@@ -150,6 +167,13 @@ fn a_gpu_driven_frame_reads_nothing_back_and_counts_its_passes() {
     let reductions = level_sizes(480, 360).len() as u64 - 1;
     assert!(hiz.iter().all(|f| f.indirect_draws == 2 && f.dispatches == 7 + reductions), "{:?}", hiz[1]);
     assert!(hiz.iter().map(|f| f.query_boxes).sum::<u64>() > 0, "hiz tested no box against its pyramid");
+    // hiz's GPU time splits into early, pyramid and late passes; the others
+    // build no pyramid.
+    for f in hiz {
+        assert!(f.pyramid_ms > 0.0 && f.late_ms > 0.0 && f.pyramid_ms < f.cull_ms, "{f:?}");
+        assert!(f.pyramid_ms + f.late_ms < f.gpu_ms, "the early pass takes time too: {f:?}");
+    }
+    assert!(vfc.iter().chain(roc).chain(ioc).all(|f| f.pyramid_ms == 0.0 && f.late_ms == 0.0));
 }
 
 #[test]

@@ -10,7 +10,7 @@ use occlude_cli::bench::config::BackendKind;
 use occlude_cli::bench::runner::cameras;
 use occlude_cli::bench::BenchConfig;
 use occlude_core::{Backend, Camera, Instruments, ItemCounts, ItemLayout, OracleView, Scene};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::{generate, Size, PAPER_SCENES};
 use occlude_soft::raster::Fragments;
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -87,7 +87,7 @@ fn check_totals(what: &str, layout: &ItemLayout, counts: &ItemCounts, oracle: &O
 
 #[test]
 fn soft_item_buffer_counts_every_instance_and_tile_exactly() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = generate(name, Size::Small, 1).unwrap();
         let cfg = config(name, BackendKind::Soft);
         let (w, h) = cfg.resolution;
@@ -113,7 +113,7 @@ fn soft_item_buffer_counts_every_instance_and_tile_exactly() {
 #[test]
 fn gpu_item_buffer_counts_every_instance_and_tile_exactly() {
     let Some(ctx) = GpuContext::for_test("gpu_item_buffer_counts_every_instance_and_tile_exactly") else { return };
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = generate(name, Size::Small, 1).unwrap();
         let cfg = config(name, BackendKind::Wgpu);
         let (w, h) = cfg.resolution;

@@ -7,7 +7,7 @@ use occlude_cli::bench::runner::run_scene;
 use occlude_cli::bench::{BenchConfig, BenchRun};
 use occlude_core::methods::{MethodOptions, NodeClass};
 use occlude_core::{FrameStats, HierarchyKind, Scene};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::{generate, Size, PAPER_SCENES};
 
 /// The whole walkthrough of each small scene at the resolution the
 /// correctness suite uses, running `methods` with `options`.
@@ -42,7 +42,7 @@ fn total(frames: &[FrameStats], field: fn(&FrameStats) -> u64) -> u64 {
 /// actually culling (so the check is not met by drawing everything).
 #[test]
 fn om_matches_vfc_on_every_frame_of_every_small_scene() {
-    for name in SCENE_NAMES {
+    for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for options in [&[][..], &["om.grouping=off"]] {

@@ -48,6 +48,17 @@ pub struct FrameStats {
     /// GPU time of drawing the scene's instances (as `cull_ms`).
     #[serde(default)]
     pub render_ms: f64,
+    /// GPU time of building depth pyramids (part of `gpu_ms` and
+    /// `cull_ms`; as `cull_ms`, simulated or from timestamps). With
+    /// `late_ms` it splits a two-phase frame (`hiz`) into its passes: early
+    /// (`gpu_ms - pyramid_ms - late_ms`), pyramid and late.
+    #[serde(default)]
+    pub pyramid_ms: f64,
+    /// GPU time of everything after the frame's first depth-pyramid build:
+    /// `hiz`'s late pass (box tests against the pyramid, compaction, the
+    /// draw of the newly visible); 0 in a frame that builds no pyramid.
+    #[serde(default)]
+    pub late_ms: f64,
     /// Compute dispatches.
     #[serde(default)]
     pub dispatches: u64,

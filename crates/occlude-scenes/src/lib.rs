@@ -7,7 +7,8 @@
 //! The scenes stand in for those of the occlusion-culling papers (CHC 2004,
 //! CHC++ 2008, IOC): a long field of Utah teapots, a city of streets and
 //! buildings, a dense industrial plant, a volume of scattered figures, and
-//! the IOC poster's furnished rooms and wide downtown.
+//! the IOC poster's furnished rooms and wide downtown, and a swarm of a
+//! million small objects between large blocks (GPU-driven culling's scale).
 //! Objects are instances of shared meshes (one draw call each), so even the
 //! `paper` sizes with millions of triangles stay small in memory.
 //!
@@ -28,6 +29,7 @@ mod rooms;
 pub mod scattered;
 pub use occlude_core::rng;
 pub mod shapes;
+mod swarm;
 mod teapots;
 mod walk;
 
@@ -47,7 +49,8 @@ pub enum Size {
     /// About 1-3 million triangles: a realistic load for a GPU.
     Medium,
     /// Near the sizes of the papers' scenes (millions of triangles, tens of
-    /// thousands of instances), kept in memory by instancing.
+    /// thousands of instances; `swarm`: a million instances), kept in memory
+    /// by instancing.
     Paper,
 }
 
@@ -88,14 +91,20 @@ impl FromStr for Size {
     }
 }
 
-/// The scenes [`generate`] knows, by name.
-pub const SCENE_NAMES: [&str; 6] = ["teapots", "city", "plant", "figures", "rooms", "downtown"];
+/// The scenes [`generate`] knows, by name: [`PAPER_SCENES`], then `swarm`.
+pub const SCENE_NAMES: [&str; 7] = ["teapots", "city", "plant", "figures", "rooms", "downtown", "swarm"];
+
+/// The scenes standing in for the papers' (every one but `swarm`): the
+/// tests that run every method on every scene iterate these. `swarm`, the
+/// million-instance scene, has a small size of thousands of objects on
+/// which every query method is slow; its tests are its own.
+pub const PAPER_SCENES: [&str; 6] = ["teapots", "city", "plant", "figures", "rooms", "downtown"];
 
 /// Why a scene could not be generated.
 #[derive(Debug, Error)]
 pub enum GenerateError {
     /// The name is not one of [`SCENE_NAMES`].
-    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures, rooms, downtown")]
+    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures, rooms, downtown, swarm")]
     UnknownScene(String),
     /// The size is not one of `small`, `medium`, `paper`.
     #[error("unknown scene size '{0}'; the sizes are: small, medium, paper")]
@@ -116,6 +125,7 @@ pub fn generate(name: &str, size: Size, seed: u64) -> Result<Scene, GenerateErro
         "figures" => figures::generate(size, seed),
         "rooms" => rooms::generate(size, seed),
         "downtown" => city::downtown(size, seed),
+        "swarm" => swarm::generate(size, seed),
         _ => return Err(GenerateError::UnknownScene(name.to_string())),
     };
     scene.validate()?;

@@ -89,6 +89,12 @@ fn walkthroughs_look_at_the_scene() {
 }
 
 #[test]
+fn the_paper_scenes_are_every_scene_but_swarm() {
+    assert_eq!(SCENE_NAMES[..PAPER_SCENES.len()], PAPER_SCENES);
+    assert_eq!(SCENE_NAMES[PAPER_SCENES.len()..], ["swarm"]);
+}
+
+#[test]
 fn sizes_parse_and_print() {
     for size in Size::ALL {
         assert_eq!(size.to_string().parse::<Size>().unwrap(), size);

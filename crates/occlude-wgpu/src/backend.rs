@@ -637,6 +637,8 @@ impl Backend for WgpuBackend<'_> {
         s.gpu_ms = times.total;
         s.cull_ms = times.cull;
         s.render_ms = times.render;
+        s.pyramid_ms = times.pyramid;
+        s.late_ms = times.late;
         s.wall_ms = s.frame_ms;
         self.camera = None;
         s

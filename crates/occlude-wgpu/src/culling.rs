@@ -26,7 +26,7 @@
 use crate::backend::frame_group;
 use crate::context::GpuContext;
 use crate::pipelines::{self, compute_pipeline, CullingPipelines};
-use crate::queries::PassTimer;
+use crate::queries::{PassKind, PassTimer};
 use crate::query_boxes::{BOX_BYTES, BOX_INDEX_COUNT};
 use crate::readback::{take_bytes, Mapping};
 use crate::scene_buffers::{material_color, GpuScene};
@@ -477,7 +477,7 @@ impl Culling {
             .collect();
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("depth pyramid"),
-            timestamp_writes: timer.and_then(PassTimer::compute_pass),
+            timestamp_writes: timer.and_then(|t| t.compute_pass_doing(PassKind::Pyramid)),
         });
         pass.set_pipeline(&scene.pyramid_level);
         for (group, &texels) in groups.iter().zip(&counts[1..]) {

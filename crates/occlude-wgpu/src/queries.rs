@@ -94,6 +94,9 @@ pub(crate) enum PassKind {
     Cull,
     /// Draws of the scene's instances only (`render_ms`).
     Render,
+    /// A depth-pyramid build: culling work (`cull_ms`), and `pyramid_ms`;
+    /// the passes after the frame's first are `late_ms`.
+    Pyramid,
     /// Both, or neither (a pass that only clears): counted in `gpu_ms` only.
     Other,
 }
@@ -105,6 +108,10 @@ pub(crate) struct GpuTimes {
     pub total: f64,
     pub cull: f64,
     pub render: f64,
+    /// Pyramid builds.
+    pub pyramid: f64,
+    /// The passes after the first pyramid build.
+    pub late: f64,
 }
 
 /// Timestamps at the start and end of each pass of a frame; their
@@ -152,7 +159,13 @@ impl PassTimer {
 
     /// Timestamp writes for the next compute pass (culling work).
     pub fn compute_pass(&mut self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.next_slots(PassKind::Cull).map(|k| wgpu::ComputePassTimestampWrites {
+        self.compute_pass_doing(PassKind::Cull)
+    }
+
+    /// Timestamp writes for the next compute pass, doing `kind` (culling
+    /// work, or a pyramid build).
+    pub fn compute_pass_doing(&mut self, kind: PassKind) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.next_slots(kind).map(|k| wgpu::ComputePassTimestampWrites {
             query_set: &self.set,
             beginning_of_pass_write_index: Some(k),
             end_of_pass_write_index: Some(k + 1),
@@ -171,16 +184,51 @@ impl PassTimer {
         ctx.queue.submit([encoder.finish()]);
         Mapping::start(&self.readback.staging, bytes).wait(ctx)?;
         let stamps = read_values(&self.readback, bytes)?;
-        let mut times = GpuTimes::default();
-        for (pair, kind) in stamps.chunks_exact(2).zip(kinds) {
-            let ms = pair[1].saturating_sub(pair[0]) as f64 * self.period_ns * 1e-6;
-            times.total += ms;
-            match kind {
-                PassKind::Cull => times.cull += ms,
-                PassKind::Render => times.render += ms,
-                PassKind::Other => {}
-            }
+        Ok(split_times(&stamps, &kinds, self.period_ns))
+    }
+}
+
+/// The GPU times of passes timed by `stamps` (start and end, in ticks of
+/// `period_ns`) doing `kinds`, in order.
+fn split_times(stamps: &[u64], kinds: &[PassKind], period_ns: f64) -> GpuTimes {
+    let mut times = GpuTimes::default();
+    let mut after_pyramid = false;
+    for (pair, &kind) in stamps.chunks_exact(2).zip(kinds) {
+        let ms = pair[1].saturating_sub(pair[0]) as f64 * period_ns * 1e-6;
+        times.total += ms;
+        if after_pyramid {
+            times.late += ms;
         }
-        Ok(times)
+        match kind {
+            PassKind::Cull => times.cull += ms,
+            PassKind::Render => times.render += ms,
+            PassKind::Pyramid => {
+                times.cull += ms;
+                if !after_pyramid {
+                    times.pyramid += ms;
+                }
+                after_pyramid = true;
+            }
+            PassKind::Other => {}
+        }
+    }
+    times
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_splits_at_its_first_pyramid_build() {
+        use PassKind::*;
+        // Early draw 2, a cull 1, the pyramid 3, the late test 4 and draw 5,
+        // a second pyramid 6 (late, not pyramid); ticks of 1 ms.
+        let stamps = [0, 2, 2, 3, 3, 6, 6, 10, 10, 15, 15, 21].map(|t| t * 1_000_000);
+        let t = split_times(&stamps, &[Render, Cull, Pyramid, Cull, Render, Pyramid], 1.0);
+        assert_eq!((t.total, t.cull, t.render), (21.0, 14.0, 7.0));
+        assert_eq!((t.pyramid, t.late), (3.0, 15.0));
+        let none = split_times(&stamps[..4], &[Render, Cull], 1.0);
+        assert_eq!((none.pyramid, none.late), (0.0, 0.0));
     }
 }

@@ -5,6 +5,7 @@ use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
 use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL};
 use super::summary::{BenchReport, SceneStats};
+use crate::progress::stage;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
@@ -175,11 +176,11 @@ pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
 /// [`occlude_scenes::LoadError`] inside the returned error, so that the
 /// command line can tell it from a failure of the run), replaces its
 /// walkthrough with the configured camera path if any, builds the hierarchy
-/// and runs every method over the walkthrough; `progress` advances once per
-/// frame.
+/// and runs every method over the walkthrough; `progress` names the loading
+/// and building stages and then advances once per frame.
 pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     config.validate()?;
-    let scene = load_scene(config)?;
+    let scene = stage(progress, &format!("loading {}", config.scene), || load_scene(config))?;
     run_scene(&scene, config, progress)
 }
 
@@ -232,11 +233,13 @@ fn run_scene_here(
 ) -> Result<BenchRun> {
     config.validate()?;
     let variant_methods = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>()?;
-    let hierarchy = Hierarchy::build(scene, config.hierarchy, config.build);
+    let hierarchy = stage(progress, &format!("building the {}", config.hierarchy), || {
+        Hierarchy::build(scene, config.hierarchy, config.build)
+    });
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
-    let renderer = Renderer::new(config, scene)?;
+    let renderer = stage(progress, "uploading the scene", || Renderer::new(config, scene))?;
     let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config)?);
     // `ideal` replays the draw calls `sw` (listed before it) made in the frame.
     let replayed = config.methods.iter().any(|m| m == IDEAL);

@@ -92,6 +92,14 @@ pub struct MethodSummary {
     /// GPU time per frame of drawing the scene, ms.
     #[serde(default)]
     pub render_ms_per_frame: f64,
+    /// GPU time per frame of building depth pyramids, ms; see
+    /// `FrameStats::pyramid_ms`.
+    #[serde(default)]
+    pub pyramid_ms_per_frame: f64,
+    /// GPU time per frame after the first pyramid build (`hiz`'s late
+    /// pass), ms; see `FrameStats::late_ms`.
+    #[serde(default)]
+    pub late_ms_per_frame: f64,
     /// Compute dispatches per frame.
     #[serde(default)]
     pub dispatches_per_frame: f64,
@@ -215,6 +223,8 @@ impl BenchReport {
                     wall_ms: mean(frames, |f| f.wall_ms),
                     cull_ms_per_frame: mean(frames, |f| f.cull_ms),
                     render_ms_per_frame: mean(frames, |f| f.render_ms),
+                    pyramid_ms_per_frame: mean(frames, |f| f.pyramid_ms),
+                    late_ms_per_frame: mean(frames, |f| f.late_ms),
                     dispatches_per_frame: mean(frames, |f| f.dispatches as f64),
                     indirect_draws_per_frame: mean(frames, |f| f.indirect_draws as f64),
                     indirect_draw_calls_per_frame: mean(frames, |f| f.indirect_draw_calls as f64),

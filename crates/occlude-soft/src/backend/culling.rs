@@ -158,9 +158,12 @@ impl GpuCulling for SoftBackend<'_> {
         let p = &mut self.device.pyramids[pyramid.0 as usize];
         p.build(&self.device.depth_scratch);
         let texels: Vec<u64> = p.sizes()[1..].iter().map(|&(w, h)| u64::from(w) * u64::from(h)).collect();
+        let busy_before = self.clock.gpu_busy;
         for t in texels {
             self.dispatch_costing(t as f64 * self.model.gpu_pyramid_texel_ns * 1e-3);
         }
+        self.count.stats.pyramid_ms += (self.clock.gpu_busy - busy_before) * 1e-3;
+        self.late_from_us.get_or_insert(self.clock.gpu_busy);
     }
 
     fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags) {

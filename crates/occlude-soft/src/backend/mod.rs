@@ -20,6 +20,12 @@
 //! batch `cpu_dispatch_us`, `gpu_draw_call_us` and `gpu_dispatch_us` (its
 //! draw and the clearing of its counts); every result of the batch readable
 //! `readback_us` after the batch's last box.
+//!
+//! Draws are recorded until `FLUSH_TRIANGLES` (2^20) triangles wait (outside a
+//! `Hib` batch) and then rasterized, so that a frame drawing tens of millions
+//! of triangles (view-frustum culling of the million-instance `swarm`) holds
+//! a bounded number of them: commands run in order either way, so images,
+//! counts and the replayed time line are the same.
 
 mod culling;
 mod item_buffer;
@@ -35,6 +41,10 @@ use occlude_core::{
     OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
 use std::time::Instant;
+
+/// Recorded triangles (48 bytes each in clip space) past which a draw
+/// rasterizes what is recorded first (module documentation).
+const FLUSH_TRIANGLES: usize = 1 << 20;
 
 /// A recorded command's place on the simulated GPU time line.
 #[derive(Clone, Copy, Debug)]
@@ -95,6 +105,10 @@ pub struct SoftBackend<'s> {
     /// Whether a [`QueryMode::Hib`] batch has been started since the last
     /// submission (its fixed costs charged).
     batch_open: bool,
+    /// The simulated GPU busy time when the frame's first depth-pyramid
+    /// build ended, µs (`None` before it): where `FrameStats::late_ms`
+    /// starts.
+    late_from_us: Option<f64>,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -120,6 +134,7 @@ impl<'s> SoftBackend<'s> {
             device: HostResources::default(),
             query_mode: QueryMode::Hardware,
             batch_open: false,
+            late_from_us: None,
         }
     }
 
@@ -230,6 +245,9 @@ impl<'s> SoftBackend<'s> {
     /// Draws instance `i` as one draw costing `fixed_us` of GPU time before
     /// its triangles and fragments; counts it.
     fn draw_instance(&mut self, i: u32, fixed_us: f64) {
+        if self.triangles.len() >= FLUSH_TRIANGLES && !self.batch_open {
+            self.flush();
+        }
         let triangles = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].triangle_count() as u64;
         self.count.draw(i, triangles);
         let first = self.triangles.len();
@@ -263,6 +281,7 @@ impl Backend for SoftBackend<'_> {
         self.pending_state_us = 0.0;
         self.queries.clear();
         self.batch_open = false;
+        self.late_from_us = None;
         self.frame_start = Instant::now();
     }
 
@@ -346,6 +365,7 @@ impl Backend for SoftBackend<'_> {
         s.cpu_ms = (c.cpu - c.wait) * 1e-3;
         s.gpu_ms = c.gpu_busy * 1e-3;
         s.wait_ms = c.wait * 1e-3;
+        s.late_ms = self.late_from_us.map_or(0.0, |from| (c.gpu_busy - from) * 1e-3);
         s.wall_ms = self.frame_start.elapsed().as_secs_f64() * 1e3;
         self.camera = None;
         s
