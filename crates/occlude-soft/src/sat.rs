@@ -14,7 +14,9 @@
 
 use crate::raster::{Command, CommandKind, DepthBuffer, Rasterizer};
 use glam::Vec4;
-use occlude_core::gvq::{count_errors, plan, CountErrors, PixelRect, RegionPlan, SatConfig, SummedAreaTable};
+use occlude_core::gvq::{
+    count_errors, plan, CountErrors, PixelRect, RegionPlan, SatConfig, Silhouette, SummedAreaTable,
+};
 use occlude_core::{Camera, Scene};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -132,8 +134,9 @@ impl SoftSat {
     pub fn query(&mut self, scene: &Scene, camera: &Camera, configs: &[SatConfig]) -> Vec<SatFrame> {
         let (w, h) = (self.depth.width(), self.depth.height());
         let view_projection = camera.view_projection();
-        let rects: Vec<Option<PixelRect>> =
-            scene.instances.iter().map(|inst| PixelRect::of_box(&view_projection, w, h, &inst.bounds)).collect();
+        let shapes: Vec<Option<Silhouette>> =
+            scene.instances.iter().map(|inst| Silhouette::of_box(&view_projection, w, h, &inst.bounds)).collect();
+        let rects: Vec<Option<PixelRect>> = shapes.iter().map(|s| s.map(|s| s.rect)).collect();
         let owners = self.owners(scene, camera, &rects);
         let mut exact = vec![0u64; rects.len()];
         for &o in owners.iter().filter(|&&o| o != NO_OWNER) {
@@ -144,7 +147,7 @@ impl SoftSat {
         configs
             .iter()
             .map(|config| {
-                let plan = plan(&rects, config);
+                let plan = plan(&shapes, config);
                 let start = Instant::now();
                 let sat = SummedAreaTable::from_channel_image(w, h, plan.channels, &plan.channel_image(&owners, w));
                 let counts: Vec<u64> = plan.sets.iter().map(|s| sat.count_set(s)).collect();
