@@ -33,6 +33,8 @@ pub struct SatFrame {
     pub counts: Vec<u64>,
     /// Per instance, its exact visible pixels.
     pub exact: Vec<u64>,
+    /// The instances with a screen rectangle (the queries), in order.
+    pub queried: Vec<usize>,
     /// Table 2's errors of `counts` against `exact`, over the instances
     /// with a screen rectangle.
     pub errors: CountErrors,
@@ -56,6 +58,13 @@ pub struct SatSummary {
 }
 
 impl SatFrame {
+    /// Table 2's errors of `counts` (one per instance, as [`Self::counts`];
+    /// another backend's, say) against [`Self::exact`], over the queries.
+    pub fn errors_of(&self, counts: &[u64]) -> CountErrors {
+        let pick = |all: &[u64]| self.queried.iter().map(|&i| all[i]).collect::<Vec<_>>();
+        count_errors(&pick(counts), &pick(&self.exact))
+    }
+
     /// The frame's Table 2 row.
     pub fn summary(&self) -> SatSummary {
         SatSummary {
@@ -143,7 +152,6 @@ impl SoftSat {
             exact[o as usize] += 1;
         }
         let queried: Vec<usize> = (0..rects.len()).filter(|&i| rects[i].is_some()).collect();
-        let queried_exact: Vec<u64> = queried.iter().map(|&i| exact[i]).collect();
         configs
             .iter()
             .map(|config| {
@@ -152,8 +160,16 @@ impl SoftSat {
                 let sat = SummedAreaTable::from_channel_image(w, h, plan.channels, &plan.channel_image(&owners, w));
                 let counts: Vec<u64> = plan.sets.iter().map(|s| sat.count_set(s)).collect();
                 let sat_ms = start.elapsed().as_secs_f64() * 1e3;
-                let errors = count_errors(&queried.iter().map(|&i| counts[i]).collect::<Vec<_>>(), &queried_exact);
-                SatFrame { plan, counts, exact: exact.clone(), errors, sat_ms }
+                let mut frame = SatFrame {
+                    plan,
+                    counts,
+                    exact: exact.clone(),
+                    queried: queried.clone(),
+                    errors: CountErrors::default(),
+                    sat_ms,
+                };
+                frame.errors = frame.errors_of(&frame.counts);
+                frame
             })
             .collect()
     }

@@ -223,9 +223,11 @@ pub fn plan(shapes: &[Option<Silhouette>], config: &SatConfig) -> RegionPlan {
     for &v in &conflicts {
         let v = v as usize;
         let shape = shapes[v].expect("a conflict object has a rectangle");
-        // The lookups over the rectangle, the only ones its pieces can meet.
-        let over: Vec<Lookup> =
-            placed.iter().map(|&(_, l)| l).filter(|l| l.rect.intersect(&shape.rect).is_some()).collect();
+        // The lookups over the rectangle, the only ones its pieces can
+        // meet, as indices into `placed`.
+        let mut near: Vec<usize> =
+            (0..placed.len()).filter(|&k| placed[k].1.rect.intersect(&shape.rect).is_some()).collect();
+        let over: Vec<Lookup> = near.iter().map(|&k| placed[k].1).collect();
         let mut pieces = split(shape.rect, &over, config.max_pieces as usize);
         merge(&mut pieces, all);
         for p in pieces {
@@ -237,10 +239,11 @@ pub fn plan(shapes: &[Option<Silhouette>], config: &SatConfig) -> RegionPlan {
                 // pixels alone: the object has none here.
                 sets[v].outside.push(p.rect);
                 continue;
-            } else if let Some(channel) = clear_channel(&p.rect, &mut placed, shapes, channels, &mut sets) {
+            } else if let Some(channel) = clear_channel(&p.rect, &mut near, &mut placed, shapes, channels, &mut sets) {
                 Lookup { rect: p.rect, channel, shared: false }
             } else if config.mode == RegionMode::Conservative {
-                Lookup { rect: p.rect, channel: least_overlapped(&p.rect, &placed, channels), shared: true }
+                let channel = least_overlapped(&p.rect, near.iter().map(|&k| &placed[k].1), channels);
+                Lookup { rect: p.rect, channel, shared: true }
             } else {
                 sets[v].dropped.push(p.rect);
                 continue;
@@ -248,6 +251,8 @@ pub fn plan(shapes: &[Option<Silhouette>], config: &SatConfig) -> RegionPlan {
             placed.push((v, lookup));
         }
     }
+    // Lookups cut away whole are left with an empty rectangle.
+    placed.retain(|(_, l)| !l.rect.is_empty());
     for &(v, l) in &placed {
         sets[v].lookups.push(l);
     }
@@ -265,33 +270,39 @@ pub fn plan(shapes: &[Option<Silhouette>], config: &SatConfig) -> RegionPlan {
 }
 
 /// Overlap no conflict (module documentation): the lowest channel whose
-/// lookups over `rect` all belong to objects whose silhouettes miss their
-/// overlap with it. Those lookups are cut around `rect` (the parts cut off
-/// go to their objects' [`RegionSet::outside`]) and the channel is free in
-/// `rect`; `None` when no channel is.
+/// lookups over `rect` (among `placed`'s entries `near`) all belong to
+/// objects whose silhouettes miss their overlap with it. Those lookups are
+/// cut around `rect` (the parts cut off go to their objects'
+/// [`RegionSet::outside`]; a lookup cut away whole keeps an empty
+/// rectangle, the rest of one cut in several pieces joins `placed` and
+/// `near`) and the channel is free in `rect`; `None` when no channel is.
 fn clear_channel(
     rect: &PixelRect,
+    near: &mut Vec<usize>,
     placed: &mut Vec<(usize, Lookup)>,
     shapes: &[Option<Silhouette>],
     channels: u32,
     sets: &mut [RegionSet],
 ) -> Option<u32> {
-    let empty_of_owner = |(w, l): &(usize, Lookup)| {
-        l.rect.intersect(rect).is_none_or(|i| shapes[*w].is_some_and(|s| !s.meets(&i)))
+    let empty_of_owner = |c: u32| {
+        near.iter()
+            .map(|&k| placed[k])
+            .filter(|(_, l)| l.channel == c)
+            .all(|(w, l)| l.rect.intersect(rect).is_none_or(|i| shapes[w].is_some_and(|s| !s.meets(&i))))
     };
-    let channel =
-        (0..channels).find(|&c| placed.iter().filter(|(_, l)| l.channel == c).all(empty_of_owner))?;
-    let mut kept = Vec::with_capacity(placed.len() + 4);
-    for (w, l) in placed.drain(..) {
-        match l.rect.intersect(rect) {
-            Some(cut) if l.channel == channel => {
-                sets[w].outside.push(cut);
-                kept.extend(l.rect.subtract(rect).into_iter().map(|r| (w, Lookup { rect: r, ..l })));
-            }
-            _ => kept.push((w, l)),
+    let channel = (0..channels).find(|&c| empty_of_owner(c))?;
+    for i in 0..near.len() {
+        let k = near[i];
+        let (w, l) = placed[k];
+        let Some(cut) = l.rect.intersect(rect).filter(|_| l.channel == channel) else { continue };
+        sets[w].outside.push(cut);
+        let mut rest = l.rect.subtract(rect).into_iter();
+        placed[k].1.rect = rest.next().unwrap_or_default();
+        for r in rest {
+            near.push(placed.len());
+            placed.push((w, Lookup { rect: r, ..l }));
         }
     }
-    *placed = kept;
     Some(channel)
 }
 
@@ -349,9 +360,9 @@ fn merge(pieces: &mut Vec<Piece>, all: u32) {
 
 /// The channel whose lookups in `placed` cover the least of `rect` (the
 /// lowest on ties): the one sharing costs the fewest foreign pixels at most.
-fn least_overlapped(rect: &PixelRect, placed: &[(usize, Lookup)], channels: u32) -> u32 {
+fn least_overlapped<'a>(rect: &PixelRect, placed: impl Iterator<Item = &'a Lookup>, channels: u32) -> u32 {
     let mut overlap = vec![0u64; channels as usize];
-    for (_, l) in placed {
+    for l in placed {
         if let Some(i) = l.rect.intersect(rect) {
             overlap[l.channel as usize] += i.area();
         }

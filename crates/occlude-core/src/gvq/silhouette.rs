@@ -40,9 +40,11 @@ impl Silhouette {
     pub fn of_box(view_projection: &Mat4, width: u32, height: u32, b: &Aabb) -> Option<Self> {
         let rect = PixelRect::of_box(view_projection, width, height, b)?;
         let mut corners = [DVec2::ZERO; 8];
-        let projected = b.corners().into_iter().zip(&mut corners).all(|(p, c)| {
-            project_corner(view_projection, width, height, p).map(|(s, _)| *c = s).is_some()
-        });
+        let projected = b
+            .corners()
+            .into_iter()
+            .zip(&mut corners)
+            .all(|(p, c)| project_corner(view_projection, width, height, p).map(|(s, _)| *c = s).is_some());
         Some(Self { rect, corners: projected.then_some(corners) })
     }
 
@@ -80,7 +82,8 @@ impl Silhouette {
             let (r0, r1) = span(&mut centres.iter().map(|c| c.dot(axis) / length));
             h1 + PIXEL_MARGIN < r0 || r1 + PIXEL_MARGIN < h0
         };
-        let edges = (0..8usize).flat_map(|i| [1, 2, 4].into_iter().filter(move |b| i & b == 0).map(move |b| (i, i | b)));
+        let edges =
+            (0..8usize).flat_map(|i| [1, 2, 4].into_iter().filter(move |b| i & b == 0).map(move |b| (i, i | b)));
         let mut axes = [DVec2::X, DVec2::Y].into_iter().chain(edges.map(|(i, j)| (corners[j] - corners[i]).perp()));
         !axes.any(separated)
     }
