@@ -334,6 +334,25 @@ impl<'m> Frame<'m> {
     }
 }
 
+/// Per prism, whether `test` of its pixel rectangle keeps it (one without
+/// a rectangle covers no pixel and is culled), and the texel reads the
+/// tests made in all; `test` gives both for one rectangle.
+fn cull_by_rect(passes: &ViewPasses, mut test: impl FnMut(&PixelRect) -> (bool, u64)) -> (Vec<bool>, u64) {
+    let mut reads = 0;
+    let drawn = passes
+        .prisms
+        .iter()
+        .map(|(_, rect, _)| {
+            rect.is_some_and(|r| {
+                let (keep, n) = test(&r);
+                reads += n;
+                keep
+            })
+        })
+        .collect();
+    (drawn, reads)
+}
+
 /// Table 3's rows of one view: `(method, frame_ms, drawn per prism)`.
 fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<bool>)> {
     let n = passes.prisms.len();
@@ -370,18 +389,12 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
         f.draw(n as u64, passes.proxy_fragments);
         f.dispatch(pixels);
         let counts = passes.tile_counts(tiles);
-        let mut reads = 0;
-        let drawn: Vec<bool> = passes
-            .prisms
-            .iter()
-            .map(|(_, rect, _)| {
-                let Some(r) = rect else { return false };
-                let (t0, t1) = (passes.tile(tiles, r.x0, r.y0), passes.tile(tiles, r.x1 - 1, r.y1 - 1));
-                let (tx0, ty0, tx1, ty1) = (t0 as u32 % tiles, t0 as u32 / tiles, t1 as u32 % tiles, t1 as u32 / tiles);
-                reads += u64::from((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
-                (ty0..=ty1).any(|ty| (tx0..=tx1).any(|tx| counts[(ty * tiles + tx) as usize] > 0))
-            })
-            .collect();
+        let (drawn, reads) = cull_by_rect(passes, |r| {
+            let (t0, t1) = (passes.tile(tiles, r.x0, r.y0), passes.tile(tiles, r.x1 - 1, r.y1 - 1));
+            let (tx0, ty0, tx1, ty1) = (t0 as u32 % tiles, t0 as u32 / tiles, t1 as u32 % tiles, t1 as u32 / tiles);
+            let seen = (ty0..=ty1).any(|ty| (tx0..=tx1).any(|tx| counts[(ty * tiles + tx) as usize] > 0));
+            (seen, u64::from((tx1 - tx0 + 1) * (ty1 - ty0 + 1)))
+        });
         f.draw_heavy(passes, &drawn, reads);
         rows.push((format!("item-buffer-{tiles}x{tiles}"), f.ms(), drawn));
     }
@@ -398,17 +411,10 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
     f.dispatch(pixels);
     f.dispatch(pixels);
     let lookups = regions.sets.first().map_or(&[][..], |s| &s.lookups[..]);
-    let mut reads = 0;
-    let drawn: Vec<bool> = passes
-        .prisms
-        .iter()
-        .map(|(_, rect, _)| {
-            let Some(r) = rect else { return false };
-            let parts: Vec<_> = lookups.iter().filter_map(|l| l.rect.intersect(r).map(|i| (l.channel, i))).collect();
-            reads += 4 * parts.len() as u64;
-            parts.iter().any(|(c, i)| sat.count(*c, i) > 0)
-        })
-        .collect();
+    let (drawn, reads) = cull_by_rect(passes, |r| {
+        let parts: Vec<_> = lookups.iter().filter_map(|l| l.rect.intersect(r).map(|i| (l.channel, i))).collect();
+        (parts.iter().any(|(c, i)| sat.count(*c, i) > 0), 4 * parts.len() as u64)
+    });
     f.draw_heavy(passes, &drawn, reads);
     rows.push(("sat".to_string(), f.ms(), drawn));
     rows
