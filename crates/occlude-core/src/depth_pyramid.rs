@@ -55,7 +55,7 @@
 
 use crate::geometry::Aabb;
 use crate::query_box::QUERY_DEPTH_BIAS;
-use glam::{DVec2, Mat4};
+use glam::{DVec2, Mat4, Vec3};
 
 /// How far beyond its projected corners a box's pixel range reaches, in
 /// pixels: more than the rasterizer's 1/512-pixel vertex snapping.
@@ -101,6 +101,23 @@ pub struct ScreenRect {
     pub depth: f32,
 }
 
+/// Point `p` seen through `view_projection` on a `width` x `height` image,
+/// as the module documentation projects a box corner: its pixel position
+/// (row 0 at the top) and biased normalized depth, or `None` when it is on
+/// or behind the near plane (or not a number).
+pub fn project_corner(view_projection: &Mat4, width: u32, height: u32, p: Vec3) -> Option<(DVec2, f64)> {
+    let v = *view_projection * p.extend(1.0);
+    let z = v.z - QUERY_DEPTH_BIAS * v.w;
+    // Written so that NaN counts as reaching the near plane.
+    if !(z > 0.0 && v.w > 0.0) {
+        return None;
+    }
+    let (cw, cz) = (f64::from(v.w), f64::from(z));
+    let (w, h) = (f64::from(width), f64::from(height));
+    let s = DVec2::new((f64::from(v.x) / cw + 1.0) * 0.5 * w, (1.0 - f64::from(v.y) / cw) * 0.5 * h);
+    Some((s, cz / cw))
+}
+
 /// The footprint of `b` (already padded as a query box) seen through
 /// `view_projection` on a `width` x `height` image (module documentation).
 pub fn box_footprint(view_projection: &Mat4, width: u32, height: u32, b: &Aabb) -> Footprint {
@@ -109,17 +126,10 @@ pub fn box_footprint(view_projection: &Mat4, width: u32, height: u32, b: &Aabb) 
     let mut hi = DVec2::splat(f64::NEG_INFINITY);
     let mut depth = f64::INFINITY;
     for p in b.corners() {
-        let v = *view_projection * p.extend(1.0);
-        let z = v.z - QUERY_DEPTH_BIAS * v.w;
-        // Written so that NaN counts as reaching the near plane.
-        if !(z > 0.0 && v.w > 0.0) {
-            return Footprint::Near;
-        }
-        let (cw, cz) = (f64::from(v.w), f64::from(z));
-        let s = DVec2::new((f64::from(v.x) / cw + 1.0) * 0.5 * w, (1.0 - f64::from(v.y) / cw) * 0.5 * h);
+        let Some((s, d)) = project_corner(view_projection, width, height, p) else { return Footprint::Near };
         lo = lo.min(s);
         hi = hi.max(s);
-        depth = depth.min(cz / cw);
+        depth = depth.min(d);
     }
     // Pixel `p` is covered only if its centre `p + 0.5` is in [lo, hi].
     let first = (lo - 0.5 - PIXEL_MARGIN).ceil().max(DVec2::ZERO);

@@ -14,7 +14,9 @@
 
 use crate::raster::{Command, CommandKind, DepthBuffer, Rasterizer};
 use glam::Vec4;
-use occlude_core::gvq::{count_errors, plan, CountErrors, PixelRect, RegionPlan, SatConfig, SummedAreaTable};
+use occlude_core::gvq::{
+    count_errors, plan, CountErrors, PixelRect, RegionPlan, SatConfig, Silhouette, SummedAreaTable,
+};
 use occlude_core::{Camera, Scene};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -31,6 +33,8 @@ pub struct SatFrame {
     pub counts: Vec<u64>,
     /// Per instance, its exact visible pixels.
     pub exact: Vec<u64>,
+    /// The instances with a screen rectangle (the queries), in order.
+    pub queried: Vec<usize>,
     /// Table 2's errors of `counts` against `exact`, over the instances
     /// with a screen rectangle.
     pub errors: CountErrors,
@@ -54,6 +58,13 @@ pub struct SatSummary {
 }
 
 impl SatFrame {
+    /// Table 2's errors of `counts` (one per instance, as [`Self::counts`];
+    /// another backend's, say) against [`Self::exact`], over the queries.
+    pub fn errors_of(&self, counts: &[u64]) -> CountErrors {
+        let pick = |all: &[u64]| self.queried.iter().map(|&i| all[i]).collect::<Vec<_>>();
+        count_errors(&pick(counts), &pick(&self.exact))
+    }
+
     /// The frame's Table 2 row.
     pub fn summary(&self) -> SatSummary {
         SatSummary {
@@ -132,25 +143,33 @@ impl SoftSat {
     pub fn query(&mut self, scene: &Scene, camera: &Camera, configs: &[SatConfig]) -> Vec<SatFrame> {
         let (w, h) = (self.depth.width(), self.depth.height());
         let view_projection = camera.view_projection();
-        let rects: Vec<Option<PixelRect>> =
-            scene.instances.iter().map(|inst| PixelRect::of_box(&view_projection, w, h, &inst.bounds)).collect();
+        let shapes: Vec<Option<Silhouette>> =
+            scene.instances.iter().map(|inst| Silhouette::of_box(&view_projection, w, h, &inst.bounds)).collect();
+        let rects: Vec<Option<PixelRect>> = shapes.iter().map(|s| s.map(|s| s.rect)).collect();
         let owners = self.owners(scene, camera, &rects);
         let mut exact = vec![0u64; rects.len()];
         for &o in owners.iter().filter(|&&o| o != NO_OWNER) {
             exact[o as usize] += 1;
         }
         let queried: Vec<usize> = (0..rects.len()).filter(|&i| rects[i].is_some()).collect();
-        let queried_exact: Vec<u64> = queried.iter().map(|&i| exact[i]).collect();
         configs
             .iter()
             .map(|config| {
-                let plan = plan(&rects, config);
+                let plan = plan(&shapes, config);
                 let start = Instant::now();
                 let sat = SummedAreaTable::from_channel_image(w, h, plan.channels, &plan.channel_image(&owners, w));
                 let counts: Vec<u64> = plan.sets.iter().map(|s| sat.count_set(s)).collect();
                 let sat_ms = start.elapsed().as_secs_f64() * 1e3;
-                let errors = count_errors(&queried.iter().map(|&i| counts[i]).collect::<Vec<_>>(), &queried_exact);
-                SatFrame { plan, counts, exact: exact.clone(), errors, sat_ms }
+                let mut frame = SatFrame {
+                    plan,
+                    counts,
+                    exact: exact.clone(),
+                    queried: queried.clone(),
+                    errors: CountErrors::default(),
+                    sat_ms,
+                };
+                frame.errors = frame.errors_of(&frame.counts);
+                frame
             })
             .collect()
     }

@@ -1,24 +1,33 @@
 //! `occlude bench --paper gvq`: the granular-visibility-queries paper's
-//! Table 2 (section 4.1): summed-area-table queries of 100 to 500 randomly
+//! Tables 2 and 3. Table 3 (section 4.2, culling parts of one heavy object)
+//! is [`super::gvq_parts`]'s, on the soft backend's simulated clock. Table 2
+//! (section 4.1): summed-area-table queries of 100 to 500 randomly
 //! placed objects of 606 triangles (`occlude_scenes::scattered`), the CPU
 //! time of the overlap test, the colouring and split and merge, the
 //! conflict objects, and the mean absolute and relative errors of the
 //! counts against the exact ones, beside the paper's figures
-//! (`published.toml`). Counts come from the soft backend
-//! (`occlude_soft::sat`), at the paper's 512 x 512 query resolution unless
-//! told otherwise, over the walkthrough circling the objects; both region
-//! modes are run (the paper's Table 2 does not say which it used).
+//! (`published.toml`). The region sets and the exact counts come from the
+//! soft backend (`occlude_soft::sat`); the counts from its summed area
+//! tables, or with `--backend wgpu` from the GPU's
+//! (`occlude_wgpu::GpuSat`, the same plans drawn, summed and looked up on
+//! the GPU), at the paper's 512 x 512 query resolution unless told
+//! otherwise, over the walkthrough circling the objects; both region modes
+//! are run (the paper's Table 2 does not say which it used).
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
+use super::gvq_parts::{self, PartsRow};
 use super::published::{self, PublishedTable};
 use super::runner::far_plane;
 use anyhow::Result;
 use indicatif::ProgressBar;
 use occlude_core::gvq::{RegionMode, SatConfig};
+use occlude_core::{Camera, Scene};
 use occlude_scenes::scattered::scattered;
-use occlude_soft::sat::{SatSummary, SoftSat};
+use occlude_soft::sat::{SatFrame, SatSummary, SoftSat};
+use occlude_wgpu::{GpuContext, GpuSat};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
+use std::sync::Arc;
 
 /// Object counts of the paper's rows.
 pub const OBJECTS: [u32; 5] = [100, 200, 300, 400, 500];
@@ -37,14 +46,24 @@ pub struct GvqTables {
 }
 
 /// One table of the paper's.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GvqTable {
     /// The paper's name for it.
     pub name: String,
     /// Where the published figures come from.
     pub source: Option<String>,
     /// Our rows.
-    pub rows: Vec<GvqRow>,
+    pub rows: GvqRows,
+}
+
+/// The rows of one table, each table with columns of its own.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum GvqRows {
+    /// Table 2: summed-area-table errors and CPU times.
+    Table2(Vec<GvqRow>),
+    /// Table 3: frame times of culling parts of one heavy object.
+    Table3(Vec<PartsRow>),
 }
 
 /// One row of Table 2: per-frame means over the walkthrough.
@@ -54,6 +73,13 @@ pub struct GvqRow {
     pub objects: u32,
     /// Region mode (`conservative` or `approximate`).
     pub mode: RegionMode,
+    /// The backend whose summed area tables counted (`soft` or `wgpu`).
+    #[serde(default)]
+    pub backend: String,
+    /// Objects per frame whose count differs from the soft backend's
+    /// count of the same plan (0 on the soft backend).
+    #[serde(default)]
+    pub differing_from_soft: f64,
     /// Colour targets (four channels each).
     pub targets: u32,
     /// Objects on screen (the queries).
@@ -93,14 +119,25 @@ pub struct GvqRow {
 }
 
 impl GvqRow {
-    /// The mean of `frames`' summaries, beside `published`'s row of
-    /// `objects`.
-    fn new(objects: u32, config: &SatConfig, frames: &[SatSummary], published: Option<&PublishedTable>) -> Self {
+    /// The mean of `frames`' summaries counted on `backend`, beside
+    /// `published`'s row of `objects`.
+    fn new(
+        objects: u32,
+        config: &SatConfig,
+        backend: &str,
+        frames: &[Counted],
+        published: Option<&PublishedTable>,
+    ) -> Self {
+        let differing = frames.iter().map(|f| f64::from(f.differing_from_soft)).sum::<f64>();
+        let frames: Vec<SatSummary> = frames.iter().map(|f| f.summary).collect();
+        let frames = frames.as_slice();
         let mean = |f: fn(&SatSummary) -> f64| frames.iter().map(f).sum::<f64>() / frames.len().max(1) as f64;
         let p = published.and_then(|t| t.rows.iter().find(|r| r.objects == Some(objects)));
         Self {
             objects,
             mode: config.mode,
+            backend: backend.to_string(),
+            differing_from_soft: differing / frames.len().max(1) as f64,
             targets: config.targets,
             queries: mean(|s| f64::from(s.objects)),
             conflicts: mean(|s| f64::from(s.conflicts)),
@@ -122,45 +159,110 @@ impl GvqRow {
     }
 }
 
-/// Runs Table 2 with the seed, frames and resolution of `base` (module
-/// documentation); returns the printed table and its JSON.
-pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
-    if base.backend != BackendKind::Soft {
-        anyhow::bail!(
-            "--paper gvq runs on the soft backend only (the wgpu backend's counts, occlude_wgpu::GpuSat, are tested against it but not benchmarked yet)"
-        );
+/// One frame's counts of one region mode on the backend benchmarked.
+#[derive(Clone, Copy, Debug)]
+struct Counted {
+    /// The Table 2 row of the frame, its errors those of the backend's counts.
+    summary: SatSummary,
+    /// Objects whose count differs from the soft backend's.
+    differing_from_soft: u32,
+}
+
+/// Where the counts come from: the soft backend's summed area tables, or
+/// the GPU's of the same plans.
+enum Counter {
+    Soft,
+    Wgpu(GpuSat),
+}
+
+impl Counter {
+    /// Counters for `configs` on `base`'s backend and resolution (one GPU
+    /// opened for all).
+    fn for_configs(base: &BenchConfig, configs: &[SatConfig]) -> Result<Vec<Self>> {
+        let (w, h) = base.resolution;
+        Ok(match base.backend {
+            BackendKind::Soft => configs.iter().map(|_| Self::Soft).collect(),
+            BackendKind::Wgpu => {
+                let ctx = Arc::new(GpuContext::new()?);
+                configs.iter().map(|c| Self::Wgpu(GpuSat::new(Arc::clone(&ctx), w, h, c.targets))).collect()
+            }
+        })
     }
+
+    fn name(&self) -> &'static str {
+        match self {
+            Self::Soft => "soft",
+            Self::Wgpu(_) => "wgpu",
+        }
+    }
+
+    /// `frame`'s counts on this backend, against the exact counts.
+    fn count(&self, scene: &Scene, camera: &Camera, frame: &SatFrame) -> Result<Counted> {
+        let mut summary = frame.summary();
+        let differing_from_soft = match self {
+            Self::Soft => 0,
+            Self::Wgpu(gpu) => {
+                let counts = gpu.query(scene, camera, &frame.plan).map_err(anyhow::Error::msg)?.counts;
+                summary.errors = frame.errors_of(&counts);
+                counts.iter().zip(&frame.counts).filter(|(g, s)| g != s).count() as u32
+            }
+        };
+        Ok(Counted { summary, differing_from_soft })
+    }
+}
+
+/// Runs Table 2 with the seed, frames, resolution and backend of `base`,
+/// and Table 3 at its resolution with its GPU model (module
+/// documentation); returns the printed tables and their JSON.
+pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
+    let (mut text, table_2) = table_2(base, &OBJECTS, progress)?;
+    progress.set_message("gvq: Table 3");
+    let (w, h) = base.resolution;
+    let published = published::table("gvq", "Table 3");
+    let parts = gvq_parts::table_3(w, h, &base.gpu_model, published);
+    text.push('\n');
+    text.push_str(&gvq_parts::print(&parts, w, h, &base.gpu_model));
+    let table_3 =
+        GvqTable { name: "Table 3".into(), source: published.map(|t| t.source.clone()), rows: GvqRows::Table3(parts) };
+    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3] }))
+}
+
+/// Table 2 over scenes of `counts` objects: the printed table and its rows.
+fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result<(String, GvqTable)> {
     let published = published::table("gvq", "Table 2");
     let configs =
         [RegionMode::Conservative, RegionMode::Approximate].map(|mode| SatConfig { mode, ..SatConfig::default() });
+    let counters = Counter::for_configs(base, &configs)?;
+    let backend = counters[0].name();
     let (w, h) = base.resolution;
     let mut text = format!(
         "Granular visibility queries — Table 2: summed-area-table queries, per frame ({w}x{h}, {} target(s), \
-         soft backend, CPU ms measured; paper's figures in brackets)\n\
+         {backend} backend's counts, CPU ms measured; paper's figures in brackets)\n\
          objects  mode          queries  conflicts  (paper)  lookups  overlap ms (paper)  colouring ms (paper)  \
-         split+merge ms (paper)  abs err px (paper)  rel err % (paper)  rel err of sums %\n",
+         split+merge ms (paper)  abs err px (paper)  rel err % (paper)  rel err of sums %  differ from soft\n",
         configs[0].targets
     );
     let mut rows = Vec::new();
-    for objects in OBJECTS {
+    for &objects in counts {
         let scene = scattered(objects, base.seed);
         let cameras = scene.path.sample_with(base.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(&scene));
         progress.set_message(format!("gvq: {objects} objects"));
         progress.inc_length(cameras.len() as u64);
         let mut sat = SoftSat::new(w, h);
-        let mut summaries = vec![Vec::with_capacity(cameras.len()); configs.len()];
+        let mut counted = vec![Vec::with_capacity(cameras.len()); configs.len()];
         for camera in &cameras {
-            for (frames, frame) in summaries.iter_mut().zip(sat.query(&scene, camera, &configs)) {
-                frames.push(frame.summary());
+            let frames = sat.query(&scene, camera, &configs);
+            for ((into, counter), frame) in counted.iter_mut().zip(&counters).zip(&frames) {
+                into.push(counter.count(&scene, camera, frame)?);
             }
             progress.inc(1);
         }
-        for (config, frames) in configs.iter().zip(&summaries) {
-            let row = GvqRow::new(objects, config, frames, published);
+        for (config, frames) in configs.iter().zip(&counted) {
+            let row = GvqRow::new(objects, config, backend, frames, published);
             let paper = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v}"));
             let _ = writeln!(
                 text,
-                "{:>7}  {:<12} {:>8.1} {:>10.1} {:>8} {:>8.1} {:>11.3} {:>6} {:>13.3} {:>6} {:>15.3} {:>6} {:>11.2} {:>6} {:>10.2} {:>6} {:>18.2}",
+                "{:>7}  {:<12} {:>8.1} {:>10.1} {:>8} {:>8.1} {:>11.3} {:>6} {:>13.3} {:>6} {:>15.3} {:>6} {:>11.2} {:>6} {:>10.2} {:>6} {:>18.2} {:>17.2}",
                 row.objects,
                 format!("{:?}", row.mode).to_lowercase(),
                 row.queries,
@@ -178,23 +280,32 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
                 row.rel_error_pct,
                 paper(row.published_rel_error_pct),
                 row.rel_error_of_sums_pct,
+                row.differing_from_soft,
             );
             rows.push(row);
         }
     }
-    let table = GvqTable { name: "Table 2".into(), source: published.map(|t| t.source.clone()), rows };
-    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table] }))
+    let source = published.map(|t| t.source.clone());
+    Ok((text, GvqTable { name: "Table 2".into(), source, rows: GvqRows::Table2(rows) }))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Table 2's rows.
+    fn rows_2(table: &GvqTable) -> &[GvqRow] {
+        match &table.rows {
+            GvqRows::Table2(rows) => rows,
+            GvqRows::Table3(_) => panic!("{} has Table 3's rows", table.name),
+        }
+    }
+
     #[test]
-    fn table_2_has_a_row_per_count_and_mode_beside_the_papers_figures() {
+    fn tables_2_and_3_have_their_rows_beside_the_papers_figures() {
         let base = BenchConfig { frames: 2, resolution: (64, 64), ..BenchConfig::default() };
         let (text, tables) = run(&base, &ProgressBar::hidden()).unwrap();
-        let rows = &tables.tables[0].rows;
+        let rows = rows_2(&tables.tables[0]);
         assert_eq!(rows.len(), 10);
         let row500 = rows.iter().find(|r| r.objects == 500 && r.mode == RegionMode::Conservative).unwrap();
         assert_eq!((row500.published_abs_error_px, row500.published_rel_error_pct), (Some(7.4), Some(11.6)));
@@ -206,7 +317,38 @@ mod tests {
         for key in ["objects", "conflicts", "abs_error_px", "rel_error_pct", "published_abs_error_px"] {
             assert!(json["tables"][0]["rows"][0].get(key).is_some(), "{key}");
         }
-        let wgpu = BenchConfig { backend: BackendKind::Wgpu, ..base };
-        assert!(run(&wgpu, &ProgressBar::hidden()).is_err());
+        assert!(rows.iter().all(|r| r.backend == "soft" && r.differing_from_soft == 0.0));
+        assert_eq!(tables.tables[1].name, "Table 3");
+        assert!(matches!(&tables.tables[1].rows, GvqRows::Table3(rows) if !rows.is_empty()));
+        for key in ["method", "view", "frame_ms"] {
+            assert!(json["tables"][1]["rows"][0].get(key).is_some(), "{key}");
+        }
+        let back: GvqTables = serde_json::from_value(json).unwrap();
+        assert!(
+            matches!(&back.tables[0].rows, GvqRows::Table2(_)) && matches!(&back.tables[1].rows, GvqRows::Table3(_))
+        );
+        assert!(text.contains("Table 3"));
+    }
+
+    /// `--backend wgpu`: the GPU's summed area tables count the soft
+    /// backend's plans of the same frames as the soft backend does.
+    #[test]
+    fn wgpu_table_2_counts_equal_the_soft_backends() {
+        if occlude_wgpu::GpuContext::for_test("wgpu_table_2_counts_equal_the_soft_backends").is_none() {
+            return;
+        }
+        let soft = BenchConfig { frames: 3, resolution: (64, 48), ..BenchConfig::default() };
+        let wgpu = BenchConfig { backend: BackendKind::Wgpu, ..soft.clone() };
+        let (_, on_soft) = table_2(&soft, &[150], &ProgressBar::hidden()).unwrap();
+        let (text, on_gpu) = table_2(&wgpu, &[150], &ProgressBar::hidden()).unwrap();
+        assert!(text.contains("wgpu backend"));
+        let (soft_rows, gpu_rows) = (rows_2(&on_soft), rows_2(&on_gpu));
+        assert_eq!(gpu_rows.len(), 2);
+        for (s, g) in soft_rows.iter().zip(gpu_rows) {
+            assert_eq!(g.backend, "wgpu");
+            assert!(g.queries > 0.0 && g.conflicts > 0.0, "{g:?}: no conflict to count");
+            assert_eq!(g.differing_from_soft, 0.0, "{:?}: counts differ from soft's", g.mode);
+            assert_eq!((g.abs_error_px, g.rel_error_pct), (s.abs_error_px, s.rel_error_pct), "{:?}", g.mode);
+        }
     }
 }

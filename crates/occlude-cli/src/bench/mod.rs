@@ -5,6 +5,7 @@
 pub mod config;
 pub mod dump;
 pub mod gvq;
+pub mod gvq_parts;
 pub mod ideal;
 pub mod output;
 pub mod paper;

@@ -52,6 +52,14 @@ pub struct PublishedRow {
     pub abs_error_px: Option<f64>,
     /// Mean relative pixel-count error, percent.
     pub rel_error_pct: Option<f64>,
+    /// The view of a table of views (granular visibility queries' Table 3:
+    /// `full`, `partial`, `occluded`).
+    #[serde(default)]
+    pub view: String,
+    /// Frames per second on an NVIDIA 280GTX.
+    pub fps_gtx280: Option<f64>,
+    /// Frames per second on an ATI HD3870.
+    pub fps_hd3870: Option<f64>,
 }
 
 #[derive(Deserialize)]

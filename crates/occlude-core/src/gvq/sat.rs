@@ -165,7 +165,7 @@ mod tests {
                 Lookup { rect: PixelRect::new(0, 0, 2, 2), channel: 0, shared: false },
                 Lookup { rect: PixelRect::new(2, 0, 3, 2), channel: 1, shared: false },
             ],
-            dropped: Vec::new(),
+            ..RegionSet::default()
         };
         assert_eq!(sat.count_set(&set), 3);
     }
