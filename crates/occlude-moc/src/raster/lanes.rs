@@ -144,7 +144,7 @@ mod tests {
             if out.len() % 7 == 0 {
                 t[2].x = t[0].x;
             }
-            if let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h) {
+            if let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h, super::super::Tolerance::NONE) {
                 out.push((w, h, tri));
             }
         }
