@@ -72,7 +72,7 @@ pub(crate) fn screen_triangles(
     let tolerance = if snap {
         let grid = f64::from(1u32 << subpixel_bits);
         for s in &mut screen[..n] {
-            (s.x, s.y) = ((s.x * grid).round() / grid, (s.y * grid).round() / grid);
+            (s.x, s.y) = (round(s.x * grid) / grid, round(s.y * grid) / grid);
         }
         // The depth slack of one grid step covers a rasterizer whose own
         // rounding put a vertex at the neighbouring grid point.
@@ -86,4 +86,25 @@ pub(crate) fn screen_triangles(
         }
     }
     n as u64 - 2
+}
+
+/// `x.round()` (halves away from zero) for `|x| < 2^52`, as the soft
+/// rasterizer rounds, without the library call `f64::round` costs where
+/// SSE4.1 is not assumed.
+#[inline]
+fn round(x: f64) -> f64 {
+    let t = x as i64;
+    // Exact: x and t have the same sign and differ by less than 1.
+    let fraction = x - t as f64;
+    (t + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn round_takes_halves_away_from_zero_as_f64_round_does() {
+        for x in [0.0, 0.49999999999999994, 0.5, 1.5, 2.5, -0.5, -1.5, -2.4, 1e15 + 0.5, -7.75, 3.0] {
+            assert_eq!(super::round(x), x.round(), "{x}");
+        }
+    }
 }

@@ -22,7 +22,7 @@ mod avx2;
 mod lanes;
 
 use avx2::Avx2;
-use lanes::{Spans, LANES};
+use lanes::{GroupStep, Spans, LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -252,6 +252,7 @@ impl ScreenTriangle {
     /// ([`DepthPlane::new`]), or `None` when it is not drawn: a non-finite or
     /// negative depth coordinate, zero area, culled by winding, or no pixel
     /// centre on screen within its bounding box.
+    #[inline]
     pub(crate) fn new(
         mut t: [DVec3; 3],
         cull: CullMode,
@@ -334,19 +335,19 @@ impl Band<'_> {
             let bottom = sy * 4 + 4 > self.height;
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
                 let sx = g * LANES as u32;
-                let (mut cover, depth) = match self.avx2 {
-                    Some(avx2) => avx2.subtile_lanes(tri, &spans, sx, sy),
-                    None => lanes::subtile_lanes(tri, &spans, sx, sy),
-                };
-                if bottom || (sx + LANES as u32) * 8 > self.width {
-                    for (l, c) in cover.iter_mut().enumerate().filter(|(_, c)| **c != 0) {
-                        *c |= outside_mask(self.width, self.height, sx + l as u32, sy);
-                    }
-                }
+                let outside = (bottom || (sx + LANES as u32) * 8 > self.width)
+                    .then(|| std::array::from_fn(|l| outside_mask(self.width, self.height, sx + l as u32, sy)));
+                let step = GroupStep { tri, spans: &spans, sx, sy, outside };
                 let group = &mut self.groups[row + g as usize];
                 match self.avx2 {
-                    Some(avx2) => avx2.merge(group, &cover, &depth, self.merge),
-                    None => group.merge(&cover, &depth, self.merge),
+                    Some(avx2) => avx2.draw_group(group, &step, self.merge),
+                    None => {
+                        let (mut cover, depth) = lanes::subtile_lanes(tri, &spans, sx, sy);
+                        if let Some(outside) = &step.outside {
+                            lanes::add_outside(&mut cover, outside);
+                        }
+                        group.merge(&cover, &depth, self.merge);
+                    }
                 }
             }
         }
