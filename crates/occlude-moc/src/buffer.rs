@@ -12,17 +12,22 @@ pub enum MergeMode {
     QuickMask,
 }
 
-/// Errors from building a buffer.
+/// Errors from building or configuring a buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Error {
     /// Width or height was zero.
     ZeroSize,
+    /// Sub-pixel bits above [`MAX_SUBPIXEL_BITS`](crate::MAX_SUBPIXEL_BITS).
+    SubpixelBits(u32),
 }
 
 impl std::fmt::Display for Error {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Error::ZeroSize => write!(f, "occlusion buffer width and height must be at least 1"),
+            Error::SubpixelBits(bits) => {
+                write!(f, "{bits} sub-pixel bits requested, the buffer snaps to at most {}", crate::MAX_SUBPIXEL_BITS)
+            }
         }
     }
 }
@@ -146,13 +151,23 @@ pub struct MaskedBuffer {
     pub(crate) groups: Vec<Group>,
     /// The merge rule used by renders.
     pub merge: MergeMode,
+    /// Fractional bits of the grid occluder vertices are snapped to
+    /// ([`set_subpixel_bits`](Self::set_subpixel_bits)).
+    pub(crate) subpixel_bits: u32,
 }
 
 impl MaskedBuffer {
     /// A cleared buffer of `width` x `height` pixels; an error if either is zero.
     pub fn new(width: u32, height: u32) -> Result<Self, Error> {
-        let mut b =
-            MaskedBuffer { width: 0, height: 0, cols: 0, rows: 0, groups: Vec::new(), merge: MergeMode::default() };
+        let mut b = MaskedBuffer {
+            width: 0,
+            height: 0,
+            cols: 0,
+            rows: 0,
+            groups: Vec::new(),
+            merge: MergeMode::default(),
+            subpixel_bits: crate::SUBPIXEL_BITS,
+        };
         b.resize(width, height)?;
         Ok(b)
     }
@@ -169,6 +184,25 @@ impl MaskedBuffer {
         self.groups.clear();
         self.groups.resize((self.cols / 8 * self.rows) as usize, CLEAR);
         Ok(())
+    }
+
+    /// Sets the sub-pixel precision of the rasterizer whose coverage the buffer
+    /// must stay within: occluder vertices are snapped to `1 / 2^bits` pixel as
+    /// it snaps them ([`SUBPIXEL_BITS`](crate::SUBPIXEL_BITS), 8, by default: the
+    /// soft backend, lavapipe and Direct3D 11-class GPUs). An error above
+    /// [`MAX_SUBPIXEL_BITS`](crate::MAX_SUBPIXEL_BITS), where the buffer's edge
+    /// functions would no longer be exact; the setting is then unchanged.
+    pub fn set_subpixel_bits(&mut self, bits: u32) -> Result<(), Error> {
+        if bits > crate::MAX_SUBPIXEL_BITS {
+            return Err(Error::SubpixelBits(bits));
+        }
+        self.subpixel_bits = bits;
+        Ok(())
+    }
+
+    /// The sub-pixel bits occluder vertices are snapped with.
+    pub fn subpixel_bits(&self) -> u32 {
+        self.subpixel_bits
     }
 
     /// Subtile (`sx`, `sy`).

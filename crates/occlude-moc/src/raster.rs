@@ -4,7 +4,8 @@
 //! subtiles at a time ([`lanes`], in AVX2 where the CPU has it: [`avx2`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
-//! edge function at the pixel centre, with a tie rule). Along a row that
+//! edge function at the pixel centre, with the top-left rule on the edge; of
+//! the snapped vertices, `crate::project`, exact). Along a row that
 //! function is monotone in `x` (every rounded operation is), so an edge's
 //! covered pixels are a half-line; its end is found from the intercept, and only
 //! the pixel centres within the intercept's proven error band ([`Edge::band`])
@@ -12,7 +13,7 @@
 //! what the pixel-by-pixel definition gives.
 
 use crate::buffer::{outside_mask, Group, MaskedBuffer, MergeMode};
-use crate::clip::clip_near;
+use crate::project::screen_triangles;
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
 use rayon::prelude::*;
@@ -21,7 +22,7 @@ mod avx2;
 mod lanes;
 
 use avx2::Avx2;
-use lanes::{Spans, LANES};
+use lanes::{GroupStep, Spans, LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -57,6 +58,22 @@ pub enum CullMode {
 /// units in the last place (`2^-53`) the few rounded operations can lose.
 const BAND_SCALE: f64 = 1.0 / (1u64 << 46) as f64;
 
+/// How far a rasterizer's vertices may lie from a [`ScreenTriangle`]'s, and
+/// what the triangle gives up for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Tolerance {
+    /// Pixels by which the edges are moved inward (0: the edges themselves).
+    pub edge: f64,
+    /// Pixels of vertex displacement the depth bounds allow for.
+    pub depth: f64,
+}
+
+impl Tolerance {
+    /// The triangle as given: its own edges and depth plane.
+    #[cfg(test)]
+    pub(crate) const NONE: Tolerance = Tolerance { edge: 0.0, depth: 0.0 };
+}
+
 /// One edge of a screen-space triangle: `e(x, y) = a x + b y + c`, positive
 /// inside.
 #[derive(Clone, Copy, Debug)]
@@ -75,12 +92,19 @@ pub(crate) struct Edge {
 
 impl Edge {
     /// The edge from `p` to `q` of a triangle whose edge functions are positive
-    /// inside.
-    fn new(p: DVec3, q: DVec3) -> Self {
+    /// inside, moved inward by `margin` pixels (0: the edge itself, with the
+    /// top-left rule on it; more: pixel centres on the moved edge are outside).
+    fn new(p: DVec3, q: DVec3, margin: f64) -> Self {
         let (a, b) = (p.y - q.y, q.x - p.x);
-        let c = -(a * p.x + b * p.y);
+        // `e > margin (|a| + |b|)` puts the centre farther than `margin` from the
+        // edge, whose distance is `e / sqrt(a^2 + b^2)`.
+        let c = -(a * p.x + b * p.y) - margin * (a.abs() + b.abs());
         let r = 1.0 / a;
-        Edge { a, b, c, on: a > 0.0 || (a == 0.0 && b > 0.0), slope: -b * r, offset: -c * r }
+        // The top-left rule (y down, edge functions positive inside): a centre
+        // on the edge is covered when the edge goes up, or is horizontal with
+        // the inside below it.
+        let on = margin == 0.0 && (a > 0.0 || (a == 0.0 && b > 0.0));
+        Edge { a, b, c, on, slope: -b * r, offset: -c * r }
     }
 
     /// Whether the pixel centre (`px`, `py`) is covered by this edge: the
@@ -160,11 +184,16 @@ pub(crate) struct DepthPlane {
 }
 
 impl DepthPlane {
-    fn new(t: &[DVec3; 3]) -> Self {
+    /// The plane through `t`, raised by `(|zx| + |zy|) slack`: at every point at
+    /// least the plane's value anywhere within `slack` pixels (in x and in y),
+    /// so also the depth a rasterizer interpolates from vertices it placed up to
+    /// `slack` away from `t`'s (the crate doc, "Depth per subtile").
+    fn new(t: &[DVec3; 3], slack: f64) -> Self {
         let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
         let n = d1.cross(d2);
         let (zx, zy) = (-n.x / n.z, -n.y / n.z);
-        DepthPlane { zx, zy, z0: t[0].z - zx * t[0].x - zy * t[0].y, zmax: t[0].z.max(t[1].z).max(t[2].z) }
+        let z0 = t[0].z - zx * t[0].x - zy * t[0].y + (zx.abs() + zy.abs()) * slack;
+        DepthPlane { zx, zy, z0, zmax: t[0].z.max(t[1].z).max(t[2].z) }
     }
 
     /// The plane at (`x`, `y`), rounded as every bound is.
@@ -218,10 +247,19 @@ pub(crate) struct ScreenTriangle {
 }
 
 impl ScreenTriangle {
-    /// The triangle `t` on a `width` x `height` screen, or `None` when it is not
-    /// drawn: a non-finite or negative depth coordinate, zero area, culled by
-    /// winding, or no pixel centre on screen within its bounding box.
-    pub(crate) fn new(mut t: [DVec3; 3], cull: CullMode, width: u32, height: u32) -> Option<Self> {
+    /// The triangle `t` on a `width` x `height` screen, its edges moved inward by
+    /// `tolerance.edge` pixels and its depth plane raised by `tolerance.depth`
+    /// ([`DepthPlane::new`]), or `None` when it is not drawn: a non-finite or
+    /// negative depth coordinate, zero area, culled by winding, or no pixel
+    /// centre on screen within its bounding box.
+    #[inline]
+    pub(crate) fn new(
+        mut t: [DVec3; 3],
+        cull: CullMode,
+        width: u32,
+        height: u32,
+        tolerance: Tolerance,
+    ) -> Option<Self> {
         if t.iter().any(|p| !p.is_finite() || p.z < 0.0) {
             return None;
         }
@@ -250,10 +288,11 @@ impl ScreenTriangle {
         if x0 >= x1 || y0 >= y1 {
             return None;
         }
-        let edges = [Edge::new(t[0], t[1]), Edge::new(t[1], t[2]), Edge::new(t[2], t[0])];
+        let m = tolerance.edge;
+        let edges = [Edge::new(t[0], t[1], m), Edge::new(t[1], t[2], m), Edge::new(t[2], t[0], m)];
         let bands = edges.map(|e| e.band(w, h));
         let (t_min, t_max) = (f64::from(x0) - 2.5, f64::from(x1) + 2.5);
-        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t), x0, x1, y0, y1, bands, t_min, t_max })
+        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t, tolerance.depth), x0, x1, y0, y1, bands, t_min, t_max })
     }
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
@@ -296,19 +335,19 @@ impl Band<'_> {
             let bottom = sy * 4 + 4 > self.height;
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
                 let sx = g * LANES as u32;
-                let (mut cover, depth) = match self.avx2 {
-                    Some(avx2) => avx2.subtile_lanes(tri, &spans, sx, sy),
-                    None => lanes::subtile_lanes(tri, &spans, sx, sy),
-                };
-                if bottom || (sx + LANES as u32) * 8 > self.width {
-                    for (l, c) in cover.iter_mut().enumerate().filter(|(_, c)| **c != 0) {
-                        *c |= outside_mask(self.width, self.height, sx + l as u32, sy);
-                    }
-                }
+                let outside = (bottom || (sx + LANES as u32) * 8 > self.width)
+                    .then(|| std::array::from_fn(|l| outside_mask(self.width, self.height, sx + l as u32, sy)));
+                let step = GroupStep { tri, spans: &spans, sx, sy, outside };
                 let group = &mut self.groups[row + g as usize];
                 match self.avx2 {
-                    Some(avx2) => avx2.merge(group, &cover, &depth, self.merge),
-                    None => group.merge(&cover, &depth, self.merge),
+                    Some(avx2) => avx2.draw_group(group, &step, self.merge),
+                    None => {
+                        let (mut cover, depth) = lanes::subtile_lanes(tri, &spans, sx, sy);
+                        if let Some(outside) = &step.outside {
+                            lanes::add_outside(&mut cover, outside);
+                        }
+                        group.merge(&cover, &depth, self.merge);
+                    }
                 }
             }
         }
@@ -388,9 +427,11 @@ const BAND_ROWS: usize = 4;
 
 impl MaskedBuffer {
     /// Renders indexed occluder triangles, `model_to_clip` taking `positions` to
-    /// clip space (wgpu conventions). Triangles crossing the near plane are
-    /// clipped; index triples with an out-of-range index, NaN vertices and
-    /// zero-area triangles are skipped. Cost: per triangle, its pixel rows and the
+    /// clip space (wgpu conventions). Vertices are snapped to the sub-pixel
+    /// grid of [`set_subpixel_bits`](Self::set_subpixel_bits) (the crate doc,
+    /// "Coverage"); triangles crossing the near plane are clipped; index
+    /// triples with an out-of-range index, NaN vertices and zero-area
+    /// triangles are skipped. Cost: per triangle, its pixel rows and the
     /// subtiles its rows touch. Run inside a rayon pool of several threads, large
     /// sets are set up in parallel and rasterized in parallel over bands of rows;
     /// the buffer is the same whatever the threads. Returns the work done, for
@@ -423,10 +464,10 @@ impl MaskedBuffer {
     /// parallel chunks, then drawn in parallel bands, when the current rayon pool
     /// has several threads.
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
-        let (width, height) = (self.width, self.height);
+        let (width, height, bits) = (self.width, self.height, self.subpixel_bits);
         let setup = |i: usize, work: &mut RenderWork, out: &mut dyn FnMut(ScreenTriangle)| {
             if let Some(c) = clip(i) {
-                work.triangles += screen_triangles(c, cull, width, height, &mut |tri| {
+                work.triangles += screen_triangles(c, cull, width, height, bits, &mut |tri| {
                     work.tiles += tri.tiles();
                     out(tri)
                 });
@@ -478,36 +519,6 @@ impl MaskedBuffer {
             avx2,
         }
     }
-}
-
-/// Clips a clip-space triangle to the near plane, projects it to a `width` x
-/// `height` screen and hands the drawable triangles of the resulting fan to
-/// `out`; returns how many triangles the fan has (drawable or not).
-fn screen_triangles(
-    clip: [Vec4; 3],
-    cull: CullMode,
-    width: u32,
-    height: u32,
-    out: &mut dyn FnMut(ScreenTriangle),
-) -> u64 {
-    let mut poly = [Vec4::ZERO; 4];
-    let n = clip_near(clip, &mut poly);
-    if n < 3 {
-        return 0;
-    }
-    let (w, h) = (f64::from(width), f64::from(height));
-    let mut screen = [DVec3::ZERO; 4];
-    for (s, c) in screen.iter_mut().zip(&poly[..n]) {
-        let r = 1.0 / c.w as f64;
-        let (x, y, z) = (c.x as f64 * r, c.y as f64 * r, c.z as f64 * r);
-        *s = DVec3::new((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h, z);
-    }
-    for k in 1..n - 1 {
-        if let Some(tri) = ScreenTriangle::new([screen[0], screen[k], screen[k + 1]], cull, width, height) {
-            out(tri);
-        }
-    }
-    n as u64 - 2
 }
 
 #[cfg(test)]
@@ -590,7 +601,7 @@ mod tests {
                     t[1].y = t[0].y;
                 }
                 let tris = [t, [t[0], t[2], t[1]]].into_iter();
-                for tri in tris.filter_map(|t| ScreenTriangle::new(t, CullMode::None, w, h)) {
+                for tri in tris.filter_map(|t| ScreenTriangle::new(t, CullMode::None, w, h, Tolerance::NONE)) {
                     fast.whole().draw(&tri);
                     portable.whole_with(None).draw(&tri);
                     reference_draw(&mut slow, &tri);

@@ -1,5 +1,6 @@
-//! Conservativeness against a simple exact reference written here (per pixel
-//! centre edge test in f64, depth by interpolating NDC z), and coverage checks.
+//! Conservativeness against a simple exact reference written here (vertices
+//! snapped to 1/256 pixel as a rasterizer snaps them, per pixel centre edge
+//! test in f64, depth by interpolating NDC z), and coverage checks.
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use occlude_moc::{CullMode, MaskedBuffer, MergeMode, Visibility};
@@ -12,7 +13,8 @@ impl Lcg {
     }
 }
 
-/// Exact depth buffer: pixel centres inside (edges inclusive, more coverage than
+/// Exact depth buffer of a rasterizer with 8 sub-pixel bits: vertices snapped
+/// to 1/256 pixel, pixel centres inside (edges inclusive, more coverage than
 /// the masked buffer takes), near-clipped triangles, nearest NDC z kept.
 fn reference(w: u32, h: u32, tris: &[[Vec3; 3]]) -> Vec<f64> {
     let mut depth = vec![1.0f64; (w * h) as usize];
@@ -34,7 +36,10 @@ fn reference(w: u32, h: u32, tris: &[[Vec3; 3]]) -> Vec<f64> {
         };
         let s: Vec<[f64; 3]> = poly
             .iter()
-            .map(|v| [(v.x as f64 + 1.0) * 0.5 * w as f64, (1.0 - v.y as f64) * 0.5 * h as f64, v.z as f64])
+            .map(|v| {
+                let snap = |p: f64| (p * 256.0).round() / 256.0;
+                [snap((v.x as f64 + 1.0) * 0.5 * w as f64), snap((1.0 - v.y as f64) * 0.5 * h as f64), v.z as f64]
+            })
             .collect();
         for k in 1..s.len().saturating_sub(1) {
             let (a, b, cc) = (s[0], s[k], s[k + 1]);

@@ -40,25 +40,35 @@
 //!   it, exactly as for the query methods. The buffer rounds the box's screen
 //!   rectangle outward by a pixel and lowers its nearest depth by a relative
 //!   1e-6, more than the rounding of either backend's interpolated depth.
-//! - Depth precision: the buffer's bound at `p` is at least the occluder's
-//!   depth plane anywhere in `p`'s 8x4-pixel subtile (its maximum over the
-//!   subtile's corners, computed in `f64`, rounded up to `f32`), so also at
-//!   the position a backend samples after snapping vertices to its sub-pixel
-//!   grid; the test compares strictly (`nearest < bound` is visible), so ties
-//!   are visible.
+//! - Depth precision: the buffer's bound at `p` is at least the depth plane
+//!   through the occluder's snapped vertices anywhere in `p`'s 8x4-pixel
+//!   subtile (its maximum over the subtile's corners, computed in `f64`,
+//!   rounded up to `f32`), raised by the plane's change over one grid step so
+//!   that it also bounds a rasterizer that placed a vertex a step away; the
+//!   test compares strictly (`nearest < bound` is visible), so ties are
+//!   visible.
 //! - Near-plane clipping: occluders are clipped to the near plane in clip space
 //!   before the divide; a box reaching the camera's near region
 //!   ([`Camera::box_touches_near_region`], which includes a camera inside the
 //!   box) or with a corner behind the near plane is visible untested.
-//! - Coverage: the buffer counts a pixel covered when its centre is inside an
-//!   occluder triangle in `f64` (top-left-like rule on edges, so a mesh's shared
-//!   edges leave no holes). The backends snap vertices to 1/256 pixel first;
-//!   where an occluder's outer edge passes within that distance of a pixel
-//!   centre, the two may disagree. A hidden object is culled through such a
-//!   pixel only if its whole subtile is covered in the buffer, which at an
-//!   outer edge needs another occluder abutting it exactly; the every-frame
-//!   tests (both backends, every small scene) have found no such pixel. This is
-//!   the one step that rests on the scenes rather than on a bound.
+//! - Coverage: the buffer covers with each occluder triangle exactly the
+//!   pixels a rasterizer with 8 sub-pixel bits and the top-left rule covers
+//!   with it (`occlude_moc`'s crate doc): it snaps the vertices to the same
+//!   1/256-pixel grid, after the same `f64` projection of the same `f32`
+//!   clip coordinates, and evaluates the same edge functions, exactly in
+//!   `f64`. So a pixel counts as covered only where the backend's image has
+//!   that occluder, on every frame of any scene; no step rests on the
+//!   scenes. Triangles crossing the near plane or reaching 8000 pixels beyond
+//!   the screen are drawn with their edges 1/32 pixel inward instead, more
+//!   than clipping and snapping move a rasterizer's edges. The soft backend
+//!   computes the clip coordinates with the same code (`view_projection *
+//!   transform` applied by glam), so for it the argument is complete. The
+//!   wgpu backend computes them on the GPU in its own `f32` arithmetic;
+//!   where that moves a vertex across a rounding tie of the grid (it moves
+//!   vertices by about `1e-4` pixel), the GPU snaps it one grid step away and
+//!   a pixel centre within 1/256 pixel of that vertex's outer edges can
+//!   differ: the one assumption left, for GPUs only (the depth bounds allow
+//!   for that step).
 //!
 //! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region
 //! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS

@@ -10,7 +10,7 @@
 
 use std::arch::x86_64::*;
 
-use super::lanes::{Spans, LANES};
+use super::lanes::{GroupStep, Spans, LANES};
 use super::{DepthPlane, ScreenTriangle};
 use crate::buffer::{Group, MergeMode};
 
@@ -31,7 +31,9 @@ impl Avx2 {
         unsafe { edge_spans(tri, y) }
     }
 
-    /// [`lanes::subtile_lanes`](super::lanes::subtile_lanes), in AVX2.
+    /// [`lanes::subtile_lanes`](super::lanes::subtile_lanes), in AVX2 (on its
+    /// own for the tests; the rasterizer runs it in [`Self::draw_group`]).
+    #[cfg(test)]
     pub(crate) fn subtile_lanes(
         self,
         tri: &ScreenTriangle,
@@ -43,11 +45,31 @@ impl Avx2 {
         unsafe { subtile_lanes(tri, spans, sx, sy) }
     }
 
-    /// [`Group::merge`], in AVX2.
+    /// One group's step of a subtile row in one call, so that the masks and
+    /// depth bounds stay in registers: [`Self::subtile_lanes`], the padding
+    /// pixels added to the lanes that cover something
+    /// ([`super::lanes::add_outside`]), then [`Self::merge`].
+    pub(crate) fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { draw_group(group, step, mode) }
+    }
+
+    /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
+    /// runs it in [`Self::draw_group`]).
+    #[cfg(test)]
     pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { merge(group, cover, depth, mode) }
     }
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+    let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy);
+    if let Some(outside) = &step.outside {
+        super::lanes::add_outside(&mut cover, outside);
+    }
+    merge(group, &cover, &depth, mode);
 }
 
 #[target_feature(enable = "avx2")]
@@ -95,6 +117,7 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
     spans
 }
 
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
     let bx = _mm256_mullo_epi32(
@@ -162,6 +185,7 @@ unsafe fn round_far(depth: __m256d) -> __m128 {
 /// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each
 /// step a comparison and a blend; lanes whose cover is empty, or whose depth is
 /// NaN or not nearer than the reference, keep their subtile.
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn merge(group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
     let zero = _mm256_setzero_si256();

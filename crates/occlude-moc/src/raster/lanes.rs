@@ -105,6 +105,31 @@ pub(crate) fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u3
     (cover, depth)
 }
 
+/// One group's step of a subtile row: what [`subtile_lanes`] reads, and the
+/// padding pixels of the group's lanes.
+pub(crate) struct GroupStep<'a> {
+    pub tri: &'a ScreenTriangle,
+    pub spans: &'a Spans,
+    /// The group's first subtile.
+    pub sx: u32,
+    pub sy: u32,
+    /// Per lane, its subtile's pixels beyond the screen; `None` where the
+    /// group lies wholly on screen.
+    pub outside: Option<[u32; LANES]>,
+}
+
+/// Adds the padding pixels `outside` (per lane: the pixels of its subtile
+/// beyond the screen) to the lanes of `cover` that cover something: padding
+/// counts as covered by every triangle touching its subtile (the crate doc).
+#[inline]
+pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
+    for (c, &o) in cover.iter_mut().zip(outside) {
+        if *c != 0 {
+            *c |= o;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,7 +169,7 @@ mod tests {
             if out.len() % 7 == 0 {
                 t[2].x = t[0].x;
             }
-            if let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h) {
+            if let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h, super::super::Tolerance::NONE) {
                 out.push((w, h, tri));
             }
         }
