@@ -74,8 +74,8 @@ pub mod stats;
 pub use backend::{
     Backend, CpuCullingWork, FrameCounter, Instruments, OracleView, QueryHandle, RenderState, StateTracker,
 };
-pub use cost_model::CostModel;
 pub use camera::{Camera, CameraError, CameraMatrices, Frustum, NearRegion, Visibility};
+pub use cost_model::CostModel;
 pub use frame::{differing_pixels, render_frame};
 pub use geometry::Aabb;
 pub use gpu_culling::{

@@ -6,8 +6,8 @@
 //! any method knowing.
 
 use occlude_core::{
-    Aabb, Backend, BoxSet, Camera, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
+    Aabb, Backend, BoxSet, Camera, CostModel, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling,
+    GpuCullingUnsupported, IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
 };
 use std::collections::HashMap;
 
@@ -202,6 +202,10 @@ impl<B: Backend> Backend for RecordingBackend<B> {
 
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
         self.inner.instruments()
+    }
+
+    fn cost_model(&self) -> Option<CostModel> {
+        self.inner.cost_model()
     }
 }
 

@@ -31,8 +31,8 @@ use glam::{Mat4, Vec4};
 use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, Camera, CostModel, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, Instruments,
-    OracleView, QueryHandle, QueryMode, RenderState, Scene,
+    Aabb, Backend, Camera, CostModel, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
+    Instruments, OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
 use std::time::Instant;
 
