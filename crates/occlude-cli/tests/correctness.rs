@@ -21,7 +21,7 @@ use std::collections::HashSet;
 fn config(scene: &str, hierarchy: HierarchyKind) -> BenchConfig {
     BenchConfig {
         scene: scene.into(),
-        methods: ["vfc", "sw", "chc", "chcpp", "opt", "moc"].map(String::from).to_vec(),
+        methods: ["vfc", "sw", "chc", "chcpp", "opt", "moc", "nohc", "nohc-opt"].map(String::from).to_vec(),
         frames: 90,
         resolution: (480, 360),
         hierarchy,

@@ -7,6 +7,7 @@
 //! through the GPU queue plus a read-back latency.
 
 use crate::camera::Camera;
+use crate::cost_model::CostModel;
 use crate::geometry::Aabb;
 use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
 use crate::stats::FrameStats;
@@ -102,6 +103,14 @@ pub trait Backend {
     ///
     /// [`CullingMethod::needs_oracle`]: crate::CullingMethod::needs_oracle
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
+        None
+    }
+
+    /// The backend's estimate of what draws and queries cost, for methods
+    /// that decide by cost whether a query pays (`nohc`), or `None` for a
+    /// backend that measures its time rather than modelling it (the
+    /// default): such methods then use [`CostModel::default`].
+    fn cost_model(&self) -> Option<CostModel> {
         None
     }
 }

@@ -54,6 +54,7 @@
 
 pub mod backend;
 pub mod camera;
+pub mod cost_model;
 pub mod depth_pyramid;
 pub mod frame;
 pub mod geometry;
@@ -75,6 +76,7 @@ pub use backend::{
     Backend, CpuCullingWork, FrameCounter, Instruments, OracleView, QueryHandle, RenderState, StateTracker,
 };
 pub use camera::{Camera, CameraError, CameraMatrices, Frustum, NearRegion, Visibility};
+pub use cost_model::CostModel;
 pub use frame::{differing_pixels, render_frame};
 pub use geometry::Aabb;
 pub use gpu_culling::{

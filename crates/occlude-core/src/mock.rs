@@ -28,6 +28,7 @@
 
 use crate::backend::{Backend, CpuCullingWork, FrameCounter, Instruments, QueryHandle, RenderState};
 use crate::camera::Camera;
+use crate::cost_model::CostModel;
 use crate::geometry::Aabb;
 use crate::gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
@@ -83,6 +84,8 @@ pub enum Call {
     GpuCulling,
     /// `instruments`.
     Instruments,
+    /// `cost_model`.
+    CostModel,
     /// [`GpuCulling::test_boxes`] (`pyramid` false) or
     /// [`GpuCulling::test_boxes_pyramid`] (true) of these ids.
     TestBoxes {
@@ -116,6 +119,7 @@ impl Call {
             Call::Failure => "failure",
             Call::GpuCulling => "gpu_culling",
             Call::Instruments => "instruments",
+            Call::CostModel => "cost_model",
             Call::TestBoxes { .. } => "test_boxes",
             Call::BuildPyramid => "build_pyramid",
             Call::DrawList(_) => "draw_list",
@@ -125,7 +129,7 @@ impl Call {
 }
 
 /// Every method of the [`Backend`] trait, in the order it declares them.
-pub const BACKEND_CALLS: [&str; 12] = [
+pub const BACKEND_CALLS: [&str; 13] = [
     "begin_frame",
     "draw",
     "issue_query",
@@ -138,6 +142,7 @@ pub const BACKEND_CALLS: [&str; 12] = [
     "failure",
     "gpu_culling",
     "instruments",
+    "cost_model",
 ];
 
 /// The calls a [`MockBackend`] received, shared with whoever holds a handle
@@ -170,6 +175,7 @@ pub struct MockBackend {
     count: FrameCounter,
     /// GPU-resident culling's resources, when it is on.
     culling: Option<HostResources>,
+    cost_model: Option<CostModel>,
     queries: Vec<MockQuery>,
     commands: u64,
     log: CallLog,
@@ -191,6 +197,7 @@ impl MockBackend {
             camera: None,
             count: FrameCounter::new(instances.len()),
             culling: None,
+            cost_model: None,
             queries: Vec::new(),
             commands: 0,
             log: CallLog::default(),
@@ -208,6 +215,13 @@ impl MockBackend {
     /// included), answered from the same script as queries.
     pub fn with_gpu_culling(mut self) -> Self {
         self.culling = Some(HostResources::default());
+        self
+    }
+
+    /// The mock answering [`Backend::cost_model`] with `model` (by default
+    /// it has none, as a backend that measures its time).
+    pub fn with_cost_model(mut self, model: CostModel) -> Self {
+        self.cost_model = Some(model);
         self
     }
 
@@ -348,6 +362,11 @@ impl Backend for MockBackend {
         self.push(Call::Instruments);
         None
     }
+
+    fn cost_model(&self) -> Option<CostModel> {
+        self.push(Call::CostModel);
+        self.cost_model
+    }
 }
 
 impl GpuCulling for MockBackend {
@@ -467,6 +486,7 @@ pub fn assert_forwards_every_call<D: Backend>(wrap: impl FnOnce(MockBackend) -> 
         assert_eq!(e.0, NO_GPU_CULLING, "gpu_culling answered by the decorator, not forwarded");
     }
     decorator.instruments();
+    decorator.cost_model();
     let received: Vec<&str> = log.borrow().iter().map(Call::name).collect();
     let missing: Vec<&str> = BACKEND_CALLS.iter().copied().filter(|c| !received.contains(c)).collect();
     assert!(missing.is_empty(), "the decorator did not forward {missing:?}");

@@ -7,8 +7,8 @@
 //! occlude can wrap its own backend the same way to debug its culling.
 
 use crate::{
-    Aabb, Backend, BoxSet, Camera, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling, GpuCullingUnsupported,
-    IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
+    Aabb, Backend, BoxSet, Camera, CostModel, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling,
+    GpuCullingUnsupported, IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
 };
 use std::collections::HashMap;
 
@@ -203,6 +203,10 @@ impl<B: Backend> Backend for RecordingBackend<B> {
 
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
         self.inner.instruments()
+    }
+
+    fn cost_model(&self) -> Option<CostModel> {
+        self.inner.cost_model()
     }
 }
 

@@ -3,6 +3,7 @@
 //!
 //! Where the defaults come from is documented in `docs/gpu-models.md`.
 
+use occlude_core::CostModel;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use thiserror::Error;
@@ -202,6 +203,20 @@ impl GpuModel {
         }
     }
 
+    /// The costs of draws and queries this model charges, for methods
+    /// that decide by cost whether a query pays (`nohc`).
+    pub fn cost_model(&self) -> CostModel {
+        CostModel {
+            cpu_draw_call_us: self.cpu_draw_call_us,
+            gpu_draw_call_us: self.gpu_draw_call_us,
+            gpu_triangle_ns: self.gpu_triangle_ns,
+            gpu_fragment_ns: self.gpu_fragment_ns,
+            cpu_query_us: self.cpu_query_us,
+            gpu_query_box_us: self.gpu_query_box_us,
+            gpu_query_fragment_ns: self.gpu_query_fragment_ns,
+        }
+    }
+
     /// The preset called `name`.
     pub fn preset(name: &str) -> Option<Self> {
         match name {
@@ -281,6 +296,13 @@ impl GpuModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Methods on a backend without a model of its own decide as on `modern`.
+    #[test]
+    fn the_default_cost_model_is_the_modern_presets() {
+        assert_eq!(GpuModel::modern().cost_model(), CostModel::default());
+        assert_ne!(GpuModel::gpu_2004().cost_model(), CostModel::default());
+    }
 
     #[test]
     fn presets_are_valid_and_distinct() {

@@ -12,8 +12,8 @@
 //! it.
 
 use occlude_core::{
-    Aabb, Backend, Camera, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling, GpuCullingUnsupported,
-    Instruments, QueryHandle,
+    Aabb, Backend, Camera, CostModel, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling,
+    GpuCullingUnsupported, Instruments, QueryHandle,
 };
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -80,6 +80,9 @@ impl Backend for DrawLog<'_> {
     }
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
         self.inner.instruments()
+    }
+    fn cost_model(&self) -> Option<CostModel> {
+        self.inner.cost_model()
     }
 }
 

@@ -55,15 +55,51 @@ struct Experiment {
     hierarchy: HierarchyKind,
     gpu_model: fn() -> GpuModel,
     methods: &'static [&'static str],
-    /// The names of the two tables: methods compared, and variants of one
-    /// method (as the paper names them where it published them).
-    tables: [&'static str; 2],
-    /// The method whose options the second table varies, and the variants
-    /// (each a list of `method.key=value`; the first, the defaults, is the
-    /// first table's row of the method).
+    /// The name of the table of methods compared (as the paper names it
+    /// where it published one).
+    compared: &'static str,
+    /// The method whose options the tables of variants vary.
     varied: &'static str,
-    variants: &'static [&'static [&'static str]],
+    /// The tables of variants of `varied`.
+    variant_tables: &'static [VariantTable],
 }
+
+/// A table of variants of one method.
+struct VariantTable {
+    /// Its name (the paper's, where it published one).
+    name: &'static str,
+    /// The variants, each a label and a list of `method.key=value`; the
+    /// defaults (no options) are the compared table's row of the method.
+    variants: &'static [(&'static str, &'static [&'static str])],
+}
+
+/// CHC++'s Figure 8 (section 8, p. 229): "We start with CHC and add one
+/// optimization at a time", B (batching of previously visible and
+/// invisible nodes: `b`, the v-queue, and the material-sorted render queue
+/// the batches are flushed through, which plain CHC lacks), R
+/// (randomization), TB (tighter bounds), MQ (multiqueries). "CHC" is
+/// `chcpp` with all of them off: CHC on the same BVH with a visible leaf
+/// re-queried every `nav` = 10 frames, the interval R randomizes.
+const FIGURE_8: VariantTable = VariantTable {
+    name: "Figure 8",
+    variants: &[
+        (
+            "CHC",
+            &[
+                "chcpp.b=1",
+                "chcpp.vqueue=off",
+                "chcpp.sort=off",
+                "chcpp.random=off",
+                "chcpp.tight=off",
+                "chcpp.multiquery=off",
+            ],
+        ),
+        ("CHC+B", &["chcpp.random=off", "chcpp.tight=off", "chcpp.multiquery=off"]),
+        ("CHC+B+R", &["chcpp.tight=off", "chcpp.multiquery=off"]),
+        ("CHC+B+R+TB", &["chcpp.multiquery=off"]),
+        ("CHC+B+R+TB+MQ (CHC++)", &[]),
+    ],
+};
 
 const CHC: Experiment = Experiment {
     paper: "chc",
@@ -72,9 +108,12 @@ const CHC: Experiment = Experiment {
     hierarchy: HierarchyKind::KdTree,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "chc", IDEAL, "opt"],
-    tables: ["Table 1", "Table 2"],
+    compared: "Table 1",
     varied: "chc",
-    variants: &[&[], &["chc.tav=2"], &["chc.tav=2", "chc.nvp=25"]],
+    variant_tables: &[VariantTable {
+        name: "Table 2",
+        variants: &[("", &[]), ("", &["chc.tav=2"]), ("", &["chc.tav=2", "chc.nvp=25"])],
+    }],
 };
 
 const CHCPP: Experiment = Experiment {
@@ -83,18 +122,24 @@ const CHCPP: Experiment = Experiment {
     scenes: CHC_SCENES,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::modern,
-    methods: &["vfc", "sw", "chc", "chcpp", IDEAL, "opt"],
-    tables: ["methods compared", "ablation"],
+    methods: &["vfc", "sw", "chc", "chcpp", "nohc", "nohc-opt", IDEAL, "opt"],
+    compared: "methods compared",
     varied: "chcpp",
-    variants: &[
-        &[],
-        &["chcpp.multiquery=off"],
-        &["chcpp.vqueue=off"],
-        &["chcpp.sort=off"],
-        &["chcpp.random=off"],
-        &["chcpp.tight=off"],
-        &["chcpp.b=1"],
-        &["chcpp.nav=0"],
+    variant_tables: &[
+        VariantTable {
+            name: "ablation",
+            variants: &[
+                ("", &[]),
+                ("", &["chcpp.multiquery=off"]),
+                ("", &["chcpp.vqueue=off"]),
+                ("", &["chcpp.sort=off"]),
+                ("", &["chcpp.random=off"]),
+                ("", &["chcpp.tight=off"]),
+                ("", &["chcpp.b=1"]),
+                ("", &["chcpp.nav=0"]),
+            ],
+        },
+        FIGURE_8,
     ],
 };
 
@@ -105,9 +150,9 @@ const OM: Experiment = Experiment {
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "om", "opt"],
-    tables: ["methods compared", "variants"],
+    compared: "methods compared",
     varied: "om",
-    variants: &[&[], &["om.grouping=off"]],
+    variant_tables: &[VariantTable { name: "variants", variants: &[("", &[]), ("", &["om.grouping=off"])] }],
 };
 
 /// Tables and the reports behind them.
@@ -160,8 +205,16 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
 }
 
 fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
-    let published = e.tables.map(|name| published::table(e.paper, name));
-    let (mut compared, mut varied) = (Vec::new(), Vec::new());
+    let published = published::table(e.paper, e.compared);
+    let mut compared = Vec::new();
+    let mut varied: Vec<Vec<Row>> = e.variant_tables.iter().map(|_| Vec::new()).collect();
+    // Every variant other than the defaults, once, whichever tables list it.
+    let mut lane_options: Vec<&[&str]> = Vec::new();
+    for (_, opts) in e.variant_tables.iter().flat_map(|t| t.variants) {
+        if !opts.is_empty() && !lane_options.contains(opts) {
+            lane_options.push(opts);
+        }
+    }
     let mut reports = Vec::new();
     for &scene_name in e.scenes {
         let config = BenchConfig {
@@ -174,36 +227,52 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         };
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
-        // The variants other than the defaults (the first table's row of the
-        // method) run as lanes of the same run: `vfc` renders once per scene.
-        let variants = e
-            .variants
+        // The variants run as lanes of the same run: `vfc` renders once per
+        // scene.
+        let variants = lane_options
             .iter()
-            .filter(|opts| !opts.is_empty())
             .map(|opts| Ok(Variant { method: e.varied.into(), options: MethodOptions::parse(opts)? }))
             .collect::<Result<Vec<_>>>()?;
         progress.set_message(format!("{scene_name} {}: methods and {} variants", config.size, variants.len()));
         let run = run_scene_with_variants(&scene, &config, &variants, progress)?;
         let report = run.report(&config);
-        compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published[0])));
+        compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published)));
         let defaults = report.methods.iter().find(|m| m.name == e.varied).cloned();
         reports.push(report);
-        let mut lanes = run.variants.iter();
-        for opts in e.variants {
-            let summary = if opts.is_empty() {
-                defaults.clone().expect("every experiment's varied method is one of its methods")
-            } else {
-                let lane = lanes.next().expect("one lane per variant");
+        let lanes: Vec<_> = run
+            .variants
+            .iter()
+            .map(|lane| {
                 let report = BenchReport::with_methods(&run, std::slice::from_ref(lane), &config);
-                let m = report.methods[0].clone();
+                let summary = report.methods[0].clone();
                 reports.push(report);
-                m
-            };
-            varied.push(Row::new(scene_name, &summary, &opts.join(" "), published[1]));
+                summary
+            })
+            .collect();
+        for (table, rows) in e.variant_tables.iter().zip(&mut varied) {
+            let table_published = published::table(e.paper, table.name);
+            for (_, opts) in table.variants {
+                let summary = match lane_options.iter().position(|o| o == opts) {
+                    Some(lane) => lanes[lane].clone(),
+                    None => defaults.clone().expect("every experiment's varied method is one of its methods"),
+                };
+                rows.push(Row::new(scene_name, &summary, &opts.join(" "), table_published));
+            }
         }
     }
-    let tables = vec![Table::new(e.tables[0], published[0], compared), Table::new(e.tables[1], published[1], varied)];
-    let text = tables.iter().map(|t| t.render(e.title)).collect::<Vec<_>>().join("\n");
+    let mut tables = vec![Table::new(e.compared, published, compared)];
+    let mut text = tables[0].render(e.title);
+    text.push_str(&published::claims_text(e.paper, &tables[0].rows));
+    for (table, rows) in e.variant_tables.iter().zip(varied) {
+        let t = Table::new(table.name, published::table(e.paper, table.name), rows);
+        text.push('\n');
+        text.push_str(&t.render(e.title));
+        for (label, opts) in table.variants.iter().filter(|(label, _)| !label.is_empty()) {
+            let opts = if opts.is_empty() { "(the defaults)".to_string() } else { opts.join(" ") };
+            let _ = writeln!(text, "  {label}: {} {opts}", e.varied);
+        }
+        tables.push(t);
+    }
     Ok(PaperResult { text, tables: PaperTables { paper: e.paper.to_string(), tables, reports }, gvq: None })
 }
 
@@ -329,6 +398,43 @@ mod tests {
         }
         assert_eq!((first["scene"].as_str(), first["method"].as_str()), (Some("teapots"), Some("vfc")));
         assert_eq!(first["published_frame_ms"], 310.42);
+    }
+
+    /// `--paper chcpp`: NOHC and NOHC-OPT beside CHC and CHC++, the
+    /// ablation and Figure 8's optimisations added one at a time (its last
+    /// row CHC++ itself), the claims of the paper's text beside our ratios.
+    #[test]
+    fn the_chcpp_tables_compare_nohc_and_add_the_optimisations_one_at_a_time() {
+        let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
+        let result = run("chcpp", &base, &ProgressBar::hidden()).unwrap();
+        let names: Vec<&str> = result.tables.tables.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(names, ["methods compared", "ablation", "Figure 8"]);
+        let [compared, ablation, figure8] = &result.tables.tables[..] else { unreachable!() };
+        assert_eq!(compared.rows.len(), 3 * 8, "3 scenes x vfc, sw, chc, chcpp, nohc, nohc-opt, ideal, opt");
+        assert_eq!(ablation.rows.len(), 3 * 8);
+        assert_eq!(figure8.rows.len(), 3 * 5);
+        for t in [compared, ablation, figure8] {
+            assert!(t.rows.iter().all(|r| r.missing_pixels == 0 && r.frame_ms > 0.0), "{}", t.name);
+        }
+        // Figure 8 starts from CHC (every optimisation off) and ends at
+        // CHC++, the compared table's row; its rows cite the figure's page.
+        assert!(figure8.rows[0].options.contains("chcpp.b=1") && figure8.rows[0].options.contains("chcpp.tight=off"));
+        let chcpp = compared.rows.iter().find(|r| r.scene == "teapots" && r.method == "chcpp").unwrap();
+        assert_eq!(figure8.rows[4].options, "");
+        assert_eq!(figure8.rows[4].frame_ms, chcpp.frame_ms);
+        assert!(figure8.source.as_deref().is_some_and(|s| s.contains("Figure 8 (p. 229)")));
+        // The variant shared by the ablation and Figure 8 runs once.
+        let lanes = ablation.rows.iter().chain(&figure8.rows).filter(|r| r.scene == "city" && !r.options.is_empty());
+        let distinct: std::collections::HashSet<&str> = lanes.map(|r| r.options.as_str()).collect();
+        assert_eq!(result.tables.reports.len(), 3 * (1 + distinct.len()));
+        assert!(
+            result.text.contains("nohc / chcpp frame time") && result.text.contains("(paper 1.5)"),
+            "{}",
+            result.text
+        );
+        assert!(result.text.contains("CHC+B+R: chcpp chcpp.tight=off chcpp.multiquery=off"), "{}", result.text);
+        let v = serde_json::to_value(&result.tables).unwrap();
+        assert_eq!((v["paper"].as_str(), v["tables"][2]["name"].as_str()), (Some("chcpp"), Some("Figure 8")));
     }
 
     #[test]

@@ -139,9 +139,11 @@ impl Table {
         if let Some(source) = &self.source {
             let _ = writeln!(out, "published: {source}");
         }
+        // The method column fits the longest label (a variant's options).
+        let width = self.rows.iter().map(|r| r.label().chars().count()).max().unwrap_or(0).max(28);
         let _ = writeln!(
             out,
-            "{:<8} {:<28} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8} {:>10}  order",
+            "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8} {:>10}  order",
             "scene",
             "method",
             "frame ms (paper)",
@@ -167,7 +169,7 @@ impl Table {
             previous = &r.scene;
             let _ = writeln!(
                 out,
-                "{:<8} {:<28} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8.0} {:>10}  {order}",
+                "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8.0} {:>10}  {order}",
                 r.scene,
                 r.label(),
                 format!("{:.2} ({})", r.frame_ms, paper(r.published_frame_ms, 2)),

@@ -1,7 +1,9 @@
 //! The papers' published figures (`published.toml`, each table citing its
 //! source), which `occlude bench --paper` prints beside its own.
 
+use super::paper_tables::Row;
 use serde::Deserialize;
+use std::fmt::Write;
 use std::sync::OnceLock;
 
 /// One published table.
@@ -62,19 +64,73 @@ pub struct PublishedRow {
     pub fps_hd3870: Option<f64>,
 }
 
+/// A comparison of two methods a paper states in words, with the ratio of
+/// frame times where it gives one (the CHC++ paper gives its comparisons
+/// as plots and such statements).
+#[derive(Clone, Debug, Deserialize)]
+pub struct PublishedClaim {
+    /// The paper, as `--paper` names it.
+    pub paper: String,
+    /// The method the paper finds slower (as `--methods` names it).
+    pub slower: String,
+    /// The method it finds faster.
+    pub faster: String,
+    /// The slower method's frame time over the faster one's, if the paper
+    /// gives a number.
+    pub ratio: Option<f64>,
+    /// The paper's words.
+    pub quote: String,
+    /// Section and page.
+    pub source: String,
+}
+
 #[derive(Deserialize)]
 struct File {
     table: Vec<PublishedTable>,
+    #[serde(default)]
+    claim: Vec<PublishedClaim>,
 }
 
-/// Every published table, read once from the data file compiled in.
-fn tables() -> &'static [PublishedTable] {
-    static TABLES: OnceLock<Vec<PublishedTable>> = OnceLock::new();
-    TABLES.get_or_init(|| {
-        let file: File =
-            toml::from_str(include_str!("published.toml")).expect("published.toml is valid (a test reads it)");
-        file.table
+/// The data file compiled in, read once.
+fn file() -> &'static File {
+    static FILE: OnceLock<File> = OnceLock::new();
+    FILE.get_or_init(|| {
+        toml::from_str(include_str!("published.toml")).expect("published.toml is valid (a test reads it)")
     })
+}
+
+/// Every published table.
+fn tables() -> &'static [PublishedTable] {
+    &file().table
+}
+
+/// The claims of `paper`, in the data file's order.
+pub fn claims(paper: &str) -> impl Iterator<Item = &'static PublishedClaim> + '_ {
+    file().claim.iter().filter(move |c| c.paper == paper)
+}
+
+/// `paper`'s claims set beside our `rows` (a table of methods compared):
+/// per claim and scene, our ratio of the two methods' mean frame times
+/// beside the paper's, and whether the order agrees (the slower one's
+/// frame time at least the faster one's). Empty for a paper without claims.
+pub fn claims_text(paper: &str, rows: &[Row]) -> String {
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    let mut out = String::new();
+    for c in claims(paper) {
+        let _ = writeln!(out, "claim ({}): \"{}\"", c.source, c.quote);
+        for &scene in &scenes {
+            let frame_ms =
+                |method: &str| rows.iter().find(|r| r.scene == scene && r.method == method).map(|r| r.frame_ms);
+            let (Some(slower), Some(faster)) = (frame_ms(&c.slower), frame_ms(&c.faster)) else { continue };
+            let ours = slower / faster;
+            let paper = c.ratio.map_or("-".to_string(), |r| format!("{r:.1}"));
+            let order = if ours >= 1.0 { "agrees" } else { "DIFFERS" };
+            let _ =
+                writeln!(out, "  {scene:<8} {} / {} frame time {ours:.2} (paper {paper})  {order}", c.slower, c.faster);
+        }
+    }
+    out
 }
 
 /// The table `name` of `paper`, if the paper published one.
@@ -104,6 +160,12 @@ mod tests {
         let t2 = table("chc", "Table 2").expect("CHC Table 2");
         assert_eq!(t2.row("teapots", "chc", "chc.tav=2 chc.nvp=25").unwrap().frame_ms, Some(55.90));
         assert!(table("chc", "Table 9").is_none() && table("om", "Table 1").is_none());
+        let fig8 = table("chcpp", "Figure 8").expect("CHC++ Figure 8's source");
+        assert!(fig8.source.contains("p. 229") && fig8.rows.is_empty(), "{}", fig8.source);
+        let nohc = claims("chcpp").find(|c| c.slower == "nohc" && c.faster == "chcpp").expect("the 1.5x claim");
+        assert_eq!(nohc.ratio, Some(1.5));
+        assert!(nohc.source.contains("p. 230"), "{}", nohc.source);
+        assert_eq!(claims("chc").count(), 0);
         let gvq = table("gvq", "Table 2").expect("GVQ Table 2");
         let row500 = gvq.rows.iter().find(|r| r.objects == Some(500)).unwrap();
         assert_eq!(

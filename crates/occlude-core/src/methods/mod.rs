@@ -13,6 +13,7 @@ mod front_to_back;
 pub mod hiz;
 pub mod ioc;
 pub mod moc;
+pub mod nohc;
 pub mod om;
 pub mod opt;
 pub mod options;
@@ -34,7 +35,10 @@ use crate::scene::Scene;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 10] = ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt"];
+/// `nohc` and `nohc-opt` come last, so that the viewer's digit keys 1 to 0
+/// keep the ten methods before them (`M` reaches every method).
+pub const METHOD_NAMES: [&str; 12] =
+    ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt", "nohc", "nohc-opt"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -84,6 +88,8 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
         "opt" => Box::new(opt::Optimal::default()),
         "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
         "chcpp" => Box::new(chcpp::Chcpp::new(chcpp::ChcppParams::read(&mut reader)?)),
+        "nohc" => Box::new(nohc::Nohc::new(nohc::Estimate::Model)),
+        "nohc-opt" => Box::new(nohc::Nohc::new(nohc::Estimate::Oracle)),
         "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
         "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
         "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),

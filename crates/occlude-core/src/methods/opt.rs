@@ -32,23 +32,14 @@ impl CullingMethod for Optimal {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        let h = ctx.hierarchy;
-        let in_view: Vec<NodeId> =
-            (0..h.node_count() as NodeId).filter(|&n| h.is_leaf(n) && ctx.in_frustum(n)).collect();
-        let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
-        candidates.sort_unstable();
-        candidates.dedup();
-        let Some(instruments) = backend.instruments() else {
+        let in_view = leaves_in_view(ctx);
+        let Some((view, visible)) = oracle_visible(ctx, backend, &in_view) else {
             // Without an oracle (refused up front by `check_support`), every
             // leaf in view: a conservative image, not the ideal set.
             self.leaves = in_view;
             return;
         };
-        let view = instruments.oracle(&ctx.camera, &candidates);
-        let mut visible = vec![false; ctx.scene.instances.len()];
-        for &i in &view.visible {
-            visible[i as usize] = true;
-        }
+        let h = ctx.hierarchy;
         let shared_instances = h.items.len() > ctx.scene.instances.len();
         let seen_leaves = shared_instances.then(|| leaves_with_visible_pixels(h, &ctx.camera, &view));
         self.leaves = in_view
@@ -63,6 +54,32 @@ impl CullingMethod for Optimal {
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         ctx.draw_leaves(backend, &self.leaves, true);
     }
+}
+
+/// The hierarchy's leaves in the frame's view.
+pub(crate) fn leaves_in_view(ctx: &FrameContext<'_>) -> Vec<NodeId> {
+    let h = ctx.hierarchy;
+    (0..h.node_count() as NodeId).filter(|&n| h.is_leaf(n) && ctx.in_frustum(n)).collect()
+}
+
+/// The backend's oracle pass over the instances of `in_view` (leaves): what
+/// it saw, and per scene instance whether it has a visible pixel; `None`
+/// for a backend without an oracle.
+pub(crate) fn oracle_visible(
+    ctx: &FrameContext<'_>,
+    backend: &mut dyn Backend,
+    in_view: &[NodeId],
+) -> Option<(OracleView, Vec<bool>)> {
+    let h = ctx.hierarchy;
+    let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
+    candidates.sort_unstable();
+    candidates.dedup();
+    let view = backend.instruments()?.oracle(&ctx.camera, &candidates);
+    let mut visible = vec![false; ctx.scene.instances.len()];
+    for &i in &view.visible {
+        visible[i as usize] = true;
+    }
+    Some((view, visible))
 }
 
 /// Relative depth uncertainty of a stored pixel depth (a few float steps

@@ -37,8 +37,8 @@ use glam::{Mat4, Vec4};
 use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
 use occlude_core::{
-    Aabb, Backend, Camera, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported, Instruments,
-    OracleView, QueryHandle, QueryMode, RenderState, Scene,
+    Aabb, Backend, Camera, CostModel, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
+    Instruments, OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
 use std::time::Instant;
 
@@ -377,6 +377,10 @@ impl Backend for SoftBackend<'_> {
 
     fn instruments(&mut self) -> Option<&mut dyn Instruments> {
         Some(self)
+    }
+
+    fn cost_model(&self) -> Option<CostModel> {
+        Some(self.model.cost_model())
     }
 }
 
