@@ -48,9 +48,8 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
         "ioc.start = 7: expected a level no deeper than ioc.bottom = 5",
     );
     assert_usage_error(&["bench", "--methods", "roc", "--method-opt", "roc.mode=fast"], "roc.mode = fast");
-    let dir = std::env::temp_dir().join(format!("occlude-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let bad = dir.join("bad.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "query_latency_us = \"slow\"").unwrap();
     assert_usage_error(&["bench", "--gpu-model", bad.to_str().unwrap()], "bad.toml");
 }
@@ -58,7 +57,8 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
 /// A file that cannot be written is refused before the run, not after it.
 #[test]
 fn an_output_file_in_a_missing_folder_is_refused_before_anything_runs() {
-    let missing = std::env::temp_dir().join(format!("occlude-cli-missing-{}", std::process::id())).join("out.json");
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing").join("out.json");
     let missing = missing.to_str().unwrap();
     for args in [
         &["bench", "--json", missing][..],
@@ -75,15 +75,14 @@ fn an_output_file_in_a_missing_folder_is_refused_before_anything_runs() {
         assert!(out.stdout.is_empty(), "{args:?}: nothing should run: {}", String::from_utf8_lossy(&out.stdout));
         assert_usage_error(args, "does not exist");
     }
-    assert_usage_error(&["bench", "--json", std::env::temp_dir().to_str().unwrap()], "is a folder");
+    assert_usage_error(&["bench", "--json", dir.path().to_str().unwrap()], "is a folder");
 }
 
 #[test]
 fn short_run_prints_table_and_writes_json_and_csv() {
-    let dir = std::env::temp_dir().join(format!("occlude-cli-run-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("out.json");
-    let csv = dir.join("out.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("out.json");
+    let csv = dir.path().join("out.csv");
     let out = occlude(&[
         "bench",
         "--frames",
