@@ -12,7 +12,7 @@
 //! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
 //! what the pixel-by-pixel definition gives.
 
-use crate::buffer::{outside_mask, Group, MaskedBuffer, MergeMode};
+use crate::buffer::{Group, MaskedBuffer, MergeMode};
 use crate::project::screen_triangles;
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -22,7 +22,7 @@ mod avx2;
 mod lanes;
 
 use avx2::Avx2;
-use lanes::{GroupStep, Spans, LANES};
+use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -324,56 +324,52 @@ struct Band<'a> {
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
     /// the four pixel rows' spans ([`Self::spans`]), then per [`LANES`] subtiles
-    /// in their reach, the masks and depth bounds, merged.
+    /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
+    /// triangle is one call, so that the steps inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
+        match self.avx2 {
+            Some(avx2) => avx2.draw(self, tri),
+            None => self.draw_with(tri, Portable),
+        }
+    }
+
+    /// [`Self::draw`] with the steps of `lanes`.
+    #[inline(always)]
+    fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
         let last = self.first + (self.groups.len() * LANES) as u32 / self.cols;
         for sy in r0.max(self.first)..r1.min(last) {
-            let spans = self.spans(tri, sy);
+            let y = (sy * 4) as i32;
+            let mut spans = lanes.edge_spans(tri, y);
+            if spans.exact != 0 {
+                exact_spans(tri, y, &mut spans);
+            }
             let Some((left, right)) = spans.reach() else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
                 let sx = g * LANES as u32;
-                let outside = (bottom || (sx + LANES as u32) * 8 > self.width)
-                    .then(|| std::array::from_fn(|l| outside_mask(self.width, self.height, sx + l as u32, sy)));
+                let padded = bottom || (sx + LANES as u32) * 8 > self.width;
+                let outside = padded.then(|| (self.width, self.height));
                 let step = GroupStep { tri, spans: &spans, sx, sy, outside };
-                let group = &mut self.groups[row + g as usize];
-                match self.avx2 {
-                    Some(avx2) => avx2.draw_group(group, &step, self.merge),
-                    None => {
-                        let (mut cover, depth) = lanes::subtile_lanes(tri, &spans, sx, sy);
-                        if let Some(outside) = &step.outside {
-                            lanes::add_outside(&mut cover, outside);
-                        }
-                        group.merge(&cover, &depth, self.merge);
-                    }
-                }
+                lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
             }
         }
     }
+}
 
-    /// The covered pixels of the four rows of subtile row `sy`: the edges the
-    /// lanes decide, then the others (rarely any) row by row with the exact
-    /// scalar rule.
-    fn spans(&self, tri: &ScreenTriangle, sy: u32) -> Spans {
-        let y = (sy * 4) as i32;
-        let mut spans = match self.avx2 {
-            Some(avx2) => avx2.edge_spans(tri, y),
-            None => lanes::edge_spans(tri, y),
-        };
-        if spans.exact != 0 {
-            for r in 0..4 {
-                for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
-                    if spans.exact >> i & 1 == 1 {
-                        let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
-                        spans.lo[r] = spans.lo[r].max(lo);
-                        spans.hi[r] = spans.hi[r].min(hi);
-                    }
-                }
+/// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
+/// to the four rows from `y`, row by row (rarely any).
+#[cold]
+fn exact_spans(tri: &ScreenTriangle, y: i32, spans: &mut Spans) {
+    for r in 0..4 {
+        for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+            if spans.exact >> i & 1 == 1 {
+                let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
+                spans.lo[r] = spans.lo[r].max(lo);
+                spans.hi[r] = spans.hi[r].min(hi);
             }
         }
-        spans
     }
 }
 
@@ -524,7 +520,7 @@ impl MaskedBuffer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::buffer::Subtile;
+    use crate::buffer::{outside_mask, Subtile};
 
     /// The masks by definition: every pixel centre of the subtile tested against
     /// every edge.

@@ -10,8 +10,8 @@
 
 use std::arch::x86_64::*;
 
-use super::lanes::{GroupStep, Spans, LANES};
-use super::{DepthPlane, ScreenTriangle};
+use super::lanes::{add_outside, outside, GroupStep, Lanes, Spans, LANES};
+use super::{Band, DepthPlane, ScreenTriangle};
 use crate::buffer::{Group, MergeMode};
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
@@ -25,14 +25,8 @@ impl Avx2 {
         is_x86_feature_detected!("avx2").then_some(Self(()))
     }
 
-    /// [`lanes::edge_spans`](super::lanes::edge_spans), in AVX2.
-    pub(crate) fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
-        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { edge_spans(tri, y) }
-    }
-
     /// [`lanes::subtile_lanes`](super::lanes::subtile_lanes), in AVX2 (on its
-    /// own for the tests; the rasterizer runs it in [`Self::draw_group`]).
+    /// own for the tests; the rasterizer runs it in [`Lanes::draw_group`]).
     #[cfg(test)]
     pub(crate) fn subtile_lanes(
         self,
@@ -45,17 +39,15 @@ impl Avx2 {
         unsafe { subtile_lanes(tri, spans, sx, sy) }
     }
 
-    /// One group's step of a subtile row in one call, so that the masks and
-    /// depth bounds stay in registers: [`Self::subtile_lanes`], the padding
-    /// pixels added to the lanes that cover something
-    /// ([`super::lanes::add_outside`]), then [`Self::merge`].
-    pub(crate) fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+    /// [`Band::draw`](super::Band) of one triangle in one AVX2 function, so
+    /// that this module's steps ([`Lanes`]) inline into its loop.
+    pub(crate) fn draw(self, band: &mut Band<'_>, tri: &ScreenTriangle) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { draw_group(group, step, mode) }
+        unsafe { draw(self, band, tri) }
     }
 
     /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
-    /// runs it in [`Self::draw_group`]).
+    /// runs it in [`Lanes::draw_group`]).
     #[cfg(test)]
     pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
@@ -63,15 +55,40 @@ impl Avx2 {
     }
 }
 
+impl Lanes for Avx2 {
+    #[inline(always)]
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { edge_spans(tri, y) }
+    }
+
+    /// The group's masks and depth bounds ([`subtile_lanes`]), the padding
+    /// pixels added to the lanes that cover something
+    /// ([`add_outside`](super::lanes::add_outside)), then [`merge`], with the
+    /// masks and depth bounds kept in registers.
+    #[inline(always)]
+    fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { draw_group(group, step, mode) }
+    }
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
+    band.draw_with(tri, avx2);
+}
+
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
     let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy);
-    if let Some(outside) = &step.outside {
-        super::lanes::add_outside(&mut cover, outside);
+    if let Some(screen) = step.outside {
+        add_outside(&mut cover, &outside(screen, step.sx, step.sy));
     }
     merge(group, &cover, &depth, mode);
 }
 
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
     let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
