@@ -20,9 +20,11 @@ use rayon::prelude::*;
 
 mod avx2;
 mod lanes;
+mod setup;
 
 use avx2::Avx2;
 use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
+use setup::SETUP_LANES;
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -230,6 +232,7 @@ pub(crate) fn round_far(depth: f64) -> f32 {
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
 /// depth) with edge functions positive inside, and the pixels whose centres it
 /// may cover.
+#[derive(Clone, Copy)]
 pub(crate) struct ScreenTriangle {
     pub(crate) edges: [Edge; 3],
     pub(crate) plane: DepthPlane,
@@ -460,19 +463,48 @@ impl MaskedBuffer {
     /// parallel chunks, then drawn in parallel bands, when the current rayon pool
     /// has several threads.
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
-        let (width, height, bits) = (self.width, self.height, self.subpixel_bits);
-        let setup = |i: usize, work: &mut RenderWork, out: &mut dyn FnMut(ScreenTriangle)| {
-            if let Some(c) = clip(i) {
+        let (width, height, bits, avx2) = (self.width, self.height, self.subpixel_bits, Avx2::detect());
+        let one = |c: Option<[Vec4; 3]>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+            if let Some(c) = c {
                 work.triangles += screen_triangles(c, cull, width, height, bits, &mut |tri| {
                     work.tiles += tri.tiles();
                     out(tri)
                 });
             }
         };
+        // Triangles `range` in order: with AVX2, four at a time where all four
+        // are in the common case of the batched set-up (`setup`).
+        let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+            let mut i = range.start;
+            if let Some(avx2) = avx2 {
+                while i + SETUP_LANES <= range.end {
+                    let batch: [_; SETUP_LANES] = std::array::from_fn(|l| clip(i + l));
+                    if let [Some(a), Some(b), Some(c), Some(d)] = batch {
+                        let set_up = avx2.setup4(&[a, b, c, d], cull, width, height, bits);
+                        for (l, c) in batch.into_iter().enumerate() {
+                            match set_up.lane(l) {
+                                Some(tri) => {
+                                    work.triangles += 1;
+                                    if let Some(tri) = tri {
+                                        work.tiles += tri.tiles();
+                                        out(&tri);
+                                    }
+                                }
+                                None => one(c, work, out),
+                            }
+                        }
+                    } else {
+                        batch.into_iter().for_each(|c| one(c, work, out));
+                    }
+                    i += SETUP_LANES;
+                }
+            }
+            (i..range.end).for_each(|i| one(clip(i), work, out));
+        };
         let mut work = RenderWork::default();
         if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
             let mut whole = self.whole();
-            (0..count).for_each(|i| setup(i, &mut work, &mut |tri| whole.draw(&tri)));
+            setup(0..count, &mut work, &mut |tri| whole.draw(tri));
             return work;
         }
         let bands = (self.rows as usize).div_ceil(BAND_ROWS);
@@ -480,13 +512,12 @@ impl MaskedBuffer {
             .into_par_iter()
             .map(|c| {
                 let (mut tris, mut work) = (Vec::with_capacity(SETUP_CHUNK), RenderWork::default());
-                (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count))
-                    .for_each(|i| setup(i, &mut work, &mut |t| tris.push(t)));
+                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut |t| tris.push(*t));
                 (Binned::new(tris, bands), work)
             })
             .collect();
         chunks.iter().for_each(|(_, w)| work += *w);
-        let (cols, merge, avx2) = (self.cols, self.merge, Avx2::detect());
+        let (cols, merge) = (self.cols, self.merge);
         self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
             let mut band = Band { groups, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {

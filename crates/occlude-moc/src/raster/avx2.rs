@@ -11,8 +11,10 @@
 use std::arch::x86_64::*;
 
 use super::lanes::{add_outside, outside, GroupStep, Lanes, Spans, LANES};
-use super::{Band, DepthPlane, ScreenTriangle};
+use super::setup::{Batch, SETUP_LANES};
+use super::{Band, CullMode, DepthPlane, ScreenTriangle};
 use crate::buffer::{Group, MergeMode};
+use glam::Vec4;
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
 /// which makes calling this module's `target_feature` functions sound.
@@ -44,6 +46,19 @@ impl Avx2 {
     pub(crate) fn draw(self, band: &mut Band<'_>, tri: &ScreenTriangle) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { draw(self, band, tri) }
+    }
+
+    /// Four triangles set up at once ([`setup::setup4`](super::setup::setup4)).
+    pub(crate) fn setup4(
+        self,
+        clip: &[[Vec4; 3]; SETUP_LANES],
+        cull: CullMode,
+        width: u32,
+        height: u32,
+        subpixel_bits: u32,
+    ) -> Batch {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { super::setup::setup4(clip, cull, width, height, subpixel_bits) }
     }
 
     /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
