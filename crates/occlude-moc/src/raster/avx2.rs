@@ -156,14 +156,7 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
         _mm256_add_epi32(_mm256_set1_epi32(sx as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)),
         _mm256_set1_epi32(8),
     );
-    let ones = _mm256_set1_epi32(1);
-    let mut cover = _mm256_setzero_si256();
-    for r in 0..4 {
-        let (lo, hi) = (in_subtile(spans.lo[r], bx), in_subtile(spans.hi[r], bx));
-        let hi = _mm256_max_epi32(hi, lo);
-        let bits = _mm256_sub_epi32(_mm256_sllv_epi32(ones, hi), _mm256_sllv_epi32(ones, lo));
-        cover = _mm256_or_si256(cover, _mm256_sllv_epi32(bits, _mm256_set1_epi32(8 * r as i32)));
-    }
+    let cover = group_cover(spans, sx);
     let plane = &tri.plane;
     let corner_x = _mm256_add_epi32(bx, _mm256_set1_epi32(if plane.zx > 0.0 { 8 } else { 0 }));
     let by = f64::from(sy * 4);
@@ -175,14 +168,37 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
     out
 }
 
-/// Pixel `x` as a column of each lane's subtile starting at `bx`, clamped to
-/// `0..=8`.
+/// The coverage masks of the eight subtiles of the group from subtile column
+/// `sx` (64 pixels wide): each pixel row's span as one 64-bit row of the
+/// group (ones from `lo` on, less ones from `hi` on: variable shifts, which
+/// give 0 from 64 on), then the 4 x 8 bytes transposed so that subtile `l`
+/// takes byte `l` of each row.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn in_subtile(x: i32, bx: __m256i) -> __m256i {
-    _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(x), bx), _mm256_setzero_si256()),
-        _mm256_set1_epi32(8),
+unsafe fn group_cover(spans: &Spans, sx: u32) -> __m256i {
+    let (gx, zero) = (_mm_set1_epi32(sx as i32 * 8), _mm_setzero_si128());
+    let column = |x: &[i32; 4]| {
+        _mm256_cvtepu32_epi64(_mm_max_epi32(_mm_sub_epi32(_mm_loadu_si128(x.as_ptr().cast()), gx), zero))
+    };
+    let ones = _mm256_set1_epi64x(-1);
+    let rows =
+        _mm256_andnot_si256(_mm256_sllv_epi64(ones, column(&spans.hi)), _mm256_sllv_epi64(ones, column(&spans.lo)));
+    // Per 128-bit half (rows 0, 1 and rows 2, 3): byte l of the two rows side
+    // by side, for l = 0..8.
+    let pairs = _mm256_shuffle_epi8(
+        rows,
+        _mm256_setr_epi8(
+            0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15, 0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15,
+        ),
+    );
+    // Subtiles 0-3 in the low half, 4-7 in the high half, each half's rows
+    // 0, 1 pairs then rows 2, 3 pairs; then each subtile's two pairs joined.
+    let halves = _mm256_permute4x64_epi64::<0b11_01_10_00>(pairs);
+    _mm256_shuffle_epi8(
+        halves,
+        _mm256_setr_epi8(
+            0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15, 0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15,
+        ),
     )
 }
 
