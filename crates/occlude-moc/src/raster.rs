@@ -2,6 +2,7 @@
 //! four pixel rows, then the coverage masks of the subtiles in reach by shifts
 //! of the rows' spans and their depth bounds from the triangle's plane, eight
 //! subtiles at a time ([`lanes`], in AVX2 where the CPU has it: [`avx2`]).
+//! With AVX2, triangles are set up four at a time ([`setup`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with the top-left rule on the edge; of
@@ -24,7 +25,7 @@ mod setup;
 
 use avx2::Avx2;
 use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
-use setup::SETUP_LANES;
+use setup::{LaneState, SETUP_LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -347,7 +348,7 @@ impl Band<'_> {
             if spans.exact != 0 {
                 exact_spans(tri, y, &mut spans);
             }
-            let Some((left, right)) = spans.reach() else { continue };
+            let Some((left, right)) = lanes.reach(&spans) else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
@@ -483,15 +484,18 @@ impl MaskedBuffer {
                         let set_up = avx2.setup4(&[a, b, c, d], cull, width, height, bits);
                         for (l, c) in batch.into_iter().enumerate() {
                             match set_up.lane(l) {
-                                Some(tri) => {
-                                    work.triangles += 1;
-                                    if let Some(tri) = tri {
-                                        work.tiles += tri.tiles();
-                                        out(&tri);
-                                    }
+                                LaneState::Drawn => {
+                                    let tri = set_up.triangle(l);
+                                    work.tiles += tri.tiles();
+                                    out(&tri);
                                 }
-                                None => one(c, work, out),
+                                LaneState::Rejected => {}
+                                LaneState::Scalar => {
+                                    one(c, work, out);
+                                    continue;
+                                }
                             }
+                            work.triangles += 1;
                         }
                     } else {
                         batch.into_iter().for_each(|c| one(c, work, out));

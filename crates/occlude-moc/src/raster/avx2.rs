@@ -77,6 +77,12 @@ impl Lanes for Avx2 {
         unsafe { edge_spans(tri, y) }
     }
 
+    #[inline(always)]
+    fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { reach(spans) }
+    }
+
     /// The group's masks and depth bounds ([`subtile_lanes`]), the padding
     /// pixels added to the lanes that cover something
     /// ([`add_outside`](super::lanes::add_outside)), then [`merge`], with the
@@ -91,6 +97,22 @@ impl Lanes for Avx2 {
 #[target_feature(enable = "avx2")]
 unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
     band.draw_with(tri, avx2);
+}
+
+/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi` of the
+/// non-empty rows, by two shuffles each.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
+    let (lo, hi) = (_mm_loadu_si128(spans.lo.as_ptr().cast()), _mm_loadu_si128(spans.hi.as_ptr().cast()));
+    let filled = _mm_cmpgt_epi32(hi, lo);
+    let lo = _mm_blendv_epi8(_mm_set1_epi32(i32::MAX), lo, filled);
+    let hi = _mm_blendv_epi8(_mm_set1_epi32(i32::MIN), hi, filled);
+    let lo = _mm_min_epi32(lo, _mm_shuffle_epi32::<0b01_00_11_10>(lo));
+    let hi = _mm_max_epi32(hi, _mm_shuffle_epi32::<0b01_00_11_10>(hi));
+    let left = _mm_cvtsi128_si32(_mm_min_epi32(lo, _mm_shuffle_epi32::<0b10_11_00_01>(lo)));
+    let right = _mm_cvtsi128_si32(_mm_max_epi32(hi, _mm_shuffle_epi32::<0b10_11_00_01>(hi)));
+    (left < right).then_some((left, right))
 }
 
 #[inline]

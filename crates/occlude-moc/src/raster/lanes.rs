@@ -145,6 +145,10 @@ pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
 pub(crate) trait Lanes: Copy {
     /// The [`Spans`] of the four pixel rows from `y` ([`edge_spans`]).
     fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans;
+    /// [`Spans::reach`].
+    fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
+        spans.reach()
+    }
     /// One group's masks and depth bounds ([`subtile_lanes`]), its padding
     /// added ([`add_outside`]), merged into `group` ([`Group::merge`]).
     fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode);

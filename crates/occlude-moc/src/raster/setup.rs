@@ -24,7 +24,7 @@ use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
 pub(crate) const SETUP_LANES: usize = 4;
 
 /// Four triangles set up by [`setup4`], lane by lane, in the registers'
-/// layout: [`Batch::lane`] takes one out.
+/// layout: [`Batch::triangle`] takes one out.
 pub(crate) struct Batch {
     /// Bit `l` set: lane `l` was set up here (else it is for the scalar
     /// set-up).
@@ -41,33 +41,51 @@ pub(crate) struct Batch {
     window_plane: [[f64; SETUP_LANES]; 8],
 }
 
+/// What became of a lane's triangle in [`setup4`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LaneState {
+    /// Set up: [`Batch::triangle`] is the triangle to draw.
+    Drawn,
+    /// Not drawn: culled, zero area, or no pixel centre on screen, as
+    /// [`ScreenTriangle::new`] rejects.
+    Rejected,
+    /// Outside the common case: for the scalar set-up.
+    Scalar,
+}
+
 impl Batch {
-    /// Lane `l`'s triangle: `None` when the lane is for the scalar set-up,
-    /// `Some(None)` when its triangle is not drawn.
+    /// What became of lane `l`'s triangle.
     #[inline]
-    pub(crate) fn lane(&self, l: usize) -> Option<Option<ScreenTriangle>> {
+    pub(crate) fn lane(&self, l: usize) -> LaneState {
         if self.common >> l & 1 == 0 {
-            return None;
+            LaneState::Scalar
+        } else if self.rejected >> l & 1 == 1 {
+            LaneState::Rejected
+        } else {
+            LaneState::Drawn
         }
-        if self.rejected >> l & 1 == 1 {
-            return Some(None);
-        }
+    }
+
+    /// Lane `l`'s triangle, where it is [`LaneState::Drawn`].
+    #[inline]
+    pub(crate) fn triangle(&self, l: usize) -> ScreenTriangle {
         let edge = |i: usize| {
-            let [a, b, c, slope, offset, _] = self.edges[i].map(|v| v[l]);
-            Edge { a, b, c, on: self.on[i] >> l & 1 == 1, slope, offset }
+            let e = &self.edges[i];
+            Edge { a: e[0][l], b: e[1][l], c: e[2][l], on: self.on[i] >> l & 1 == 1, slope: e[3][l], offset: e[4][l] }
         };
-        let [x0, x1, y0, y1, zx, zy, z0, zmax] = self.window_plane.map(|v| v[l]);
-        Some(Some(ScreenTriangle {
+        let v = &self.window_plane;
+        let (x0, x1) = (v[0][l], v[1][l]);
+        ScreenTriangle {
             edges: [edge(0), edge(1), edge(2)],
-            plane: DepthPlane { zx, zy, z0, zmax },
+            plane: DepthPlane { zx: v[4][l], zy: v[5][l], z0: v[6][l], zmax: v[7][l] },
             x0: x0 as i32,
             x1: x1 as i32,
-            y0: y0 as i32,
-            y1: y1 as i32,
-            bands: [0, 1, 2].map(|i| self.edges[i][5][l]),
+            y0: v[2][l] as i32,
+            y1: v[3][l] as i32,
+            bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
             t_min: x0 - 2.5,
             t_max: x1 + 2.5,
-        }))
+        }
     }
 }
 
@@ -89,6 +107,8 @@ pub(crate) unsafe fn setup4(
     let (w, h) = (f64::from(width), f64::from(height));
     let (wv, hv) = (_mm256_set1_pd(w), _mm256_set1_pd(h));
     let grid = _mm256_set1_pd(f64::from(1u32 << subpixel_bits));
+    // One grid step: dividing by the grid, a power of two, is multiplying by it.
+    let step = _mm256_set1_pd(1.0 / f64::from(1u32 << subpixel_bits));
     let (zero, half, one) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
     let sign = _mm256_set1_pd(-0.0);
     let abs = |v: __m256d| _mm256_andnot_pd(sign, v);
@@ -131,8 +151,8 @@ pub(crate) unsafe fn setup4(
         };
         let snapped = _mm256_and_pd(in_range(sx, wv), in_range(sy, hv));
         common = _mm256_and_pd(common, _mm256_and_pd(_mm256_and_pd(ok, drawn), snapped));
-        vx[k] = _mm256_div_pd(round(_mm256_mul_pd(sx, grid)), grid);
-        vy[k] = _mm256_div_pd(round(_mm256_mul_pd(sy, grid)), grid);
+        vx[k] = _mm256_mul_pd(round(_mm256_mul_pd(sx, grid)), step);
+        vy[k] = _mm256_mul_pd(round(_mm256_mul_pd(sy, grid)), step);
         vz[k] = _mm256_div_pd(cz, cw);
         // A non-finite depth (a tiny w) is left to the scalar path.
         common = _mm256_and_pd(common, _mm256_cmp_pd::<_CMP_LT_OQ>(vz[k], _mm256_set1_pd(f64::INFINITY)));
@@ -222,10 +242,9 @@ pub(crate) unsafe fn setup4(
     let nz = cross(d1[0], d2[1], d2[0], d1[1]);
     let zx = _mm256_div_pd(_mm256_xor_pd(nx, sign), nz);
     let zy = _mm256_div_pd(_mm256_xor_pd(ny, sign), nz);
-    let slack = _mm256_div_pd(one, grid);
     let z0 = _mm256_add_pd(
         _mm256_sub_pd(_mm256_sub_pd(vz[0], _mm256_mul_pd(zx, vx[0])), _mm256_mul_pd(zy, vy[0])),
-        _mm256_mul_pd(_mm256_add_pd(abs(zx), abs(zy)), slack),
+        _mm256_mul_pd(_mm256_add_pd(abs(zx), abs(zy)), step),
     );
     let zmax = _mm256_max_pd(_mm256_max_pd(vz[0], vz[1]), vz[2]);
     for (out, v) in batch.window_plane.iter_mut().zip([x0, x1, y0, y1, zx, zy, z0, zmax]) {
@@ -321,9 +340,13 @@ mod tests {
             });
             let batch = avx2.setup4(&clip, cull, width, height, bits);
             for (l, c) in clip.iter().enumerate() {
-                let Some(tri) = batch.lane(l) else {
-                    scalar += 1;
-                    continue;
+                let tri = match batch.lane(l) {
+                    LaneState::Scalar => {
+                        scalar += 1;
+                        continue;
+                    }
+                    LaneState::Rejected => None,
+                    LaneState::Drawn => Some(batch.triangle(l)),
                 };
                 batched += 1;
                 let mut expected = Vec::new();
