@@ -327,7 +327,7 @@ struct Band<'a> {
 
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
-    /// the four pixel rows' spans ([`Self::spans`]), then per [`LANES`] subtiles
+    /// the four pixel rows' spans ([`Lanes::edge_spans`], [`exact_spans`]), then per [`LANES`] subtiles
     /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
     /// triangle is one call, so that the steps inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
@@ -354,7 +354,7 @@ impl Band<'_> {
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
                 let sx = g * LANES as u32;
                 let padded = bottom || (sx + LANES as u32) * 8 > self.width;
-                let outside = padded.then(|| (self.width, self.height));
+                let outside = padded.then_some((self.width, self.height));
                 let step = GroupStep { tri, spans: &spans, sx, sy, outside };
                 lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
             }

@@ -85,7 +85,7 @@ impl Lanes for Avx2 {
 
     /// The group's masks and depth bounds ([`subtile_lanes`]), the padding
     /// pixels added to the lanes that cover something
-    /// ([`add_outside`](super::lanes::add_outside)), then [`merge`], with the
+    /// ([`add_outside`]), then [`merge`], with the
     /// masks and depth bounds kept in registers.
     #[inline(always)]
     fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {

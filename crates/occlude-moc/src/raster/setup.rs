@@ -301,7 +301,7 @@ mod tests {
         let mut v = Vec4::new(rng.unit() * 2.4 - 1.2, rng.unit() * 2.4 - 1.2, rng.unit(), 1.0);
         match case % 23 {
             0 => v.z = -0.1,
-            1 => v.w = if case % 2 == 0 { 0.0 } else { -1.0 },
+            1 => v.w = if case.is_multiple_of(2) { 0.0 } else { -1.0 },
             2 => v.x *= 40.0,
             3 => v.y = f32::NAN,
             4 => v.w = f32::INFINITY,
@@ -330,7 +330,7 @@ mod tests {
                 std::array::from_fn(|k| {
                     let v = vertex(&mut rng, round * 7 + l * 3 + k);
                     let v = centre + v * Vec4::new(size, size, 1.0, 1.0);
-                    if round % 5 == 0 && k == 1 {
+                    if round.is_multiple_of(5) && k == 1 {
                         // A horizontal edge.
                         Vec4::new(v.x, centre.y, v.z, v.w)
                     } else {
