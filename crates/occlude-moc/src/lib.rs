@@ -81,7 +81,9 @@
 //! subtiles are stored in groups of eight (64x4 pixels), field by field, and
 //! each lane applies the merge rule above. These steps run in AVX2 where the
 //! CPU has it (detected at run time) and in portable code otherwise, with
-//! bit-identical results. Inside a rayon pool of several threads, large
+//! bit-identical results; with AVX2, four triangles are also set up at once
+//! (projection, snapping, edges, depth plane: the `raster::setup` module),
+//! bit for bit as the scalar set-up does each. Inside a rayon pool of several threads, large
 //! triangle sets are set up and binned to bands of subtile rows in parallel
 //! chunks, then drawn in parallel bands, each band taking its triangles in
 //! order: the buffer is the same whatever the threads.

@@ -10,18 +10,18 @@ use glam::{DVec3, Vec4};
 /// triangle that does not cross the near plane are snapped: inside the soft
 /// backend's guard band (8192 pixels), so that it does not clip such a
 /// triangle either and both snap the same vertices.
-const SNAP_RANGE: f64 = 8000.0;
+pub(crate) const SNAP_RANGE: f64 = 8000.0;
 
 /// Largest absolute coordinate (pixels) snapped. Below `2^15`, with at most 8
 /// sub-pixel bits, the edge functions of snapped vertices at pixel centres
 /// need at most 49 significant bits: `f64` evaluates them exactly.
-const SNAP_LIMIT: f64 = 32000.0;
+pub(crate) const SNAP_LIMIT: f64 = 32000.0;
 
 /// Largest absolute coordinate (pixels) of a vertex drawn at all; a polygon
 /// with a vertex beyond it (or with `w <= 0`) is not drawn, which only makes
 /// the buffer cull less. Far below it, the `f64` rounding of an edge function
 /// is negligible against [`UNSNAPPED_MARGIN`].
-const DRAW_LIMIT: f64 = 1e9;
+pub(crate) const DRAW_LIMIT: f64 = 1e9;
 
 /// Pixels by which the edges of a triangle that is not snapped (it crosses the
 /// near plane, or a vertex lies outside the snapping range) are moved inward,
@@ -48,7 +48,7 @@ pub(crate) fn screen_triangles(
     width: u32,
     height: u32,
     subpixel_bits: u32,
-    out: &mut dyn FnMut(ScreenTriangle),
+    out: &mut dyn FnMut(&ScreenTriangle),
 ) -> u64 {
     let mut poly = [Vec4::ZERO; 4];
     let n = clip_near(clip, &mut poly);
@@ -82,7 +82,7 @@ pub(crate) fn screen_triangles(
     };
     for k in 1..n - 1 {
         if let Some(tri) = ScreenTriangle::new([screen[0], screen[k], screen[k + 1]], cull, width, height, tolerance) {
-            out(tri);
+            out(&tri);
         }
     }
     n as u64 - 2

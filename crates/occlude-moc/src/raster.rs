@@ -2,6 +2,7 @@
 //! four pixel rows, then the coverage masks of the subtiles in reach by shifts
 //! of the rows' spans and their depth bounds from the triangle's plane, eight
 //! subtiles at a time ([`lanes`], in AVX2 where the CPU has it: [`avx2`]).
+//! With AVX2, triangles are set up four at a time ([`setup`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with the top-left rule on the edge; of
@@ -12,7 +13,7 @@
 //! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
 //! what the pixel-by-pixel definition gives.
 
-use crate::buffer::{outside_mask, Group, MaskedBuffer, MergeMode};
+use crate::buffer::{Group, MaskedBuffer, MergeMode};
 use crate::project::screen_triangles;
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec3, Mat4, Vec3, Vec4};
@@ -20,9 +21,11 @@ use rayon::prelude::*;
 
 mod avx2;
 mod lanes;
+mod setup;
 
 use avx2::Avx2;
-use lanes::{GroupStep, Spans, LANES};
+use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
+use setup::{LaneState, SETUP_LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -230,6 +233,7 @@ pub(crate) fn round_far(depth: f64) -> f32 {
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
 /// depth) with edge functions positive inside, and the pixels whose centres it
 /// may cover.
+#[derive(Clone, Copy)]
 pub(crate) struct ScreenTriangle {
     pub(crate) edges: [Edge; 3],
     pub(crate) plane: DepthPlane,
@@ -323,57 +327,53 @@ struct Band<'a> {
 
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
-    /// the four pixel rows' spans ([`Self::spans`]), then per [`LANES`] subtiles
-    /// in their reach, the masks and depth bounds, merged.
+    /// the four pixel rows' spans ([`Lanes::edge_spans`], [`exact_spans`]), then per [`LANES`] subtiles
+    /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
+    /// triangle is one call, so that the steps inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
+        match self.avx2 {
+            Some(avx2) => avx2.draw(self, tri),
+            None => self.draw_with(tri, Portable),
+        }
+    }
+
+    /// [`Self::draw`] with the steps of `lanes`.
+    #[inline(always)]
+    fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
         let last = self.first + (self.groups.len() * LANES) as u32 / self.cols;
         for sy in r0.max(self.first)..r1.min(last) {
-            let spans = self.spans(tri, sy);
-            let Some((left, right)) = spans.reach() else { continue };
+            let y = (sy * 4) as i32;
+            let mut spans = lanes.edge_spans(tri, y);
+            if spans.exact != 0 {
+                exact_spans(tri, y, &mut spans);
+            }
+            let Some((left, right)) = lanes.reach(&spans) else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
             for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
                 let sx = g * LANES as u32;
-                let outside = (bottom || (sx + LANES as u32) * 8 > self.width)
-                    .then(|| std::array::from_fn(|l| outside_mask(self.width, self.height, sx + l as u32, sy)));
+                let padded = bottom || (sx + LANES as u32) * 8 > self.width;
+                let outside = padded.then_some((self.width, self.height));
                 let step = GroupStep { tri, spans: &spans, sx, sy, outside };
-                let group = &mut self.groups[row + g as usize];
-                match self.avx2 {
-                    Some(avx2) => avx2.draw_group(group, &step, self.merge),
-                    None => {
-                        let (mut cover, depth) = lanes::subtile_lanes(tri, &spans, sx, sy);
-                        if let Some(outside) = &step.outside {
-                            lanes::add_outside(&mut cover, outside);
-                        }
-                        group.merge(&cover, &depth, self.merge);
-                    }
-                }
+                lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
             }
         }
     }
+}
 
-    /// The covered pixels of the four rows of subtile row `sy`: the edges the
-    /// lanes decide, then the others (rarely any) row by row with the exact
-    /// scalar rule.
-    fn spans(&self, tri: &ScreenTriangle, sy: u32) -> Spans {
-        let y = (sy * 4) as i32;
-        let mut spans = match self.avx2 {
-            Some(avx2) => avx2.edge_spans(tri, y),
-            None => lanes::edge_spans(tri, y),
-        };
-        if spans.exact != 0 {
-            for r in 0..4 {
-                for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
-                    if spans.exact >> i & 1 == 1 {
-                        let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
-                        spans.lo[r] = spans.lo[r].max(lo);
-                        spans.hi[r] = spans.hi[r].min(hi);
-                    }
-                }
+/// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
+/// to the four rows from `y`, row by row (rarely any).
+#[cold]
+fn exact_spans(tri: &ScreenTriangle, y: i32, spans: &mut Spans) {
+    for r in 0..4 {
+        for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+            if spans.exact >> i & 1 == 1 {
+                let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
+                spans.lo[r] = spans.lo[r].max(lo);
+                spans.hi[r] = spans.hi[r].min(hi);
             }
         }
-        spans
     }
 }
 
@@ -464,19 +464,51 @@ impl MaskedBuffer {
     /// parallel chunks, then drawn in parallel bands, when the current rayon pool
     /// has several threads.
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
-        let (width, height, bits) = (self.width, self.height, self.subpixel_bits);
-        let setup = |i: usize, work: &mut RenderWork, out: &mut dyn FnMut(ScreenTriangle)| {
-            if let Some(c) = clip(i) {
+        let (width, height, bits, avx2) = (self.width, self.height, self.subpixel_bits, Avx2::detect());
+        let one = |c: Option<[Vec4; 3]>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+            if let Some(c) = c {
                 work.triangles += screen_triangles(c, cull, width, height, bits, &mut |tri| {
                     work.tiles += tri.tiles();
                     out(tri)
                 });
             }
         };
+        // Triangles `range` in order: with AVX2, four at a time where all four
+        // are in the common case of the batched set-up (`setup`).
+        let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+            let mut i = range.start;
+            if let Some(avx2) = avx2 {
+                while i + SETUP_LANES <= range.end {
+                    let batch: [_; SETUP_LANES] = std::array::from_fn(|l| clip(i + l));
+                    if let [Some(a), Some(b), Some(c), Some(d)] = batch {
+                        let set_up = avx2.setup4(&[a, b, c, d], cull, width, height, bits);
+                        for (l, c) in batch.into_iter().enumerate() {
+                            match set_up.lane(l) {
+                                LaneState::Drawn => {
+                                    let tri = set_up.triangle(l);
+                                    work.tiles += tri.tiles();
+                                    out(&tri);
+                                }
+                                LaneState::Rejected => {}
+                                LaneState::Scalar => {
+                                    one(c, work, out);
+                                    continue;
+                                }
+                            }
+                            work.triangles += 1;
+                        }
+                    } else {
+                        batch.into_iter().for_each(|c| one(c, work, out));
+                    }
+                    i += SETUP_LANES;
+                }
+            }
+            (i..range.end).for_each(|i| one(clip(i), work, out));
+        };
         let mut work = RenderWork::default();
         if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
             let mut whole = self.whole();
-            (0..count).for_each(|i| setup(i, &mut work, &mut |tri| whole.draw(&tri)));
+            setup(0..count, &mut work, &mut |tri| whole.draw(tri));
             return work;
         }
         let bands = (self.rows as usize).div_ceil(BAND_ROWS);
@@ -484,13 +516,12 @@ impl MaskedBuffer {
             .into_par_iter()
             .map(|c| {
                 let (mut tris, mut work) = (Vec::with_capacity(SETUP_CHUNK), RenderWork::default());
-                (c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count))
-                    .for_each(|i| setup(i, &mut work, &mut |t| tris.push(t)));
+                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut |t| tris.push(*t));
                 (Binned::new(tris, bands), work)
             })
             .collect();
         chunks.iter().for_each(|(_, w)| work += *w);
-        let (cols, merge, avx2) = (self.cols, self.merge, Avx2::detect());
+        let (cols, merge) = (self.cols, self.merge);
         self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
             let mut band = Band { groups, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
@@ -524,7 +555,7 @@ impl MaskedBuffer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::buffer::Subtile;
+    use crate::buffer::{outside_mask, Subtile};
 
     /// The masks by definition: every pixel centre of the subtile tested against
     /// every edge.

@@ -10,9 +10,11 @@
 
 use std::arch::x86_64::*;
 
-use super::lanes::{GroupStep, Spans, LANES};
-use super::{DepthPlane, ScreenTriangle};
+use super::lanes::{add_outside, outside, GroupStep, Lanes, Spans, LANES};
+use super::setup::{Batch, SETUP_LANES};
+use super::{Band, CullMode, DepthPlane, ScreenTriangle};
 use crate::buffer::{Group, MergeMode};
+use glam::Vec4;
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
 /// which makes calling this module's `target_feature` functions sound.
@@ -25,14 +27,8 @@ impl Avx2 {
         is_x86_feature_detected!("avx2").then_some(Self(()))
     }
 
-    /// [`lanes::edge_spans`](super::lanes::edge_spans), in AVX2.
-    pub(crate) fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
-        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { edge_spans(tri, y) }
-    }
-
     /// [`lanes::subtile_lanes`](super::lanes::subtile_lanes), in AVX2 (on its
-    /// own for the tests; the rasterizer runs it in [`Self::draw_group`]).
+    /// own for the tests; the rasterizer runs it in [`Lanes::draw_group`]).
     #[cfg(test)]
     pub(crate) fn subtile_lanes(
         self,
@@ -45,17 +41,28 @@ impl Avx2 {
         unsafe { subtile_lanes(tri, spans, sx, sy) }
     }
 
-    /// One group's step of a subtile row in one call, so that the masks and
-    /// depth bounds stay in registers: [`Self::subtile_lanes`], the padding
-    /// pixels added to the lanes that cover something
-    /// ([`super::lanes::add_outside`]), then [`Self::merge`].
-    pub(crate) fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+    /// [`Band::draw`](super::Band) of one triangle in one AVX2 function, so
+    /// that this module's steps ([`Lanes`]) inline into its loop.
+    pub(crate) fn draw(self, band: &mut Band<'_>, tri: &ScreenTriangle) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { draw_group(group, step, mode) }
+        unsafe { draw(self, band, tri) }
+    }
+
+    /// Four triangles set up at once ([`setup::setup4`](super::setup::setup4)).
+    pub(crate) fn setup4(
+        self,
+        clip: &[[Vec4; 3]; SETUP_LANES],
+        cull: CullMode,
+        width: u32,
+        height: u32,
+        subpixel_bits: u32,
+    ) -> Batch {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { super::setup::setup4(clip, cull, width, height, subpixel_bits) }
     }
 
     /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
-    /// runs it in [`Self::draw_group`]).
+    /// runs it in [`Lanes::draw_group`]).
     #[cfg(test)]
     pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
@@ -63,15 +70,62 @@ impl Avx2 {
     }
 }
 
+impl Lanes for Avx2 {
+    #[inline(always)]
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { edge_spans(tri, y) }
+    }
+
+    #[inline(always)]
+    fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { reach(spans) }
+    }
+
+    /// The group's masks and depth bounds ([`subtile_lanes`]), the padding
+    /// pixels added to the lanes that cover something
+    /// ([`add_outside`]), then [`merge`], with the
+    /// masks and depth bounds kept in registers.
+    #[inline(always)]
+    fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { draw_group(group, step, mode) }
+    }
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
+    band.draw_with(tri, avx2);
+}
+
+/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi` of the
+/// non-empty rows, by two shuffles each.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
+    let (lo, hi) = (_mm_loadu_si128(spans.lo.as_ptr().cast()), _mm_loadu_si128(spans.hi.as_ptr().cast()));
+    let filled = _mm_cmpgt_epi32(hi, lo);
+    let lo = _mm_blendv_epi8(_mm_set1_epi32(i32::MAX), lo, filled);
+    let hi = _mm_blendv_epi8(_mm_set1_epi32(i32::MIN), hi, filled);
+    let lo = _mm_min_epi32(lo, _mm_shuffle_epi32::<0b01_00_11_10>(lo));
+    let hi = _mm_max_epi32(hi, _mm_shuffle_epi32::<0b01_00_11_10>(hi));
+    let left = _mm_cvtsi128_si32(_mm_min_epi32(lo, _mm_shuffle_epi32::<0b10_11_00_01>(lo)));
+    let right = _mm_cvtsi128_si32(_mm_max_epi32(hi, _mm_shuffle_epi32::<0b10_11_00_01>(hi)));
+    (left < right).then_some((left, right))
+}
+
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
     let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy);
-    if let Some(outside) = &step.outside {
-        super::lanes::add_outside(&mut cover, outside);
+    if let Some(screen) = step.outside {
+        add_outside(&mut cover, &outside(screen, step.sx, step.sy));
     }
     merge(group, &cover, &depth, mode);
 }
 
+#[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
     let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
@@ -124,14 +178,7 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
         _mm256_add_epi32(_mm256_set1_epi32(sx as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)),
         _mm256_set1_epi32(8),
     );
-    let ones = _mm256_set1_epi32(1);
-    let mut cover = _mm256_setzero_si256();
-    for r in 0..4 {
-        let (lo, hi) = (in_subtile(spans.lo[r], bx), in_subtile(spans.hi[r], bx));
-        let hi = _mm256_max_epi32(hi, lo);
-        let bits = _mm256_sub_epi32(_mm256_sllv_epi32(ones, hi), _mm256_sllv_epi32(ones, lo));
-        cover = _mm256_or_si256(cover, _mm256_sllv_epi32(bits, _mm256_set1_epi32(8 * r as i32)));
-    }
+    let cover = group_cover(spans, sx);
     let plane = &tri.plane;
     let corner_x = _mm256_add_epi32(bx, _mm256_set1_epi32(if plane.zx > 0.0 { 8 } else { 0 }));
     let by = f64::from(sy * 4);
@@ -143,14 +190,37 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
     out
 }
 
-/// Pixel `x` as a column of each lane's subtile starting at `bx`, clamped to
-/// `0..=8`.
+/// The coverage masks of the eight subtiles of the group from subtile column
+/// `sx` (64 pixels wide): each pixel row's span as one 64-bit row of the
+/// group (ones from `lo` on, less ones from `hi` on: variable shifts, which
+/// give 0 from 64 on), then the 4 x 8 bytes transposed so that subtile `l`
+/// takes byte `l` of each row.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn in_subtile(x: i32, bx: __m256i) -> __m256i {
-    _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_sub_epi32(_mm256_set1_epi32(x), bx), _mm256_setzero_si256()),
-        _mm256_set1_epi32(8),
+unsafe fn group_cover(spans: &Spans, sx: u32) -> __m256i {
+    let (gx, zero) = (_mm_set1_epi32(sx as i32 * 8), _mm_setzero_si128());
+    let column = |x: &[i32; 4]| {
+        _mm256_cvtepu32_epi64(_mm_max_epi32(_mm_sub_epi32(_mm_loadu_si128(x.as_ptr().cast()), gx), zero))
+    };
+    let ones = _mm256_set1_epi64x(-1);
+    let rows =
+        _mm256_andnot_si256(_mm256_sllv_epi64(ones, column(&spans.hi)), _mm256_sllv_epi64(ones, column(&spans.lo)));
+    // Per 128-bit half (rows 0, 1 and rows 2, 3): byte l of the two rows side
+    // by side, for l = 0..8.
+    let pairs = _mm256_shuffle_epi8(
+        rows,
+        _mm256_setr_epi8(
+            0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15, 0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15,
+        ),
+    );
+    // Subtiles 0-3 in the low half, 4-7 in the high half, each half's rows
+    // 0, 1 pairs then rows 2, 3 pairs; then each subtile's two pairs joined.
+    let halves = _mm256_permute4x64_epi64::<0b11_01_10_00>(pairs);
+    _mm256_shuffle_epi8(
+        halves,
+        _mm256_setr_epi8(
+            0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15, 0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15,
+        ),
     )
 }
 

@@ -26,6 +26,7 @@
 //! definition.
 
 use super::{floor_in, ScreenTriangle};
+use crate::buffer::{outside_mask, Group, MergeMode};
 
 /// Subtiles handled by one [`subtile_lanes`] call.
 pub(crate) const LANES: usize = 8;
@@ -105,17 +106,25 @@ pub(crate) fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u3
     (cover, depth)
 }
 
-/// One group's step of a subtile row: what [`subtile_lanes`] reads, and the
-/// padding pixels of the group's lanes.
+/// One group's step of a subtile row: what [`subtile_lanes`] reads, and
+/// whether the group has padding pixels.
 pub(crate) struct GroupStep<'a> {
     pub tri: &'a ScreenTriangle,
     pub spans: &'a Spans,
     /// The group's first subtile.
     pub sx: u32,
     pub sy: u32,
-    /// Per lane, its subtile's pixels beyond the screen; `None` where the
-    /// group lies wholly on screen.
-    pub outside: Option<[u32; LANES]>,
+    /// The screen's width and height where the group reaches beyond it (its
+    /// lanes' padding pixels are [`outside`]); `None` where it lies wholly on
+    /// screen.
+    pub outside: Option<(u32, u32)>,
+}
+
+/// Per lane of the group from subtile column `sx` of row `sy`, its subtile's
+/// pixels beyond a `width` x `height` screen.
+#[inline]
+pub(crate) fn outside((width, height): (u32, u32), sx: u32, sy: u32) -> [u32; LANES] {
+    std::array::from_fn(|l| outside_mask(width, height, sx + l as u32, sy))
 }
 
 /// Adds the padding pixels `outside` (per lane: the pixels of its subtile
@@ -130,10 +139,45 @@ pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
     }
 }
 
+/// The rasterizer's two per-row steps, portable ([`Portable`]) or in AVX2
+/// ([`Avx2`](super::avx2::Avx2)), so that one traversal
+/// (`Band::draw_with`) serves both.
+pub(crate) trait Lanes: Copy {
+    /// The [`Spans`] of the four pixel rows from `y` ([`edge_spans`]).
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans;
+    /// [`Spans::reach`].
+    fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
+        spans.reach()
+    }
+    /// One group's masks and depth bounds ([`subtile_lanes`]), its padding
+    /// added ([`add_outside`]), merged into `group` ([`Group::merge`]).
+    fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode);
+}
+
+/// The portable [`Lanes`]: this module's functions.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable;
+
+impl Lanes for Portable {
+    #[inline]
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
+        edge_spans(tri, y)
+    }
+
+    #[inline]
+    fn draw_group(self, group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
+        let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy);
+        if let Some(screen) = step.outside {
+            add_outside(&mut cover, &outside(screen, step.sx, step.sy));
+        }
+        group.merge(&cover, &depth, mode);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::buffer::{Group, MergeMode, Subtile};
+    use crate::buffer::Subtile;
     use crate::raster::CullMode;
     use glam::DVec3;
 

@@ -1,0 +1,362 @@
+//! The set-up of four triangles at once in AVX2 (`f64 x 4` lanes, one
+//! triangle a lane), after MOC's batched set-up (HPG 2016 section 4 sets up
+//! several triangles per SIMD pass): projection, snapping to the sub-pixel
+//! grid, winding and area rejection, the pixel window, the edges with their
+//! intercept bands, and the depth plane.
+//!
+//! It covers the common case only: a triangle wholly in front of the near plane
+//! with finite coordinates, `w > 0` and its vertices within the snapping range
+//! (`crate::project`'s conditions for snapping). A lane outside it is left to
+//! the scalar [`screen_triangles`](crate::project::screen_triangles). Every
+//! lane does the scalar path's `f64` operations in the same order (products
+//! and sums rounded separately, never fused; the same rounding of halves away
+//! from zero), so a triangle set up here is bit for bit the scalar one; the
+//! tests check it on random triangles.
+
+use std::arch::x86_64::*;
+
+use glam::Vec4;
+
+use super::{CullMode, DepthPlane, Edge, ScreenTriangle, BAND_SCALE};
+use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
+
+/// Triangles set up by one [`setup4`] call.
+pub(crate) const SETUP_LANES: usize = 4;
+
+/// Four triangles set up by [`setup4`], lane by lane, in the registers'
+/// layout: [`Batch::triangle`] takes one out.
+pub(crate) struct Batch {
+    /// Bit `l` set: lane `l` was set up here (else it is for the scalar
+    /// set-up).
+    common: i32,
+    /// Bit `l` set: lane `l`'s triangle is not drawn (culled, zero area, or no
+    /// pixel centre on screen, as [`ScreenTriangle::new`] rejects).
+    rejected: i32,
+    /// Per edge: `a`, `b`, `c`, `slope`, `offset`, `band`.
+    edges: [[[f64; SETUP_LANES]; 6]; 3],
+    /// Per edge, bit `l`: [`Edge`]'s `on` of lane `l`.
+    on: [i32; 3],
+    /// `x0`, `x1`, `y0`, `y1` (whole numbers), then the plane's `zx`, `zy`,
+    /// `z0`, `zmax`.
+    window_plane: [[f64; SETUP_LANES]; 8],
+}
+
+/// What became of a lane's triangle in [`setup4`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LaneState {
+    /// Set up: [`Batch::triangle`] is the triangle to draw.
+    Drawn,
+    /// Not drawn: culled, zero area, or no pixel centre on screen, as
+    /// [`ScreenTriangle::new`] rejects.
+    Rejected,
+    /// Outside the common case: for the scalar set-up.
+    Scalar,
+}
+
+impl Batch {
+    /// What became of lane `l`'s triangle.
+    #[inline]
+    pub(crate) fn lane(&self, l: usize) -> LaneState {
+        if self.common >> l & 1 == 0 {
+            LaneState::Scalar
+        } else if self.rejected >> l & 1 == 1 {
+            LaneState::Rejected
+        } else {
+            LaneState::Drawn
+        }
+    }
+
+    /// Lane `l`'s triangle, where it is [`LaneState::Drawn`].
+    #[inline]
+    pub(crate) fn triangle(&self, l: usize) -> ScreenTriangle {
+        let edge = |i: usize| {
+            let e = &self.edges[i];
+            Edge { a: e[0][l], b: e[1][l], c: e[2][l], on: self.on[i] >> l & 1 == 1, slope: e[3][l], offset: e[4][l] }
+        };
+        let v = &self.window_plane;
+        let (x0, x1) = (v[0][l], v[1][l]);
+        ScreenTriangle {
+            edges: [edge(0), edge(1), edge(2)],
+            plane: DepthPlane { zx: v[4][l], zy: v[5][l], z0: v[6][l], zmax: v[7][l] },
+            x0: x0 as i32,
+            x1: x1 as i32,
+            y0: v[2][l] as i32,
+            y1: v[3][l] as i32,
+            bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
+            t_min: x0 - 2.5,
+            t_max: x1 + 2.5,
+        }
+    }
+}
+
+/// The four clip-space triangles `clip` set up on a `width` x `height` screen
+/// with vertices snapped to `1 / 2^subpixel_bits` pixel, as the scalar
+/// [`screen_triangles`](crate::project::screen_triangles) sets up a triangle
+/// that needs no clipping.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+pub(crate) unsafe fn setup4(
+    clip: &[[Vec4; 3]; SETUP_LANES],
+    cull: CullMode,
+    width: u32,
+    height: u32,
+    subpixel_bits: u32,
+) -> Batch {
+    let (w, h) = (f64::from(width), f64::from(height));
+    let (wv, hv) = (_mm256_set1_pd(w), _mm256_set1_pd(h));
+    let grid = _mm256_set1_pd(f64::from(1u32 << subpixel_bits));
+    // One grid step: dividing by the grid, a power of two, is multiplying by it.
+    let step = _mm256_set1_pd(1.0 / f64::from(1u32 << subpixel_bits));
+    let (zero, half, one) = (_mm256_setzero_pd(), _mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
+    let sign = _mm256_set1_pd(-0.0);
+    let abs = |v: __m256d| _mm256_andnot_pd(sign, v);
+    let (draw_limit, snap_limit) = (_mm256_set1_pd(DRAW_LIMIT), _mm256_set1_pd(SNAP_LIMIT));
+    // Lanes in the common case so far (all bits set).
+    let mut common = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    let mut vx = [zero; 3];
+    let mut vy = [zero; 3];
+    let mut vz = [zero; 3];
+    for k in 0..3 {
+        // Vertex k of the four triangles, one triangle a lane.
+        let [mut x, mut y, mut z, mut cw] = [0, 1, 2, 3].map(|l| _mm_loadu_ps(clip[l][k].as_ref().as_ptr()));
+        _MM_TRANSPOSE4_PS(&mut x, &mut y, &mut z, &mut cw);
+        let finite = |v: __m128| {
+            let a = _mm_andnot_ps(_mm_set1_ps(-0.0), v);
+            _mm256_cvtps_pd(_mm_cmplt_ps(a, _mm_set1_ps(f32::INFINITY)))
+        };
+        // A converted all-ones f32 is a NaN f64 (its sign set): the lane mask.
+        let ok = _mm256_and_pd(_mm256_and_pd(finite(x), finite(y)), _mm256_and_pd(finite(z), finite(cw)));
+        let ok = _mm256_and_pd(ok, _mm256_cvtps_pd(_mm_cmpge_ps(z, _mm_setzero_ps())));
+        let (cx, cy, cz, cw) = (_mm256_cvtps_pd(x), _mm256_cvtps_pd(y), _mm256_cvtps_pd(z), _mm256_cvtps_pd(cw));
+        let sx = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_div_pd(cx, cw), one), half), wv);
+        let sy = _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(one, _mm256_div_pd(cy, cw)), half), hv);
+        let drawn = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(cw, zero),
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(abs(sx), draw_limit),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(abs(sy), draw_limit),
+            ),
+        );
+        let in_range = |v: __m256d, size: __m256d| {
+            let range = _mm256_set1_pd(SNAP_RANGE);
+            _mm256_and_pd(
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GE_OQ>(v, _mm256_sub_pd(zero, range)),
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(v, _mm256_add_pd(size, range)),
+                ),
+                _mm256_cmp_pd::<_CMP_LE_OQ>(abs(v), snap_limit),
+            )
+        };
+        let snapped = _mm256_and_pd(in_range(sx, wv), in_range(sy, hv));
+        common = _mm256_and_pd(common, _mm256_and_pd(_mm256_and_pd(ok, drawn), snapped));
+        vx[k] = _mm256_mul_pd(round(_mm256_mul_pd(sx, grid)), step);
+        vy[k] = _mm256_mul_pd(round(_mm256_mul_pd(sy, grid)), step);
+        vz[k] = _mm256_div_pd(cz, cw);
+        // A non-finite depth (a tiny w) is left to the scalar path.
+        common = _mm256_and_pd(common, _mm256_cmp_pd::<_CMP_LT_OQ>(vz[k], _mm256_set1_pd(f64::INFINITY)));
+    }
+    let common = _mm256_movemask_pd(common);
+    let mut batch = Batch {
+        common,
+        rejected: 0,
+        edges: [[[0.0; SETUP_LANES]; 6]; 3],
+        on: [0; 3],
+        window_plane: [[0.0; SETUP_LANES]; 8],
+    };
+    if common == 0 {
+        return batch;
+    }
+    // ScreenTriangle::new: signed area, rejection, winding.
+    let area = _mm256_sub_pd(
+        _mm256_mul_pd(_mm256_sub_pd(vx[1], vx[0]), _mm256_sub_pd(vy[2], vy[0])),
+        _mm256_mul_pd(_mm256_sub_pd(vx[2], vx[0]), _mm256_sub_pd(vy[1], vy[0])),
+    );
+    let mut rejected = _mm256_or_pd(
+        _mm256_cmp_pd::<_CMP_EQ_OQ>(area, zero),
+        _mm256_cmp_pd::<_CMP_LT_OQ>(abs(area), _mm256_set1_pd(1e-12)),
+    );
+    if cull == CullMode::Back {
+        rejected = _mm256_or_pd(rejected, _mm256_cmp_pd::<_CMP_GT_OQ>(area, zero));
+    }
+    let swap = _mm256_cmp_pd::<_CMP_LT_OQ>(area, zero);
+    for v in [&mut vx, &mut vy, &mut vz] {
+        (v[1], v[2]) = (_mm256_blendv_pd(v[1], v[2], swap), _mm256_blendv_pd(v[2], v[1], swap));
+    }
+    // The pixel window.
+    let lo_x = _mm256_max_pd(_mm256_min_pd(_mm256_min_pd(vx[0], vx[1]), vx[2]), zero);
+    let hi_x = _mm256_min_pd(_mm256_max_pd(_mm256_max_pd(vx[0], vx[1]), vx[2]), wv);
+    let lo_y = _mm256_max_pd(_mm256_min_pd(_mm256_min_pd(vy[0], vy[1]), vy[2]), zero);
+    let hi_y = _mm256_min_pd(_mm256_max_pd(_mm256_max_pd(vy[0], vy[1]), vy[2]), hv);
+    rejected = _mm256_or_pd(
+        rejected,
+        _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(lo_x, hi_x), _mm256_cmp_pd::<_CMP_GE_OQ>(lo_y, hi_y)),
+    );
+    let floor_in = |v: __m256d, min: __m256d, max: __m256d| _mm256_floor_pd(_mm256_max_pd(_mm256_min_pd(v, max), min));
+    let minus_one = _mm256_set1_pd(-1.0);
+    let first = |lo: __m256d, size: __m256d| {
+        let c = _mm256_sub_pd(zero, floor_in(_mm256_sub_pd(half, lo), _mm256_sub_pd(zero, size), one));
+        _mm256_max_pd(c, zero)
+    };
+    let end = |hi: __m256d, size: __m256d| {
+        _mm256_min_pd(_mm256_add_pd(floor_in(_mm256_sub_pd(hi, half), minus_one, size), one), size)
+    };
+    let (x0, x1, y0, y1) = (first(lo_x, wv), end(hi_x, wv), first(lo_y, hv), end(hi_y, hv));
+    rejected =
+        _mm256_or_pd(rejected, _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
+    batch.rejected = _mm256_movemask_pd(rejected);
+    // The edges (Edge::new with no margin) and their bands (Edge::band).
+    for (i, e) in batch.edges.iter_mut().enumerate() {
+        let (p, q) = (i, (i + 1) % 3);
+        let a = _mm256_sub_pd(vy[p], vy[q]);
+        let b = _mm256_sub_pd(vx[q], vx[p]);
+        let c = _mm256_xor_pd(_mm256_add_pd(_mm256_mul_pd(a, vx[p]), _mm256_mul_pd(b, vy[p])), sign);
+        let r = _mm256_div_pd(one, a);
+        batch.on[i] = _mm256_movemask_pd(_mm256_or_pd(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero),
+            _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero), _mm256_cmp_pd::<_CMP_GT_OQ>(b, zero)),
+        ));
+        let slope = _mm256_mul_pd(_mm256_xor_pd(b, sign), r);
+        let offset = _mm256_mul_pd(_mm256_xor_pd(c, sign), r);
+        let intercept =
+            _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(slope), hv), abs(offset)), wv), one);
+        let function = _mm256_div_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(a), wv), _mm256_mul_pd(abs(b), hv)), abs(c)),
+            abs(a),
+        );
+        let band = _mm256_mul_pd(_mm256_set1_pd(BAND_SCALE), _mm256_add_pd(intercept, function));
+        for (out, v) in e.iter_mut().zip([a, b, c, slope, offset, band]) {
+            _mm256_storeu_pd(out.as_mut_ptr(), v);
+        }
+    }
+    // The depth plane (DepthPlane::new), raised by one grid step.
+    let (d1, d2) = (
+        [_mm256_sub_pd(vx[1], vx[0]), _mm256_sub_pd(vy[1], vy[0]), _mm256_sub_pd(vz[1], vz[0])],
+        [_mm256_sub_pd(vx[2], vx[0]), _mm256_sub_pd(vy[2], vy[0]), _mm256_sub_pd(vz[2], vz[0])],
+    );
+    let cross =
+        |a: __m256d, b: __m256d, c: __m256d, d: __m256d| _mm256_sub_pd(_mm256_mul_pd(a, b), _mm256_mul_pd(c, d));
+    let nx = cross(d1[1], d2[2], d2[1], d1[2]);
+    let ny = cross(d1[2], d2[0], d2[2], d1[0]);
+    let nz = cross(d1[0], d2[1], d2[0], d1[1]);
+    let zx = _mm256_div_pd(_mm256_xor_pd(nx, sign), nz);
+    let zy = _mm256_div_pd(_mm256_xor_pd(ny, sign), nz);
+    let z0 = _mm256_add_pd(
+        _mm256_sub_pd(_mm256_sub_pd(vz[0], _mm256_mul_pd(zx, vx[0])), _mm256_mul_pd(zy, vy[0])),
+        _mm256_mul_pd(_mm256_add_pd(abs(zx), abs(zy)), step),
+    );
+    let zmax = _mm256_max_pd(_mm256_max_pd(vz[0], vz[1]), vz[2]);
+    for (out, v) in batch.window_plane.iter_mut().zip([x0, x1, y0, y1, zx, zy, z0, zmax]) {
+        _mm256_storeu_pd(out.as_mut_ptr(), v);
+    }
+    batch
+}
+
+/// `crate::project`'s rounding (halves away from zero) on four lanes of
+/// magnitude below `2^52`.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn round(x: __m256d) -> __m256d {
+    let t = _mm256_round_pd::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(x);
+    let fraction = _mm256_sub_pd(x, t);
+    let one = _mm256_set1_pd(1.0);
+    let up = _mm256_and_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(fraction, _mm256_set1_pd(0.5)), one);
+    let down = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(fraction, _mm256_set1_pd(-0.5)), one);
+    _mm256_sub_pd(_mm256_add_pd(t, up), down)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::project::screen_triangles;
+    use crate::raster::avx2::Avx2;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn unit(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// Every field of a set-up triangle, as bits.
+    fn fields(t: &ScreenTriangle) -> Vec<u64> {
+        let mut out: Vec<u64> = t
+            .edges
+            .iter()
+            .flat_map(|e| [e.a, e.b, e.c, e.slope, e.offset].map(f64::to_bits).into_iter().chain([u64::from(e.on)]))
+            .collect();
+        let p = &t.plane;
+        out.extend([p.zx, p.zy, p.z0, p.zmax, t.t_min, t.t_max].map(f64::to_bits));
+        out.extend(t.bands.map(f64::to_bits));
+        out.extend([t.x0, t.x1, t.y0, t.y1].map(|v| v as u64));
+        out
+    }
+
+    /// A clip-space vertex: mostly on screen (some snapped to half pixels,
+    /// so that edges pass through pixel centres and areas vanish), some far
+    /// out, behind the eye, at `w <= 0` or not finite.
+    fn vertex(rng: &mut Lcg, case: usize) -> Vec4 {
+        let mut v = Vec4::new(rng.unit() * 2.4 - 1.2, rng.unit() * 2.4 - 1.2, rng.unit(), 1.0);
+        match case % 23 {
+            0 => v.z = -0.1,
+            1 => v.w = if case.is_multiple_of(2) { 0.0 } else { -1.0 },
+            2 => v.x *= 40.0,
+            3 => v.y = f32::NAN,
+            4 => v.w = f32::INFINITY,
+            5 => v.w = 1e-30,
+            6..=12 => (v.x, v.y) = ((v.x * 8.0).round() / 8.0, (v.y * 8.0).round() / 8.0),
+            _ => {}
+        }
+        v
+    }
+
+    #[test]
+    fn batched_set_up_equals_the_scalar_set_up() {
+        let Some(avx2) = Avx2::detect() else {
+            eprintln!("skipped: no AVX2 on this CPU");
+            return;
+        };
+        let mut rng = Lcg(17);
+        let screens = [(64, 48), (83, 45), (1920, 1080), (7, 5)];
+        let (mut batched, mut drawn, mut scalar) = (0, 0, 0);
+        for round in 0..20_000usize {
+            let (width, height) = screens[round % screens.len()];
+            let (cull, bits) = ([CullMode::Back, CullMode::None][round % 2], [8, 8, 4, 0][round / 2 % 4]);
+            let centre = Vec4::new(rng.unit() * 2.0 - 1.0, rng.unit() * 2.0 - 1.0, 0.0, 0.0);
+            let size = [0.01, 0.1, 1.0][round % 3];
+            let clip: [[Vec4; 3]; SETUP_LANES] = std::array::from_fn(|l| {
+                std::array::from_fn(|k| {
+                    let v = vertex(&mut rng, round * 7 + l * 3 + k);
+                    let v = centre + v * Vec4::new(size, size, 1.0, 1.0);
+                    if round.is_multiple_of(5) && k == 1 {
+                        // A horizontal edge.
+                        Vec4::new(v.x, centre.y, v.z, v.w)
+                    } else {
+                        v
+                    }
+                })
+            });
+            let batch = avx2.setup4(&clip, cull, width, height, bits);
+            for (l, c) in clip.iter().enumerate() {
+                let tri = match batch.lane(l) {
+                    LaneState::Scalar => {
+                        scalar += 1;
+                        continue;
+                    }
+                    LaneState::Rejected => None,
+                    LaneState::Drawn => Some(batch.triangle(l)),
+                };
+                batched += 1;
+                let mut expected = Vec::new();
+                let count = screen_triangles(*c, cull, width, height, bits, &mut |t| expected.push(fields(t)));
+                assert_eq!(count, 1, "round {round} lane {l}: {c:?}");
+                let got: Vec<_> = tri.iter().map(fields).collect();
+                assert_eq!(got, expected, "round {round} lane {l}: {c:?}");
+                drawn += got.len();
+            }
+        }
+        assert!(batched > 40_000 && drawn > 10_000 && scalar > 10_000, "{batched} {drawn} {scalar}");
+    }
+}
