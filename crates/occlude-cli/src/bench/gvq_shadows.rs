@@ -87,8 +87,9 @@ use std::ops::Range;
 
 /// Frames of Table 1 at most per object count, spread over the
 /// walkthrough: each frame rasterizes every shadow volume and plans both
-/// region modes in the light's view, and 24 frames took about 4 minutes on
-/// the loaded 2-vCPU development VM, 8 keep `--paper gvq` near 5.
+/// region modes in the light's view. On the loaded 2-vCPU development VM
+/// `--paper gvq --frames 24` (Table 1 on 24 frames, Table 2 on 24) took
+/// 355 s; the default run with 8 took 283 s (`docs/benchmarks.md`).
 pub const FRAMES: usize = 8;
 
 /// A way of deciding which shadow volumes to draw (module documentation).
