@@ -1,6 +1,8 @@
 //! `occlude bench --paper gvq`: the granular-visibility-queries paper's
-//! Tables 2 and 3. Table 3 (section 4.2, culling parts of one heavy object)
-//! is [`super::gvq_parts`]'s, on the soft backend's simulated clock. Table 2
+//! Tables 1 to 3. Table 1 (section 4.1, shadow-volume culling) is
+//! [`super::gvq_shadows`]'s and Table 3 (section 4.2, culling parts of one
+//! heavy object) [`super::gvq_parts`]'s, both on the soft backend's
+//! simulated clock, printed and written after Table 2. Table 2
 //! (section 4.1): summed-area-table queries of 100 to 500 randomly
 //! placed objects of 606 triangles (`occlude_scenes::scattered`), the CPU
 //! time of the overlap test, the colouring and split and merge, the
@@ -16,6 +18,7 @@
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::gvq_parts::{self, PartsRow};
+use super::gvq_shadows::{self, ShadowRow};
 use super::published::{self, PublishedTable};
 use super::runner::far_plane;
 use anyhow::Result;
@@ -60,6 +63,8 @@ pub struct GvqTable {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum GvqRows {
+    /// Table 1: frame times of shadow-volume culling.
+    Table1(Vec<ShadowRow>),
     /// Table 2: summed-area-table errors and CPU times.
     Table2(Vec<GvqRow>),
     /// Table 3: frame times of culling parts of one heavy object.
@@ -212,8 +217,10 @@ impl Counter {
 }
 
 /// Runs Table 2 with the seed, frames, resolution and backend of `base`,
-/// and Table 3 at its resolution with its GPU model (module
-/// documentation); returns the printed tables and their JSON.
+/// Table 3 at its resolution with its GPU model, and Table 1 with its
+/// seed, resolution and GPU model on at most [`gvq_shadows::FRAMES`] of
+/// its frames (module documentation); returns the printed tables and
+/// their JSON, in that order.
 pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
     let (mut text, table_2) = table_2(base, &OBJECTS, progress)?;
     progress.set_message("gvq: Table 3");
@@ -224,7 +231,16 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
     text.push_str(&gvq_parts::print(&parts, w, h, &base.gpu_model));
     let table_3 =
         GvqTable { name: "Table 3".into(), source: published.map(|t| t.source.clone()), rows: GvqRows::Table3(parts) };
-    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3] }))
+    let published = published::table("gvq", "Table 1");
+    let shadows = gvq_shadows::table_1(base, &OBJECTS, published, progress);
+    text.push('\n');
+    text.push_str(&gvq_shadows::print(&shadows, w, h, &base.gpu_model));
+    let table_1 = GvqTable {
+        name: "Table 1".into(),
+        source: published.map(|t| t.source.clone()),
+        rows: GvqRows::Table1(shadows),
+    };
+    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3, table_1] }))
 }
 
 /// Table 2 over scenes of `counts` objects: the printed table and its rows.
@@ -297,7 +313,7 @@ mod tests {
     fn rows_2(table: &GvqTable) -> &[GvqRow] {
         match &table.rows {
             GvqRows::Table2(rows) => rows,
-            GvqRows::Table3(_) => panic!("{} has Table 3's rows", table.name),
+            _ => panic!("{} has no Table 2 rows", table.name),
         }
     }
 
@@ -323,11 +339,17 @@ mod tests {
         for key in ["method", "view", "frame_ms"] {
             assert!(json["tables"][1]["rows"][0].get(key).is_some(), "{key}");
         }
-        let back: GvqTables = serde_json::from_value(json).unwrap();
+        let back: GvqTables = serde_json::from_value(json.clone()).unwrap();
         assert!(
             matches!(&back.tables[0].rows, GvqRows::Table2(_)) && matches!(&back.tables[1].rows, GvqRows::Table3(_))
         );
         assert!(text.contains("Table 3"));
+        assert_eq!(back.tables[2].name, "Table 1");
+        assert!(matches!(&back.tables[2].rows, GvqRows::Table1(rows) if rows.len() == 25));
+        for key in ["objects", "method", "frame_ms", "published_frame_ms", "published_fps_gtx280"] {
+            assert!(json["tables"][2]["rows"][0].get(key).is_some(), "{key}");
+        }
+        assert!(text.contains("Table 1"));
     }
 
     /// `--backend wgpu`: the GPU's summed area tables count the soft

@@ -28,7 +28,7 @@
 //! Every culling method is conservative: a prism with a visible fragment is
 //! drawn (tests check it). Fragments come from the soft rasterizer's exact
 //! walk ([`Fragments`]); `frame_ms` is the soft backend's simulated clock
-//! ([`SimClock`]) charged with the GPU model's costs: draws, triangles,
+//! ([`SimFrame`]) charged with the GPU model's costs: draws, triangles,
 //! fragments, queries, the first pass, the histogram or prefix-sum
 //! dispatches over every pixel, and one texel read
 //! (`gpu_hiz_texel_ns`) per tile or summed-area-table read a prism's test
@@ -37,12 +37,12 @@
 //! 12 triangles and their fragments per prism make it.
 
 use super::published::PublishedTable;
+use super::sim_gpu::SimFrame;
 use glam::{DVec2, Mat4, Vec3, Vec4};
 use occlude_core::depth_pyramid::{project_corner, PIXEL_MARGIN};
 use occlude_core::gvq::{plan, PixelRect, SatConfig, Silhouette, SummedAreaTable, NO_CHANNEL};
 use occlude_core::query_box::BOX_TRIANGLES;
 use occlude_core::{Aabb, Camera};
-use occlude_soft::clock::SimClock;
 use occlude_soft::raster::Fragments;
 use occlude_soft::GpuModel;
 use serde::{Deserialize, Serialize};
@@ -284,54 +284,24 @@ impl ViewPasses {
     }
 }
 
-/// One method's culling of one view: which prisms are drawn and what the
-/// clock is charged.
-struct Frame<'m> {
-    model: &'m GpuModel,
-    clock: SimClock,
+/// A frame of one method in one view that has drawn the static scene.
+fn frame<'m>(model: &'m GpuModel, passes: &ViewPasses) -> SimFrame<'m> {
+    let mut f = SimFrame::new(model);
+    f.draw(12, passes.static_fragments);
+    f
 }
 
-impl<'m> Frame<'m> {
-    /// A frame that has drawn the static scene.
-    fn new(model: &'m GpuModel, passes: &ViewPasses) -> Self {
-        let mut f = Self { model, clock: SimClock::default() };
-        f.draw(12, passes.static_fragments);
-        f
+/// The heavy object in one draw, the prisms `drawn` says drawn (12
+/// triangles and their fragments each; a culled one costs its input
+/// triangle), after `reads` texel reads of the culling tests.
+fn draw_heavy(f: &mut SimFrame, passes: &ViewPasses, drawn: &[bool], reads: u64) {
+    let (mut triangles, mut fragments) = (0, 0);
+    for (&(frags, _, _), &d) in passes.prisms.iter().zip(drawn) {
+        triangles += if d { 12 } else { 1 };
+        fragments += if d { frags } else { 0 };
     }
-
-    /// One draw call of `triangles` and `fragments`.
-    fn draw(&mut self, triangles: u64, fragments: u64) {
-        let m = self.model;
-        self.clock.cpu_work(m.cpu_draw_call_us);
-        let gpu =
-            m.gpu_draw_call_us + (triangles as f64 * m.gpu_triangle_ns + fragments as f64 * m.gpu_fragment_ns) * 1e-3;
-        self.clock.gpu_command(self.clock.cpu, gpu);
-    }
-
-    /// A compute dispatch over `items`.
-    fn dispatch(&mut self, items: u64) {
-        let m = self.model;
-        self.clock.cpu_work(m.cpu_dispatch_us);
-        self.clock.gpu_command(self.clock.cpu, m.gpu_dispatch_us + items as f64 * m.gpu_compute_item_ns * 1e-3);
-    }
-
-    /// The heavy object in one draw, the prisms `drawn` says drawn (12
-    /// triangles and their fragments each; a culled one costs its input
-    /// triangle), after `reads` texel reads of the culling tests.
-    fn draw_heavy(&mut self, passes: &ViewPasses, drawn: &[bool], reads: u64) {
-        let (mut triangles, mut fragments) = (0, 0);
-        for (&(f, _, _), &d) in passes.prisms.iter().zip(drawn) {
-            triangles += if d { 12 } else { 1 };
-            fragments += if d { f } else { 0 };
-        }
-        self.draw(triangles, fragments);
-        let gpu = reads as f64 * self.model.gpu_hiz_texel_ns * 1e-3;
-        self.clock.gpu_command(self.clock.cpu, gpu);
-    }
-
-    fn ms(&self) -> f64 {
-        self.clock.frame_end() * 1e-3
-    }
+    f.draw(triangles, fragments);
+    f.texel_reads(reads);
 }
 
 /// Per prism, whether `test` of its pixel rectangle keeps it (one without
@@ -358,18 +328,17 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
     let n = passes.prisms.len();
     let mut rows = Vec::new();
 
-    let mut f = Frame::new(model, passes);
+    let mut f = frame(model, passes);
     let all = vec![true; n];
-    f.draw_heavy(passes, &all, 0);
+    draw_heavy(&mut f, passes, &all, 0);
     rows.push(("none".to_string(), f.ms(), all));
 
     for (size, draws) in DRAW_SIZES.iter().zip(&passes.draws) {
-        let mut f = Frame::new(model, passes);
+        let mut f = frame(model, passes);
         let mut drawn = vec![false; n];
         for (k, &(box_fragments, passed)) in draws.iter().enumerate() {
-            f.clock.cpu_work(model.cpu_query_us);
-            let gpu = model.gpu_query_box_us + box_fragments as f64 * model.gpu_query_fragment_ns * 1e-3;
-            f.clock.gpu_command(f.clock.cpu, gpu);
+            f.cpu_work(model.cpu_query_us);
+            f.gpu(model.gpu_query_box_us + box_fragments as f64 * model.gpu_query_fragment_ns * 1e-3);
             let range = k * size..((k + 1) * size).min(n);
             if passed {
                 let (tris, frags) = passes.prisms[range.clone()].iter().fold((0, 0), |(t, g), p| (t + 12, g + p.0));
@@ -377,7 +346,7 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
                 drawn[range].iter_mut().for_each(|d| *d = true);
             } else {
                 // The predicated draw is issued; the GPU skips it.
-                f.clock.cpu_work(model.cpu_draw_call_us);
+                f.cpu_work(model.cpu_draw_call_us);
             }
         }
         rows.push((format!("predicates-{size}"), f.ms(), drawn));
@@ -385,7 +354,7 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
 
     let pixels = u64::from(passes.width) * u64::from(passes.height);
     for tiles in TILINGS {
-        let mut f = Frame::new(model, passes);
+        let mut f = frame(model, passes);
         f.draw(n as u64, passes.proxy_fragments);
         f.dispatch(pixels);
         let counts = passes.tile_counts(tiles);
@@ -395,14 +364,14 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
             let seen = (ty0..=ty1).any(|ty| (tx0..=tx1).any(|tx| counts[(ty * tiles + tx) as usize] > 0));
             (seen, u64::from((tx1 - tx0 + 1) * (ty1 - ty0 + 1)))
         });
-        f.draw_heavy(passes, &drawn, reads);
+        draw_heavy(&mut f, passes, &drawn, reads);
         rows.push((format!("item-buffer-{tiles}x{tiles}"), f.ms(), drawn));
     }
 
-    let mut f = Frame::new(model, passes);
+    let mut f = frame(model, passes);
     let start = Instant::now();
     let regions = plan(&[passes.silhouette], &SatConfig::default());
-    f.clock.cpu_work(start.elapsed().as_secs_f64() * 1e6);
+    f.cpu_work(start.elapsed().as_secs_f64() * 1e6);
     f.draw(n as u64, passes.proxy_fragments);
     let owners: Vec<u32> = passes.visible.iter().map(|&v| if v { 0 } else { u32::MAX }).collect();
     let image = regions.channel_image(&owners, passes.width);
@@ -415,7 +384,7 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
         let parts: Vec<_> = lookups.iter().filter_map(|l| l.rect.intersect(r).map(|i| (l.channel, i))).collect();
         (parts.iter().any(|(c, i)| sat.count(*c, i) > 0), 4 * parts.len() as u64)
     });
-    f.draw_heavy(passes, &drawn, reads);
+    draw_heavy(&mut f, passes, &drawn, reads);
     rows.push(("sat".to_string(), f.ms(), drawn));
     rows
 }

@@ -6,6 +6,7 @@ pub mod config;
 pub mod dump;
 pub mod gvq;
 pub mod gvq_parts;
+pub mod gvq_shadows;
 pub mod ideal;
 pub mod output;
 pub mod paper;
@@ -13,6 +14,7 @@ pub mod paper_tables;
 pub mod plot;
 pub mod published;
 pub mod runner;
+pub mod sim_gpu;
 pub mod summary;
 pub mod table;
 

@@ -22,8 +22,9 @@
 //!   the poster's figure) and Figure 4 (frame time of VFC, ROC, IOC and the
 //!   ideal set; the poster gives that one as a chart, without figures, and
 //!   its NOCULL has no method here).
-//! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 2
-//!   and 3, in [`super::gvq`] and [`super::gvq_parts`].
+//! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
+//!   to 3, in [`super::gvq`], [`super::gvq_shadows`] and
+//!   [`super::gvq_parts`].
 
 use super::config::BenchConfig;
 use super::ideal::IDEAL;

@@ -62,6 +62,8 @@ pub struct PublishedRow {
     pub fps_gtx280: Option<f64>,
     /// Frames per second on an ATI HD3870.
     pub fps_hd3870: Option<f64>,
+    /// Frames per second on an ATI HD4870X2.
+    pub fps_hd4870x2: Option<f64>,
 }
 
 /// A comparison of two methods a paper states in words, with the ratio of
