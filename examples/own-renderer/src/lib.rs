@@ -52,7 +52,9 @@ struct InstanceData {
 
 /// occlude: the culling method, query-driven (`chcpp` and the others) or
 /// GPU-driven (`hiz`, with a bind group of each of its lists and the
-/// instances for the listed pipeline).
+/// instances for the listed pipeline). One per renderer, so the variants'
+/// sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 enum Culling {
     Queries(Culler),
     Gpu { culler: GpuCuller, lists: [wgpu::BindGroup; 2] },

@@ -147,6 +147,12 @@
 //! - **Latency of visibility:** an instance hidden last frame and visible
 //!   now is drawn in the late pass of this frame, after the pyramid: never
 //!   missing, but its draw waits for the pyramid.
+//! - **Warm-up:** the first frame has no visible set from a frame before,
+//!   so its pyramid is empty and it draws every instance in the frustum;
+//!   the second frame draws those again in its early pass. Occlusion
+//!   shows from the third frame on, and again two frames after a camera
+//!   cut (in the example, 2,717 of 3,603 instances in frames 0 and 1,
+//!   then about 150 to 230).
 //!
 //! ## Requirements
 //!
