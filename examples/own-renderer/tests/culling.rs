@@ -108,9 +108,8 @@ fn culling_keeps_the_image_with_depth24plus() {
 #[test]
 fn the_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_embedding_refuses_what_it_cannot_cull") else { return };
-    let depth_format = wgpu::TextureFormat::Depth32Float;
-    let attachments = Attachments { color: None, depth: depth_format, compare: wgpu::CompareFunction::Less };
-    let bounds = [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))];
+    let (attachments, bounds) = one_box();
+    let depth_format = attachments.depth;
     let new = |attachments, bounds: &[Aabb], method| Culler::new(&device, &queue, attachments, bounds, method).err();
     assert!(matches!(new(attachments, &bounds, "opt"), Some(EmbedError::Unsupported(_))));
     assert!(matches!(new(attachments, &bounds, "roc"), Some(EmbedError::Unsupported(_))));
@@ -146,6 +145,15 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     assert_eq!(drawn, [0]);
 }
 
+/// The refusal tests' culling input: depth-only `Depth32Float` attachments
+/// tested with `Less`, and one box in front of a camera at the origin
+/// looking down -z.
+fn one_box() -> (Attachments, [Aabb; 1]) {
+    let attachments =
+        Attachments { color: None, depth: wgpu::TextureFormat::Depth32Float, compare: wgpu::CompareFunction::Less };
+    (attachments, [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))])
+}
+
 /// A view of a new `size` x `size` texture of `format` and `usage`.
 fn texture_view(
     device: &wgpu::Device,
@@ -169,9 +177,8 @@ fn texture_view(
 #[test]
 fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_gpu_driven_embedding_refuses_what_it_cannot_cull") else { return };
-    let depth_format = wgpu::TextureFormat::Depth32Float;
-    let attachments = Attachments { color: None, depth: depth_format, compare: wgpu::CompareFunction::Less };
-    let bounds = [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))];
+    let (attachments, bounds) = one_box();
+    let depth_format = attachments.depth;
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let new =
         |attachments, bounds: &[Aabb], method| GpuCuller::new(&device, &queue, attachments, bounds, method, draw).err();
