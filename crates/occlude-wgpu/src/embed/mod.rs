@@ -139,8 +139,9 @@
 //! ## Costs
 //!
 //! - **Per frame:** four compute dispatches over the instances, one per
-//!   pyramid level plus one for level 0 over the pixels, two 4-byte
-//!   buffer copies and your two indirect draws. One submission; nothing is
+//!   pyramid level (level 0 over your depth's pixels, each further level
+//!   over its texels), two 4-byte buffer copies and your two indirect
+//!   draws. One submission; nothing is
 //!   read back, so the CPU never waits for the GPU.
 //! - **Memory:** per instance a 32-byte box, two flag words and three list
 //!   entries; the pyramid is about 4/3 of a 32-bit depth image.
