@@ -1,6 +1,8 @@
 // GPU-resident culling (culling.rs): compute passes over id lists and flag
-// buffers, and the fragment stage of the batched box tests, whose vertex
-// stage is vs_query_box of shader.wgsl.
+// buffers. The fragment stage of the batched box tests (whose vertex stage
+// is vs_query_box of shader.wgsl) is in cull_fragments.wgsl, appended to
+// this file where the device has early depth tests; the embedding's
+// compute passes (embed/gpu_culler.rs) use this file alone.
 //
 // Each compute entry point runs one thread per list entry or flag slot, in
 // workgroups of 64 laid out in two dimensions (a dimension holds at most
@@ -106,14 +108,12 @@ struct Stats {
 @group(0) @binding(13) var<storage, read_write> stats: Stats;
 @group(0) @binding(14) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(15) var<storage, read> levels: array<Level>;
-// The level a reduction writes, or the reach of a pyramid test.
+// The level a reduction writes, the reach of a pyramid test, or (1 or 0)
+// whether the depth texture a pyramid's level 0 is read from is reverse Z.
 @group(0) @binding(16) var<uniform> param: vec4<u32>;
+// A renderer's depth texture (the embedding's pyramids are built from it).
+@group(0) @binding(17) var depth_texture: texture_depth_2d;
 
-// The box-test fragments' flags (the render pass's group 1).
-@group(1) @binding(0) var<storage, read_write> box_flags: array<u32>;
-// Counted queries (`--queries hib`): per query slot a 64-bit count of its
-// boxes' fragments that passed the depth test, low word first.
-@group(1) @binding(2) var<storage, read_write> query_counts: array<atomic<u32>>;
 
 const GROUP_SIZE: u32 = 64u;
 
@@ -170,28 +170,6 @@ fn cs_test_boxes(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroup
     // The append slot doubles as the instance index of the box draw.
     raster[atomicAdd(&box_draw.instance_count, 1u)] = boxes[src.ids[k]];
     atomicAdd(&stats.boxes, 1u);
-}
-
-// Box tests, second half: a fragment of the box that passed the depth test
-// marks it visible. Forced early depth testing is what makes the test happen
-// before the write: a shader with side effects otherwise runs (and writes)
-// for fragments the depth test then discards.
-@fragment @early_depth_test(force)
-fn fs_test_box(@location(0) @interpolate(flat) id: u32) -> @location(0) vec4<f32> {
-    box_flags[id] = 1u;
-    return vec4<f32>(0.0);
-}
-
-// Counted queries: a fragment of a query's box that passed the depth test
-// (forced early, as for box tests) adds one to the query's count, carrying
-// into the high word. Boxes of one query or of several may overlap: each
-// fragment counts, as a hardware occlusion query counts them.
-@fragment @early_depth_test(force)
-fn fs_count_box(@location(0) @interpolate(flat) slot: u32) -> @location(0) vec4<f32> {
-    if atomicAdd(&query_counts[2u * slot], 1u) == 0xffffffffu {
-        atomicAdd(&query_counts[2u * slot + 1u], 1u);
-    }
-    return vec4<f32>(0.0);
 }
 
 // The range of entry k of `src`, when its flag in `filter_flags` is set.
@@ -332,6 +310,33 @@ fn cs_pyramid_level(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgr
         }
     }
     pyramid[dst_level.offset + y * dst_level.pitch + x] = farthest;
+}
+
+// How much farther than the depth texture's value level 0 of an embedded
+// pyramid is taken: 2^-22, four steps of a 24-bit depth buffer (whose stored
+// depth is the fragment's rounded to one), more than the rounding of
+// 1 - depth for reverse Z (half a step of f32 at 1).
+const LOAD_SLACK: f32 = 2.384185791015625e-7;
+
+// Level 0 of a depth pyramid from a renderer's depth texture (the
+// embedding's): each texel its pixel's depth, turned into depth 0 nearest
+// when param.x says the texture is reverse Z, and pushed LOAD_SLACK farther,
+// so that it is never nearer than the depth the renderer's fragments had.
+@compute @workgroup_size(64)
+fn cs_pyramid_base(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                   @builtin(local_invocation_index) local: u32) {
+    let t = thread_index(group, groups, local);
+    let level = levels[0];
+    if t >= level.width * level.height {
+        return;
+    }
+    let x = t % level.width;
+    let y = t / level.width;
+    var depth = textureLoad(depth_texture, vec2<u32>(x, y), 0);
+    if param.x != 0u {
+        depth = 1.0 - depth;
+    }
+    pyramid[level.offset + y * level.pitch + x] = min(depth + LOAD_SLACK, 1.0);
 }
 
 // A bound on how far two f32 evaluations of a sum or quotient may differ,

@@ -8,7 +8,8 @@
 //! each fragment that passes the depth test setting its box's flag. Compute
 //! passes turn flags into id lists, and a list into indirect draw arguments
 //! drawn by one multi-draw (`multi_draw_indexed_indirect_count` where the
-//! device has it). The shaders are in `cull.wgsl`.
+//! device has it). The shaders are in `cull.wgsl`, the box tests' fragment stages in
+//! `cull_fragments.wgsl` (appended to it here).
 //!
 //! [`CullingScene`] is the part shared by every backend on a scene (pipelines,
 //! per-instance draw data); [`Culling`] one backend's resources, which live as
@@ -122,7 +123,9 @@ impl CullingScene {
         let device = &gpu.ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("occlude culling shaders"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("cull.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(include_str!("cull.wgsl"), include_str!("cull_fragments.wgsl")).into(),
+            ),
         });
         let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
@@ -202,13 +205,33 @@ struct TableBuffers {
 /// A depth pyramid: its levels one after the other in `texels` (level 0 with
 /// rows padded as texture copies need), and their places (`Level` of
 /// `cull.wgsl`) in `levels`.
-struct PyramidBuffers {
-    texels: wgpu::Buffer,
-    levels: wgpu::Buffer,
+pub(crate) struct PyramidBuffers {
+    pub texels: wgpu::Buffer,
+    pub levels: wgpu::Buffer,
     /// Texels per level, level 0 first.
-    counts: Vec<u32>,
+    pub counts: Vec<u32>,
     /// Bytes per row of level 0.
     row_bytes: u32,
+}
+
+impl PyramidBuffers {
+    /// A pyramid over a `width` x `height` depth image, level 0's rows
+    /// `pitch` texels apart (at least `width`), every texel at the far
+    /// plane.
+    pub fn new(ctx: &GpuContext, width: u32, height: u32, pitch: u32) -> Self {
+        let mut table = Vec::new();
+        let mut offset = 0;
+        for (k, (w, h)) in level_sizes(width, height).into_iter().enumerate() {
+            let pitch = if k == 0 { pitch } else { w };
+            table.push([offset, w, h, pitch]);
+            offset += pitch * h;
+        }
+        let far = vec![1f32; offset as usize];
+        let texels = storage_init(ctx, "depth pyramid", bytemuck::cast_slice(&far), wgpu::BufferUsages::COPY_DST);
+        let levels = storage_init(ctx, "pyramid levels", bytemuck::cast_slice(&table), wgpu::BufferUsages::empty());
+        let counts = table.iter().map(|l| l[1] * l[2]).collect();
+        Self { texels, levels, counts, row_bytes: 4 * pitch }
+    }
 }
 
 /// What the box tests and list draws of a frame did, counted on the GPU.
@@ -287,7 +310,7 @@ impl Culling {
             gpu: Arc::clone(gpu),
             frame_camera: frame_camera.clone(),
             depth: depth.clone(),
-            camera: buffer("culling camera", CAMERA_BYTES, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST),
+            camera: cull_camera_buffer(&ctx.device),
             boxes: Vec::new(),
             flags: Vec::new(),
             lists: Vec::new(),
@@ -323,36 +346,13 @@ impl Culling {
     /// Sets the frame's camera for box tests (frustum planes, near region,
     /// view-projection matrix and the constants of pyramid footprints).
     pub fn set_camera(&self, camera: &Camera) {
-        let mut uniform = [0f32; CAMERA_BYTES as usize / 4];
-        for (k, plane) in camera.frustum().planes.iter().enumerate() {
-            uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
-        }
-        let near = camera.near_region();
-        uniform[24..28].copy_from_slice(&near.center.extend(near.radius * near.radius).to_array());
-        uniform[28..44].copy_from_slice(&camera.view_projection().to_cols_array());
-        uniform[44..47].copy_from_slice(&[QUERY_DEPTH_BIAS, DEPTH_SLACK, PIXEL_MARGIN as f32]);
-        self.ctx().queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&uniform));
+        write_cull_camera(&self.ctx().queue, &self.camera, camera);
     }
 
     /// Uploads `boxes` padded as query boxes, each with its slot; empty boxes
     /// stay empty (min > max), which tests skip.
     pub fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
-        let data: Vec<[u32; 8]> = boxes
-            .iter()
-            .zip(0u32..)
-            .map(|(b, slot)| {
-                let (lo, hi) = if b.is_empty() {
-                    (glam::Vec3::ONE, glam::Vec3::ZERO)
-                } else {
-                    let p = b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element());
-                    (p.min, p.max)
-                };
-                let [lx, ly, lz] = lo.to_array().map(f32::to_bits);
-                let [hx, hy, hz] = hi.to_array().map(f32::to_bits);
-                [lx, ly, lz, slot, hx, hy, hz, 0]
-            })
-            .collect();
-        self.boxes.push(storage_init(self.ctx(), "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty()));
+        self.boxes.push(box_set_buffer(self.ctx(), boxes));
         BoxSet(self.boxes.len() as u32 - 1)
     }
 
@@ -402,20 +402,8 @@ impl Culling {
         let (width, height) = (self.depth.width(), self.depth.height());
         let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let row_bytes = (4 * width).div_ceil(align) * align;
-        let mut table = Vec::new();
-        let mut offset = 0;
-        for (k, (w, h)) in level_sizes(width, height).into_iter().enumerate() {
-            let pitch = if k == 0 { row_bytes / 4 } else { w };
-            table.push([offset, w, h, pitch]);
-            offset += pitch * h;
-        }
-        let far = vec![1f32; offset as usize];
-        let texels =
-            storage_init(self.ctx(), "depth pyramid", bytemuck::cast_slice(&far), wgpu::BufferUsages::COPY_DST);
-        let levels =
-            storage_init(self.ctx(), "pyramid levels", bytemuck::cast_slice(&table), wgpu::BufferUsages::empty());
-        let counts = table.iter().map(|l| l[1] * l[2]).collect();
-        self.pyramids.push(PyramidBuffers { texels, levels, counts, row_bytes });
+        let pyramid = PyramidBuffers::new(self.ctx(), width, height, row_bytes / 4);
+        self.pyramids.push(pyramid);
         Pyramid(self.pyramids.len() as u32 - 1)
     }
 
@@ -427,14 +415,7 @@ impl Culling {
     /// The uniform holding `value` in its first word, made on first use.
     fn param(&mut self, value: u32) -> wgpu::Buffer {
         let ctx = Arc::clone(&self.gpu.ctx);
-        let make = || {
-            ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("culling parameter"),
-                contents: bytemuck::cast_slice(&[value, 0, 0, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-        };
-        self.params.entry(value).or_insert_with(make).clone()
+        self.params.entry(value).or_insert_with(|| param_buffer(&ctx.device, value)).clone()
     }
 
     /// Encodes the build of `pyramid`: the depth texture copied into level
@@ -479,12 +460,7 @@ impl Culling {
             label: Some("depth pyramid"),
             timestamp_writes: timer.and_then(|t| t.compute_pass_doing(PassKind::Pyramid)),
         });
-        pass.set_pipeline(&scene.pyramid_level);
-        for (group, &texels) in groups.iter().zip(&counts[1..]) {
-            pass.set_bind_group(0, group, &[]);
-            let (x, y) = workgroups(texels);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        dispatch_reductions(&mut pass, &scene.pyramid_level, &groups, &counts);
     }
 
     /// The compute bind group `key` of `entries` for `pipeline`, made on
@@ -730,6 +706,79 @@ impl Culling {
     }
 }
 
+/// Writes the culling camera uniform `buffer` (`Cull` of `cull.wgsl`) for
+/// `camera`: frustum planes, near region, the view-projection matrix the
+/// backends rasterize (depth 0 nearest) and the constants of pyramid
+/// footprints.
+pub(crate) fn write_cull_camera(queue: &wgpu::Queue, buffer: &wgpu::Buffer, camera: &Camera) {
+    let mut uniform = [0f32; CAMERA_BYTES as usize / 4];
+    for (k, plane) in camera.frustum().planes.iter().enumerate() {
+        uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
+    }
+    let near = camera.near_region();
+    uniform[24..28].copy_from_slice(&near.center.extend(near.radius * near.radius).to_array());
+    uniform[28..44].copy_from_slice(&camera.view_projection().to_cols_array());
+    uniform[44..47].copy_from_slice(&[QUERY_DEPTH_BIAS, DEPTH_SLACK, PIXEL_MARGIN as f32]);
+    queue.write_buffer(buffer, 0, bytemuck::cast_slice(&uniform));
+}
+
+/// A uniform buffer for [`write_cull_camera`].
+pub(crate) fn cull_camera_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("culling camera"),
+        size: CAMERA_BYTES,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A `param` uniform of `cull.wgsl` holding `value` in its first word.
+pub(crate) fn param_buffer(device: &wgpu::Device, value: u32) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("culling parameter"),
+        contents: bytemuck::cast_slice(&[value, 0, 0, 0]),
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// A box set's storage buffer: `boxes` padded as query boxes, each with its
+/// slot; empty boxes stay empty (min > max), which tests skip.
+pub(crate) fn box_set_buffer(ctx: &GpuContext, boxes: &[Aabb]) -> wgpu::Buffer {
+    let data: Vec<[u32; 8]> = boxes
+        .iter()
+        .zip(0u32..)
+        .map(|(b, slot)| {
+            let (lo, hi) = if b.is_empty() {
+                (glam::Vec3::ONE, glam::Vec3::ZERO)
+            } else {
+                let p = b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element());
+                (p.min, p.max)
+            };
+            let [lx, ly, lz] = lo.to_array().map(f32::to_bits);
+            let [hx, hy, hz] = hi.to_array().map(f32::to_bits);
+            [lx, ly, lz, slot, hx, hy, hz, 0]
+        })
+        .collect();
+    storage_init(ctx, "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty())
+}
+
+/// Records a pyramid's reductions into `pass`: `pipeline`
+/// (`cs_pyramid_level`) once per level past level 0 with that level's bind
+/// group, over `counts` (texels per level, level 0 first).
+pub(crate) fn dispatch_reductions(
+    pass: &mut wgpu::ComputePass<'_>,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[wgpu::BindGroup],
+    counts: &[u32],
+) {
+    pass.set_pipeline(pipeline);
+    for (group, &texels) in groups.iter().zip(&counts[1..]) {
+        pass.set_bind_group(0, group, &[]);
+        let (x, y) = workgroups(texels);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}
+
 /// Workgroups `(x, y)` covering `threads` threads, `x` within the limit.
 pub(crate) fn workgroups(threads: u32) -> (u32, u32) {
     let groups = threads.div_ceil(GROUP_SIZE).max(1);
@@ -740,7 +789,7 @@ pub(crate) fn workgroups(threads: u32) -> (u32, u32) {
 /// A storage buffer holding `contents`, with `usage` besides; zeros follow up
 /// to 32 bytes, so that even an empty array binds one element of any type
 /// here.
-fn storage_init(ctx: &GpuContext, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+pub(crate) fn storage_init(ctx: &GpuContext, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     let mut bytes = contents.to_vec();
     bytes.resize(contents.len().max(BOX_BYTES as usize), 0);
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -751,7 +800,7 @@ fn storage_init(ctx: &GpuContext, label: &str, contents: &[u8], usage: wgpu::Buf
 }
 
 /// A bind group of whole buffers at the given bindings.
-fn bind_group(
+pub(crate) fn bind_group(
     ctx: &GpuContext,
     label: &str,
     layout: &wgpu::BindGroupLayout,

@@ -2,15 +2,17 @@
 //! vertex and index buffers and a per-instance buffer (offset, scale,
 //! colour), drawing a grid of boxes behind three walls with two gaps. With
 //! culling off it draws every box in one instanced draw; with culling on,
-//! occlude's `chcpp` (`occlude::wgpu::embed`) decides which boxes to draw
-//! and calls this renderer's draw code for them, inside its own passes on
-//! this renderer's device and attachments.
+//! occlude's `chcpp` (`occlude::wgpu::embed::Culler`) decides which boxes
+//! to draw and calls this renderer's draw code for them, inside its own
+//! passes on this renderer's device and attachments; or occlude's `hiz`
+//! (`occlude::wgpu::embed::GpuCuller`) writes the visible boxes' ids into
+//! lists on the GPU, which this renderer draws with one indirect draw each.
 //!
 //! The lines that integrate occlude are marked `occlude:` (counted in
 //! the README).
 
 use glam::{Mat4, Vec3};
-use occlude::wgpu::embed::{Attachments, Culler, FrameTarget};
+use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -48,12 +50,24 @@ struct InstanceData {
     color: [f32; 3],
 }
 
-/// The renderer: device, pipeline, buffers and its off-screen image.
+/// occlude: the culling method, query-driven (`chcpp` and the others) or
+/// GPU-driven (`hiz`, with a bind group of each of its lists and the
+/// instances for the listed pipeline). One per renderer, so the variants'
+/// sizes do not matter.
+#[allow(clippy::large_enum_variant)]
+enum Culling {
+    Queries(Culler),
+    Gpu { culler: GpuCuller, lists: [wgpu::BindGroup; 2] },
+}
+
+/// The renderer: device, pipelines, buffers and its off-screen image.
 pub struct Renderer {
     device: wgpu::Device,
     queue: wgpu::Queue,
     options: Options,
     pipeline: wgpu::RenderPipeline,
+    /// Draws listed instances: ids from a list, instances from storage.
+    listed: wgpu::RenderPipeline,
     uniforms: wgpu::Buffer,
     group: wgpu::BindGroup,
     cube_vertices: wgpu::Buffer,
@@ -64,7 +78,7 @@ pub struct Renderer {
     color: wgpu::Texture,
     depth: wgpu::Texture,
     /// occlude: the culling method, when culling is on.
-    culler: Option<Culler>,
+    culling: Option<Culling>,
 }
 
 /// A device and queue on the first adapter wgpu finds (`WGPU_BACKEND` and
@@ -87,9 +101,11 @@ impl Renderer {
         };
         let cube_vertices = buffer("cube vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
         let cube_indices = buffer("cube indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
-        let instances = buffer("instances", bytemuck::cast_slice(&data), wgpu::BufferUsages::VERTEX);
+        let instances =
+            buffer("instances", bytemuck::cast_slice(&data), wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE);
         let uniforms = buffer("uniforms", &[0; 64], wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
         let pipeline = pipeline(&device, options);
+        let listed = pipeline_listed(&device, options);
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("uniforms"),
             layout: &pipeline.get_bind_group_layout(0),
@@ -103,7 +119,9 @@ impl Renderer {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         };
@@ -114,6 +132,7 @@ impl Renderer {
             queue,
             options,
             pipeline,
+            listed,
             uniforms,
             group,
             cube_vertices,
@@ -122,7 +141,7 @@ impl Renderer {
             bounds,
             color,
             depth,
-            culler: None,
+            culling: None,
         }
     }
 
@@ -145,12 +164,34 @@ impl Renderer {
         // occlude: the attachments, the instance boxes and the method, once.
         let attachments =
             Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
-        self.culler = match method {
-            Some(method) => Some(Culler::new(&self.device, &self.queue, attachments, &self.bounds, method)?),
+        self.culling = match method {
+            Some(method) if GPU_METHODS.contains(&method) => {
+                let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
+                let culler = GpuCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draw)?;
+                let lists = culler.lists().each_ref().map(|list| self.list_group(list.ids()));
+                Some(Culling::Gpu { culler, lists })
+            }
+            Some(method) => {
+                Some(Culling::Queries(Culler::new(&self.device, &self.queue, attachments, &self.bounds, method)?))
+            }
             None => None,
         };
         // occlude: end.
         Ok(())
+    }
+
+    /// occlude: the listed pipeline's group: the uniforms, a list of
+    /// visible instances and the instances.
+    fn list_group(&self, list: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("visible instances"),
+            layout: &self.listed.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.uniforms.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: list.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: self.instances.as_entire_binding() },
+            ],
+        })
     }
 
     /// Renders frame `t` (0 to 1 along the camera's path) and returns how
@@ -160,7 +201,7 @@ impl Renderer {
         self.queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&(projection * view).to_cols_array()));
         let color = self.color.create_view(&Default::default());
         let depth = self.depth.create_view(&Default::default());
-        let Some(culler) = self.culler.as_mut() else {
+        let Some(culling) = self.culling.as_mut() else {
             // Culling off: one pass, every instance in one instanced draw.
             let mut encoder = self.device.create_command_encoder(&Default::default());
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -192,13 +233,29 @@ impl Renderer {
         let camera = Camera::from_matrices(view, projection, self.options.reverse_z)?;
         let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
         let mut drawn = 0u64;
-        culler.render(&camera, target, |pass, instances| {
-            bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
-            for &i in instances {
-                pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
+        match culling {
+            Culling::Queries(culler) => {
+                culler.render(&camera, target, |pass, instances| {
+                    bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
+                    for &i in instances {
+                        pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
+                    }
+                    drawn += instances.len() as u64;
+                })?;
             }
-            drawn += instances.len() as u64;
-        })?;
+            Culling::Gpu { culler, lists } => {
+                culler.render(&camera, target, |pass, list| {
+                    pass.set_pipeline(&self.listed);
+                    pass.set_bind_group(0, &lists[list.index()], &[]);
+                    pass.set_vertex_buffer(0, self.cube_vertices.slice(..));
+                    pass.set_index_buffer(self.cube_indices.slice(..), wgpu::IndexFormat::Uint16);
+                    pass.draw_indexed_indirect(list.indirect(), 0);
+                })?;
+                // The lists' lengths, read back for the printout and the
+                // test (the frame itself reads nothing back).
+                drawn = culler.read_counts()?.iter().map(|&n| u64::from(n)).sum();
+            }
+        }
         // occlude: end.
         Ok(drawn)
     }
@@ -296,35 +353,57 @@ fn bind(
     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint16);
 }
 
+/// The cube vertex buffer's layout (position, normal).
+const CUBE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 24,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+};
+
 /// The render pipeline: cube vertices (position, normal) and instances
-/// (offset, scale, colour), back faces culled, depth written and tested
-/// with `Less`, or `GreaterEqual` for reverse Z.
+/// (offset, scale, colour) as vertex buffers, back faces culled, depth
+/// written and tested with `Less`, or `GreaterEqual` for reverse Z.
 fn pipeline(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("own renderer"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
-    });
-    let compare = if options.reverse_z { wgpu::CompareFunction::GreaterEqual } else { wgpu::CompareFunction::Less };
     let buffers = [
-        Some(wgpu::VertexBufferLayout {
-            array_stride: 24,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-        }),
+        Some(CUBE_LAYOUT),
         Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<InstanceData>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &wgpu::vertex_attr_array![2 => Float32x3, 3 => Float32x3, 4 => Float32x3],
         }),
     ];
+    render_pipeline(device, options, "vs_main", &buffers)
+}
+
+/// The pipeline drawing a list of visible instances (`vs_listed`): cube
+/// vertices as a vertex buffer, the list and the instances beside the
+/// uniforms in group 0;
+/// otherwise the render pipeline.
+fn pipeline_listed(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
+    render_pipeline(device, options, "vs_listed", &[Some(CUBE_LAYOUT)])
+}
+
+/// A pipeline of the renderer's shader with vertex entry point `vertex`
+/// reading `buffers`.
+fn render_pipeline(
+    device: &wgpu::Device,
+    options: Options,
+    vertex: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("own renderer"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+    });
+    let compare = if options.reverse_z { wgpu::CompareFunction::GreaterEqual } else { wgpu::CompareFunction::Less };
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("own renderer"),
         layout: None,
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some("vs_main"),
+            entry_point: Some(vertex),
             compilation_options: Default::default(),
-            buffers: &buffers,
+            buffers,
         },
         primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
         depth_stencil: Some(wgpu::DepthStencilState {

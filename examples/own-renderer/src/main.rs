@@ -1,9 +1,10 @@
 //! Runs the example renderer off-screen: a walk past the walls, culling off
-//! or with occlude methods (several in one run, one after the other),
+//! or with occlude methods (several in one run, one after the other:
+//! query-driven or GPU-driven),
 //! printing what each frame drew and how long it took until the GPU was
 //! idle, and writes the last frame as a PNG.
 //!
-//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc]
+//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz]
 //! [--frames N] [--grid N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
 
 use own_renderer::{open_device, Options, Renderer};

@@ -1,13 +1,16 @@
-//! The example renderer with occlude's culling on draws fewer instances
-//! than with culling off, and its images are the same, bit for bit (colour
-//! and depth), on every frame of a moving camera, with forward and with
-//! reverse Z (with `Depth24Plus`, whose depth cannot be read back, the
-//! colour); and the embedding refuses what it cannot cull. Runs on any
+//! The example renderer with occlude's culling on (the query-driven methods
+//! through `Culler`, `hiz` through `GpuCuller`) draws fewer instances than
+//! with culling off, and its images are the same, bit for bit (colour and
+//! depth), on every frame of a moving camera, with forward and with reverse
+//! Z (with `Depth24Plus`, whose depth cannot be read back, the colour); and
+//! the embedding refuses what it cannot cull. Runs on any
 //! adapter (lavapipe in CI, with `OCCLUDE_REQUIRE_GPU=1`); skipped with a
 //! message where there is none, unless `OCCLUDE_REQUIRE_GPU=1`.
 
 use occlude::glam::{Mat4, Vec3};
-use occlude::wgpu::embed::{Attachments, Culler, EmbedError, FrameTarget, QUERY_METHODS};
+use occlude::wgpu::embed::{
+    Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS,
+};
 use occlude::{Aabb, Camera};
 use own_renderer::{open_device, Options, Renderer};
 
@@ -29,10 +32,13 @@ fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
     }
 }
 
-/// Renders the walk with culling off and with each query-driven method,
-/// comparing every frame's images (the depth image where it can be read
-/// back), and checks that `chcpp` draws fewer instances than culling off on
-/// every frame.
+/// Renders the walk with culling off and with each method (query-driven and
+/// GPU-driven), comparing every frame's images (the depth image where it
+/// can be read back), and checks that `chcpp` draws fewer instances than
+/// culling off on every frame, and `hiz` fewer than `vfc` (frustum culling)
+/// from the third frame on: its first frame has no depth to test against
+/// and draws every instance in the frustum, its second draws those again
+/// in its early pass.
 fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::TextureFormat) {
     let Some((device, queue)) = device(test) else { return };
     let options = Options { size: 256, grid: 24, reverse_z, depth_format };
@@ -52,7 +58,8 @@ fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::Text
         assert!(drawn_pixels > color.len() / 40, "frame {frame}: the image is nearly empty ({drawn_pixels} pixels)");
         reference.push((color, depth_image(&off)));
     }
-    for method in QUERY_METHODS {
+    let mut in_frustum = Vec::new();
+    for method in QUERY_METHODS.into_iter().chain(GPU_METHODS) {
         let mut on = Renderer::new(device.clone(), queue.clone(), options);
         on.set_culling(Some(method)).unwrap();
         for (frame, (color, depth)) in reference.iter().enumerate() {
@@ -63,12 +70,19 @@ fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::Text
             let differing_colors = got_color.chunks(4).zip(color.chunks(4)).filter(|(a, b)| a != b).count();
             assert_eq!(differing_colors, 0, "{method}, frame {frame}: colour pixels differ from culling off");
             assert_eq!(occlude::differing_pixels(&got_depth, depth), 0, "{method}, frame {frame}: depth differs");
-            if method == "chcpp" {
-                assert!(
+            match method {
+                "vfc" => in_frustum.push(drawn),
+                "chcpp" => assert!(
                     drawn < u64::from(on.instance_count()),
                     "chcpp, frame {frame}: drew {drawn} of {} instances",
                     on.instance_count()
-                );
+                ),
+                "hiz" if frame >= 2 => assert!(
+                    drawn < in_frustum[frame],
+                    "hiz, frame {frame}: drew {drawn} instances, frustum culling {}",
+                    in_frustum[frame]
+                ),
+                _ => {}
             }
         }
     }
@@ -94,12 +108,12 @@ fn culling_keeps_the_image_with_depth24plus() {
 #[test]
 fn the_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_embedding_refuses_what_it_cannot_cull") else { return };
-    let depth_format = wgpu::TextureFormat::Depth32Float;
-    let attachments = Attachments { color: None, depth: depth_format, compare: wgpu::CompareFunction::Less };
-    let bounds = [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))];
+    let (attachments, bounds) = one_box();
+    let depth_format = attachments.depth;
     let new = |attachments, bounds: &[Aabb], method| Culler::new(&device, &queue, attachments, bounds, method).err();
     assert!(matches!(new(attachments, &bounds, "opt"), Some(EmbedError::Unsupported(_))));
     assert!(matches!(new(attachments, &bounds, "roc"), Some(EmbedError::Unsupported(_))));
+    assert!(matches!(new(attachments, &bounds, "hiz"), Some(EmbedError::Unsupported(_))));
     assert!(matches!(new(attachments, &[], "chcpp"), Some(EmbedError::Scene(_))));
     let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
     assert!(matches!(new(always, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
@@ -107,19 +121,7 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     assert!(matches!(new(colour_as_depth, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
 
     let mut culler = Culler::new(&device, &queue, attachments, &bounds, "chcpp").unwrap();
-    let view = |format, size| {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
-        texture.create_view(&Default::default())
-    };
+    let view = |format, size| texture_view(&device, format, size, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let depth = view(depth_format, 8);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
     let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
@@ -141,4 +143,74 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let result = culler.render(&reverse.unwrap(), target, |_, instances| drawn.extend_from_slice(instances));
     assert!(matches!(result, Err(EmbedError::Device(_))), "{result:?}");
     assert_eq!(drawn, [0]);
+}
+
+/// The refusal tests' culling input: depth-only `Depth32Float` attachments
+/// tested with `Less`, and one box in front of a camera at the origin
+/// looking down -z.
+fn one_box() -> (Attachments, [Aabb; 1]) {
+    let attachments =
+        Attachments { color: None, depth: wgpu::TextureFormat::Depth32Float, compare: wgpu::CompareFunction::Less };
+    (attachments, [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))])
+}
+
+/// A view of a new `size` x `size` texture of `format` and `usage`.
+fn texture_view(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    size: u32,
+    usage: wgpu::TextureUsages,
+) -> wgpu::TextureView {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    });
+    texture.create_view(&Default::default())
+}
+
+#[test]
+fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
+    let Some((device, queue)) = device("the_gpu_driven_embedding_refuses_what_it_cannot_cull") else { return };
+    let (attachments, bounds) = one_box();
+    let depth_format = attachments.depth;
+    let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+    let new =
+        |attachments, bounds: &[Aabb], method| GpuCuller::new(&device, &queue, attachments, bounds, method, draw).err();
+    for method in ["chcpp", "roc", "ioc", "opt"] {
+        assert!(matches!(new(attachments, &bounds, method), Some(EmbedError::Unsupported(_))), "{method}");
+    }
+    assert!(matches!(new(attachments, &[], "hiz"), Some(EmbedError::Scene(_))));
+    let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
+    assert!(matches!(new(always, &bounds, "hiz"), Some(EmbedError::Attachments(_))));
+
+    let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let depth = texture_view(&device, depth_format, 8, sampled);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let mut calls = 0;
+    // A depth texture the pyramid cannot be read from: an error, nothing drawn.
+    let unsampled = texture_view(&device, depth_format, 8, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    let result = culler.render(&forward, FrameTarget { depth: &unsampled, ..target }, |_, _| calls += 1);
+    assert!(matches!(result, Err(EmbedError::Attachments(_))), "{result:?}");
+    // A reverse-Z camera over a forward depth test: an error, nothing drawn.
+    let reverse = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_infinite_reverse_rh(1.0, 1.0, 0.1), true);
+    let result = culler.render(&reverse.unwrap(), target, |_, _| calls += 1);
+    assert!(matches!(result, Err(EmbedError::Device(_))), "{result:?}");
+    assert_eq!(calls, 0);
+    // A frame that can be culled: both lists drawn, the box (in view, in
+    // front of an empty depth buffer) in the late list of the first frame
+    // and in the early list of the next.
+    let mut lists = Vec::new();
+    culler.render(&forward, target, |_, list| lists.push(list.index())).unwrap();
+    assert_eq!(lists, [0, 1]);
+    assert_eq!(culler.read_counts().unwrap(), [0, 1]);
+    culler.render(&forward, target, |_, _| {}).unwrap();
+    assert_eq!(culler.read_counts().unwrap(), [1, 0]);
 }

@@ -56,7 +56,7 @@ impl Attachments {
     }
 
     /// Whether a culling method can test against this depth buffer.
-    fn check(&self) -> Result<(), EmbedError> {
+    pub(super) fn check(&self) -> Result<(), EmbedError> {
         use wgpu::CompareFunction::{Greater, GreaterEqual, Less, LessEqual};
         if !self.depth.has_depth_aspect() {
             return Err(EmbedError::Attachments(format!("{:?} is not a depth format", self.depth)));
@@ -89,14 +89,14 @@ pub struct FrameTarget<'a> {
 
 impl FrameTarget<'_> {
     /// Width and height of the depth texture in pixels.
-    fn size(&self) -> (u32, u32) {
+    pub(super) fn size(&self) -> (u32, u32) {
         let texture = self.depth.texture();
         (texture.width(), texture.height())
     }
 
     /// Whether the views are what `attachments` says and of one size, so
     /// that occlude's passes on them are valid.
-    fn check(&self, attachments: &Attachments) -> Result<(), EmbedError> {
+    pub(super) fn check(&self, attachments: &Attachments) -> Result<(), EmbedError> {
         let depth = self.depth.texture();
         let wrong = |what: String| Err(EmbedError::Attachments(what));
         if depth.format() != attachments.depth {
@@ -232,6 +232,45 @@ impl QueryBackend {
     }
 }
 
+/// Begins a render pass of a frame on the renderer's views in `target`,
+/// clearing them (colour to its clear colour, depth to
+/// [`Attachments::far_depth`], stencil to 0) when `clear`, else loading
+/// them; its occlusion queries go to `queries`.
+pub(super) fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &FrameTarget<'_>,
+    attachments: &Attachments,
+    clear: bool,
+    queries: Option<&wgpu::QuerySet>,
+) -> wgpu::RenderPass<'e> {
+    let (color_load, depth_load, stencil_load) = if clear {
+        (wgpu::LoadOp::Clear(target.clear_color), wgpu::LoadOp::Clear(attachments.far_depth()), wgpu::LoadOp::Clear(0))
+    } else {
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+    };
+    let stencil = attachments
+        .depth
+        .has_stencil_aspect()
+        .then_some(wgpu::Operations { load: stencil_load, store: wgpu::StoreOp::Store });
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("occlude embedded frame"),
+        color_attachments: &[target.color.map(|view| wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: target.depth,
+            depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+            stencil_ops: stencil,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: queries,
+        multiview_mask: None,
+    })
+}
+
 /// The bind group of the query pipeline: the camera and the boxes.
 fn query_group(
     device: &wgpu::Device,
@@ -289,33 +328,8 @@ where
         let pending = s.book.take_pending();
         let set = pending.map(|p| s.book.set(&s.ctx, p.set).clone());
         let mut encoder = s.ctx.device.create_command_encoder(&Default::default());
-        let (color_load, depth_load) = if s.cleared {
-            (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
-        } else {
-            (wgpu::LoadOp::Clear(target.clear_color), wgpu::LoadOp::Clear(s.attachments.far_depth()))
-        };
-        let stencil = s.attachments.depth.has_stencil_aspect().then_some(wgpu::Operations {
-            load: if s.cleared { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(0) },
-            store: wgpu::StoreOp::Store,
-        });
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("occlude embedded frame"),
-                color_attachments: &[target.color.map(|view| wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: target.depth,
-                    depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
-                    stencil_ops: stencil,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: set.as_ref(),
-                multiview_mask: None,
-            });
+            let mut pass = begin_pass(&mut encoder, target, &s.attachments, !s.cleared, set.as_ref());
             // The query pipeline is bound again after each of the
             // renderer's draws, which bind their own.
             let mut bound = false;

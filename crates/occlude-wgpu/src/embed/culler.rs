@@ -9,9 +9,9 @@ use occlude_core::{render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameSta
 /// The methods that run embedded: those that draw and query through the
 /// [`occlude_core::Backend`] interface alone. `vfc` (frustum culling)
 /// issues no query and is the baseline the others are checked against.
-/// The GPU-driven methods (`roc`, `ioc`, `hiz`) need occlude's own scene on
-/// the GPU, `opt` an oracle pass and `moc` the meshes' triangles: none of
-/// them runs here.
+/// The GPU-driven methods do not run here: `hiz` runs in a
+/// [`GpuCuller`](super::GpuCuller), `roc` and `ioc` not embedded; nor do
+/// `opt` (an oracle pass) and `moc` (the meshes' triangles).
 pub const QUERY_METHODS: [&str; 5] = ["vfc", "sw", "chc", "chcpp", "om"];
 
 /// A query-driven culling method running in a renderer's own passes: give

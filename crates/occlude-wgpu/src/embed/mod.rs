@@ -1,8 +1,16 @@
-//! Occlusion culling inside your own wgpu renderer, for the query-driven
-//! methods (`chc`, `chcpp`, `om`, `sw`; `vfc` as the baseline): your
-//! device and queue, your depth buffer (`Depth32Float`, `Depth24Plus`,
-//! reverse Z with `GreaterEqual`), your pipelines and draws. Occlude needs
-//! only each instance's world-space box.
+//! Occlusion culling inside your own wgpu renderer: your device and queue,
+//! your depth buffer (`Depth32Float`, `Depth24Plus`, reverse Z with
+//! `GreaterEqual`), your pipelines and draws. Occlude needs only each
+//! instance's world-space box. Two shapes:
+//!
+//! - [`Culler`], the query-driven methods (`chc`, `chcpp`, `om`, `sw`;
+//!   `vfc` as the baseline): occlude calls your draw code with lists of
+//!   instances decided on the CPU from occlusion queries (below).
+//! - [`GpuCuller`], the GPU-driven method `hiz`: occlude writes lists of
+//!   visible instance ids into buffers on the GPU and you draw each with
+//!   one indirect draw (section "GPU-driven culling" below).
+//!
+//! # Query-driven culling
 //!
 //! Each frame the method walks a BVH over the boxes front to back; where it
 //! would draw, occlude calls your draw callback with the instances to draw,
@@ -14,7 +22,7 @@
 //! "give me the result" waits (CHC paper, section 3; CHC++ paper, sections
 //! 3-4 for how `chcpp` hides that wait).
 //!
-//! # Costs
+//! ## Costs
 //!
 //! - **A submission per wait.** A query's result can only come back after
 //!   its pass is submitted, so the frame is split there: each wait ends the
@@ -29,7 +37,7 @@
 //!   your views; draws you need outside them (sky, UI, post-processing) go
 //!   in passes of your own before or after.
 //!
-//! # Requirements
+//! ## Requirements
 //!
 //! - Every draw of instance `i` stays inside `bounds[i]`; instances that
 //!   move need new bounds (and a new [`Culler`]).
@@ -39,21 +47,19 @@
 //!   every call: occlude's query boxes are drawn between calls in the same
 //!   pass.
 //!
-//! # Known limits
+//! ## Known limits
 //!
 //! - One colour attachment at most, one sample (no MSAA), no viewport or
 //!   scissor other than the whole target.
 //! - Each instance counts 12 triangles in [`FrameStats`] and in `chcpp`'s
 //!   cost estimates, whatever it draws.
-//! - No GPU-resident culling (`roc`, `ioc`, `hiz`): that needs occlude's
-//!   own scene on the GPU (see [`Culler`]'s [`QUERY_METHODS`]).
 //! - Errors of your device (loss, validation) go to your handlers, not to
 //!   [`Backend::failure`](occlude_core::Backend::failure), which reports
 //!   only what occlude found itself (a failed read-back, a camera of the
 //!   wrong depth order). A failure stays: every later frame reports it,
 //!   and its queries count as visible, so frames stay complete.
 //!
-//! # Example
+//! ## Example
 //!
 //! ```no_run
 //! use occlude_wgpu::embed::{Attachments, Culler, FrameTarget};
@@ -90,14 +96,150 @@
 //! # }
 //! ```
 //!
+//! # GPU-driven culling
+//!
+//! [`GpuCuller`] runs two-phase Hi-Z culling (`hiz`,
+//! [`occlude_core::methods::hiz`]; zeux's niagara, nvpro's
+//! `gl_occlusion_culling`, Bevy's occlusion culling) with every decision
+//! on the GPU. Each frame, in one submission:
+//!
+//! 1. a compute pass drops last frame's visible instances whose boxes left
+//!    the view frustum and compacts the rest into the early
+//!    [`VisibleList`];
+//! 2. your callback draws the early list in a pass that clears your views;
+//! 3. a compute pass builds a depth pyramid from your depth texture
+//!    ([`occlude_core::depth_pyramid`]: level 0 your depth, each level the
+//!    2x2 maximum of the one before) and tests every instance's box
+//!    against it (at most 2 x 2 texels of the finest level that fits, as
+//!    `hiz` does by default), setting this frame's visibility; it compacts
+//!    the instances visible now that the early pass did not draw into the
+//!    late list;
+//! 4. your callback draws the late list in a pass that loads your views.
+//!
+//! A list is one buffer: its length, its capacity and the ids, which your
+//! vertex shader reads as `ids[instance_index]` (the WGSL is at
+//! [`VisibleList`]); its length is also copied, on the GPU, into the
+//! instance count of an indirect draw of the mesh range you gave
+//! ([`IndirectDraw`]), so one `draw_indexed_indirect` draws the list. The
+//! first instance stays 0, so `INDIRECT_FIRST_INSTANCE` is not needed.
+//!
+//! The image is the image without culling: an instance with a pixel in the
+//! final image is at that pixel no farther than the early pass's depth,
+//! so its box (which holds it, padded and pulled towards the eye as query
+//! boxes are) is not hidden by the pyramid, whose texels are at least the
+//! farthest depth of the pixels they cover (the proof is
+//! [`occlude_core::depth_pyramid`]'s). Your depth texture is read into
+//! level 0 with two changes: reverse Z is turned into depth 0 nearest
+//! (`1 - d`), and each texel is taken 2^-22 farther, which covers both a
+//! 24-bit depth buffer's rounding of the fragments' depth and the rounding
+//! of `1 - d`; the box's depth comes from
+//! [`Camera::view_projection`](occlude_core::Camera::view_projection),
+//! whose reverse-Z flip only negates and adds rows of your projection.
+//!
+//! ## Costs
+//!
+//! - **Per frame:** four compute dispatches over the instances, one per
+//!   pyramid level (level 0 over your depth's pixels, each further level
+//!   over its texels), two 4-byte buffer copies and your two indirect
+//!   draws. One submission; nothing is
+//!   read back, so the CPU never waits for the GPU.
+//! - **Memory:** per instance a 32-byte box, two flag words and three list
+//!   entries; the pyramid is about 4/3 of a 32-bit depth image.
+//! - **Latency of visibility:** an instance hidden last frame and visible
+//!   now is drawn in the late pass of this frame, after the pyramid: never
+//!   missing, but its draw waits for the pyramid.
+//! - **Warm-up:** the first frame has no visible set from a frame before,
+//!   so its pyramid is empty and it draws every instance in the frustum;
+//!   the second frame draws those again in its early pass. Occlusion
+//!   shows from the third frame on, and again two frames after a camera
+//!   cut (in the example, 2,717 of 3,603 instances in frames 0 and 1,
+//!   then about 150 to 230).
+//!
+//! ## Requirements
+//!
+//! - As for [`Culler`]: draws of instance `i` stay inside `bounds[i]`, the
+//!   camera is [`occlude_core::Camera::from_matrices`] of your matrices
+//!   with `reverse_z` matching the depth test.
+//! - Your depth texture has `TEXTURE_BINDING` usage (the pyramid reads
+//!   it in a compute shader); otherwise [`GpuCuller::render`] refuses
+//!   the frame.
+//! - Your device has compute shaders with workgroups of 64 threads and 6
+//!   storage buffers per shader stage (checked by [`GpuCuller::new`]); your
+//!   vertex shader reads a storage buffer (the list).
+//! - Your callback binds its own pipeline and bind groups: it is called
+//!   once per list, at the start of each of the frame's two passes.
+//!
+//! ## Known limits
+//!
+//! - One mesh range per culler: every instance is drawn by the same
+//!   indirect draw (different meshes need a culler each, or your own
+//!   compute pass over the list).
+//! - `hiz` only. `roc` and `ioc` rasterize their boxes with a fragment
+//!   stage of occlude's setting flags, inside the passes: not embedded
+//!   ([`GPU_METHODS`]).
+//! - No statistics from the frame: [`GpuCuller::read_counts`] reads the
+//!   lists' lengths back (blocking), for tests and printouts.
+//! - The attachment rules of [`Culler`] (one colour attachment, one
+//!   sample, the whole target).
+//!
+//! ## Example
+//!
+//! ```no_run
+//! use occlude_wgpu::embed::{Attachments, FrameTarget, GpuCuller, IndirectDraw};
+//! use glam::{Mat4, Vec3};
+//! use occlude_core::{Aabb, Camera};
+//!
+//! # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, color: &wgpu::TextureView,
+//! #          depth: &wgpu::TextureView, pipeline: &wgpu::RenderPipeline,
+//! #          instances: &wgpu::Buffer) -> Result<(), Box<dyn std::error::Error>> {
+//! // Once: your attachments, one box per instance, how an instance is drawn,
+//! // and a bind group of each list for your pipeline's vertex shader.
+//! let attachments = Attachments {
+//!     color: Some(wgpu::TextureFormat::Rgba8Unorm),
+//!     depth: wgpu::TextureFormat::Depth32Float,
+//!     compare: wgpu::CompareFunction::Less,
+//! };
+//! let bounds: Vec<Aabb> = (0..1000).map(|i| {
+//!     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
+//!     Aabb::new(at, at + Vec3::ONE)
+//! }).collect();
+//! let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+//! let mut culler = GpuCuller::new(device, queue, attachments, &bounds, "hiz", draw)?;
+//! let groups = culler.lists().each_ref().map(|list| {
+//!     device.create_bind_group(&wgpu::BindGroupDescriptor {
+//!         label: None,
+//!         layout: &pipeline.get_bind_group_layout(0),
+//!         entries: &[
+//!             wgpu::BindGroupEntry { binding: 0, resource: list.ids().as_entire_binding() },
+//!             wgpu::BindGroupEntry { binding: 1, resource: instances.as_entire_binding() },
+//!         ],
+//!     })
+//! });
+//!
+//! // Each frame: your camera, your views, one indirect draw per list.
+//! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
+//! let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
+//! let camera = Camera::from_matrices(view, projection, false)?;
+//! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth };
+//! culler.render(&camera, target, |pass, list| {
+//!     pass.set_pipeline(pipeline);
+//!     pass.set_bind_group(0, &groups[list.index()], &[]);
+//!     pass.draw_indirect(list.indirect(), 0);
+//! })?;
+//! # Ok(())
+//! # }
+//! ```
+//!
 //! [`FrameStats`]: occlude_core::FrameStats
 //! [`FrameStats::wait_ms`]: occlude_core::FrameStats::wait_ms
 
 mod backend;
 mod culler;
+mod gpu_culler;
 
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
+pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS};
 
 use occlude_core::methods::MethodError;
 use occlude_core::SceneError;
@@ -107,8 +249,10 @@ use occlude_core::SceneError;
 pub enum EmbedError {
     /// The method does not run embedded.
     #[error(
-        "method '{0}' cannot run in your renderer: the embedding runs the query-driven methods ({names})",
-        names = QUERY_METHODS.join(", ")
+        "method '{0}' cannot run in your renderer: the embedding runs the query-driven methods ({names}) with a \
+         Culler and the GPU-driven ones ({gpu}) with a GpuCuller",
+        names = QUERY_METHODS.join(", "),
+        gpu = GPU_METHODS.join(", ")
     )]
     Unsupported(String),
     /// The method's name or parameters are wrong.
@@ -120,6 +264,10 @@ pub enum EmbedError {
     /// The attachments' depth format or test cannot be culled against.
     #[error("unsupported attachments: {0}")]
     Attachments(String),
+    /// The renderer's device lacks what GPU-driven culling's compute
+    /// passes need.
+    #[error("{0}")]
+    Adapter(String),
     /// Occlude's work on the device failed, or the camera's depth order is
     /// not the depth test's ([`occlude_core::Backend::failure`]).
     #[error("culling failed: {0}")]

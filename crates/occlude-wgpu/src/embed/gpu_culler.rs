@@ -1,0 +1,422 @@
+//! [`GpuCuller`]: two-phase Hi-Z culling (`hiz`, [`occlude_core::methods::hiz`])
+//! in a renderer's own passes, its visibility never leaving the GPU. Each
+//! frame occlude writes two lists of visible instance ids (the early pass's
+//! and the late pass's) with an indirect draw's arguments each, and the
+//! renderer draws each list with one indirect draw of its own. The compute
+//! shaders are `cull.wgsl`'s, as the wgpu backend's GPU-resident culling
+//! runs them (frustum drop, compaction, pyramid reduction and pyramid box
+//! test), plus `cs_pyramid_base`, which reads level 0 from the renderer's
+//! depth texture.
+
+use super::backend::begin_pass;
+use super::{Attachments, EmbedError, FrameTarget};
+use crate::context::GpuContext;
+use crate::culling::{
+    bind_group, box_set_buffer, cull_camera_buffer, dispatch_reductions, param_buffer, storage_init, workgroups,
+    write_cull_camera, PyramidBuffers,
+};
+use crate::pipelines::compute_pipeline;
+use crate::readback::{take_bytes, Mapping};
+use occlude_core::methods::hiz::HizParams;
+use occlude_core::methods::{MethodError, MethodOptions};
+use occlude_core::{Aabb, Camera, Scene};
+
+/// The methods [`GpuCuller`] runs: the GPU-driven ones whose every step is
+/// a compute pass over the renderer's depth. `roc` and `ioc` rasterize
+/// their boxes with a fragment stage writing flags, which would need
+/// occlude's pipelines inside the renderer's passes: not embedded.
+pub const GPU_METHODS: [&str; 1] = ["hiz"];
+
+/// The storage buffers `cs_test_boxes_pyramid`, the culling shader using
+/// most, binds in one stage.
+const STORAGE_BUFFERS_NEEDED: u32 = 6;
+
+/// Threads per workgroup of `cull.wgsl`'s compute shaders.
+const WORKGROUP_THREADS: u32 = 64;
+
+/// How the renderer draws every instance of a list: one indirect draw whose
+/// instance count occlude fills in with the list's length. Both kinds of
+/// arguments hold the instance count in their second word, so the length
+/// is copied there on the GPU; the first instance stays 0 (no
+/// `INDIRECT_FIRST_INSTANCE` needed): the vertex shader reads the instance
+/// id as `ids[instance_index]` of the list (see [`VisibleList`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IndirectDraw {
+    /// `draw_indexed_indirect` of this mesh range
+    /// (`DrawIndexedIndirectArgs`).
+    Indexed {
+        /// Indices per instance.
+        index_count: u32,
+        /// First index in the renderer's index buffer.
+        first_index: u32,
+        /// Added to each index.
+        base_vertex: i32,
+    },
+    /// `draw_indirect` of this vertex range (`DrawIndirectArgs`).
+    NonIndexed {
+        /// Vertices per instance.
+        vertex_count: u32,
+        /// First vertex.
+        first_vertex: u32,
+    },
+}
+
+impl IndirectDraw {
+    /// The argument words, instance count 0.
+    fn words(self) -> Vec<u32> {
+        match self {
+            Self::Indexed { index_count, first_index, base_vertex } => {
+                vec![index_count, 0, first_index, base_vertex as u32, 0]
+            }
+            Self::NonIndexed { vertex_count, first_vertex } => vec![vertex_count, 0, first_vertex, 0],
+        }
+    }
+}
+
+/// One of the frame's two lists of visible instances, kept for the
+/// culler's life (the buffers never change, so bind groups over them can be
+/// made once).
+///
+/// `ids` holds the list as `cull.wgsl` writes it, which the renderer's
+/// vertex shader binds as a read-only storage buffer:
+///
+/// ```wgsl
+/// struct VisibleList { count: u32, capacity: u32, ids: array<u32> }
+/// @group(1) @binding(0) var<storage, read> visible: VisibleList;
+/// // in the vertex shader: let instance = visible.ids[instance_index];
+/// ```
+///
+/// `indirect` holds the [`IndirectDraw`] arguments with the list's length
+/// as instance count: `pass.draw_indexed_indirect(list.indirect(), 0)` (or
+/// `draw_indirect`) draws the list.
+pub struct VisibleList {
+    ids: wgpu::Buffer,
+    indirect: wgpu::Buffer,
+    index: usize,
+}
+
+impl VisibleList {
+    /// The list: count, capacity, then the ids (`STORAGE` usage).
+    pub fn ids(&self) -> &wgpu::Buffer {
+        &self.ids
+    }
+
+    /// The list's indirect draw arguments (`INDIRECT` usage).
+    pub fn indirect(&self) -> &wgpu::Buffer {
+        &self.indirect
+    }
+
+    /// 0 for the early pass's list (last frame's visible instances still
+    /// in view), 1 for the late pass's (the instances found visible now
+    /// that the early pass did not draw); also its place in
+    /// [`GpuCuller::lists`].
+    pub fn index(&self) -> usize {
+        self.index
+    }
+}
+
+/// The pyramid of one depth-texture size and the bind groups naming it.
+struct PyramidState {
+    size: (u32, u32),
+    buffers: PyramidBuffers,
+    /// The reductions' groups, level 1 first.
+    reductions: Vec<wgpu::BindGroup>,
+    /// The pyramid test's group writing flag buffer 0 or 1.
+    tests: [wgpu::BindGroup; 2],
+}
+
+/// Two-phase Hi-Z culling (`hiz`) in a renderer's own passes, GPU-driven:
+/// give it the renderer's device, attachments, per-instance boxes and how
+/// it draws an instance once; each frame, the camera, the frame's views and
+/// a callback that draws a [`VisibleList`] with one indirect draw.
+pub struct GpuCuller {
+    ctx: GpuContext,
+    attachments: Attachments,
+    instances: u32,
+    base: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    test: wgpu::ComputePipeline,
+    camera: wgpu::Buffer,
+    boxes: wgpu::Buffer,
+    all: wgpu::Buffer,
+    stats: wgpu::Buffer,
+    /// Per-instance visibility: this frame's is `flags[parity]`, last
+    /// frame's the other.
+    flags: [wgpu::Buffer; 2],
+    parity: usize,
+    lists: [VisibleList; 2],
+    /// `param` uniforms: the pyramid test's reach, whether depth is reverse
+    /// Z, and each reduction's level (made with the pyramid).
+    reach: wgpu::Buffer,
+    reverse: wgpu::Buffer,
+    /// Drop outside the frustum, compact into the early list, compact the
+    /// newly visible into the late list; each for flag parity 0 and 1.
+    drop_outside: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
+    compact_early: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
+    compact_late: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
+    pyramid: Option<PyramidState>,
+    counts_staging: wgpu::Buffer,
+}
+
+impl GpuCuller {
+    /// Culls instances whose world-space boxes are `bounds` (instance `i`
+    /// is `bounds[i]`; its draws must stay inside that box) with the
+    /// GPU-driven method `method` (one of [`GPU_METHODS`], default
+    /// parameters) on the renderer's `device` and `queue`, whose passes
+    /// draw into `attachments`, each instance drawn as `draw` says. A
+    /// method that does not run here, bad boxes or attachments, or a device
+    /// without what the compute passes need are an error.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        attachments: Attachments,
+        bounds: &[Aabb],
+        method: &str,
+        draw: IndirectDraw,
+    ) -> Result<Self, EmbedError> {
+        if !GPU_METHODS.contains(&method) {
+            return Err(EmbedError::Unsupported(method.to_string()));
+        }
+        let params = HizParams::read(&mut MethodOptions::default().for_method(method)).map_err(MethodError::from)?;
+        attachments.check()?;
+        check_device(device)?;
+        let scene = Scene::from_bounds("embedded", bounds)?;
+        let ctx = GpuContext::from_device(device, queue);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("occlude culling shaders"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../cull.wgsl").into()),
+        });
+        let compute = |entry: &str| compute_pipeline(device, &module, entry);
+        let n = scene.instances.len() as u32;
+        let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
+        let list_usage = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let list = |ids: &[u32]| {
+            let mut words = vec![ids.len() as u32, n];
+            words.extend(ids);
+            words.resize(2 + n as usize, 0);
+            storage_init(&ctx, "visible instances", bytemuck::cast_slice(&words), list_usage)
+        };
+        let all = list(&(0..n).collect::<Vec<_>>());
+        let flag_usage = wgpu::BufferUsages::COPY_DST;
+        let flags = [0, 1].map(|_| storage_init(&ctx, "visibility", &vec![0; 4 * n as usize], flag_usage));
+        let indirect_usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST;
+        let lists = [0, 1].map(|index| VisibleList {
+            ids: list(&[]),
+            indirect: storage_init(&ctx, "visible draw", bytemuck::cast_slice(&draw.words()), indirect_usage),
+            index,
+        });
+        let boxes = box_set_buffer(&ctx, &boxes);
+        let camera = cull_camera_buffer(device);
+        // Flag parity p: this frame's flags are flags[p], last frame's
+        // flags[1 - p].
+        let drop_outside = compute("cs_drop_outside");
+        let drop_groups = parity_groups(&ctx, &drop_outside, |p| vec![(0, &camera), (1, &boxes), (3, &flags[1 - p])]);
+        let compact_early = compute("cs_compact");
+        let early_groups = parity_groups(&ctx, &compact_early, |p| vec![(6, &flags[1 - p]), (8, &lists[0].ids)]);
+        let compact_late = compute("cs_compact_unless");
+        let late_groups =
+            parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &lists[1].ids)]);
+        let reverse = param_buffer(device, u32::from(attachments.reverse_z()));
+        Ok(Self {
+            attachments,
+            instances: n,
+            base: compute("cs_pyramid_base"),
+            reduce: compute("cs_pyramid_level"),
+            test: compute("cs_test_boxes_pyramid"),
+            stats: storage_init(&ctx, "hiz statistics", &[], wgpu::BufferUsages::empty()),
+            reach: param_buffer(device, params.texels),
+            reverse,
+            drop_outside: (drop_outside, drop_groups),
+            compact_early: (compact_early, early_groups),
+            compact_late: (compact_late, late_groups),
+            camera,
+            boxes,
+            all,
+            flags,
+            parity: 0,
+            lists,
+            pyramid: None,
+            counts_staging: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visible counts read-back"),
+                size: 8,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+            ctx,
+        })
+    }
+
+    /// The two lists the frame's draws read: index 0 the early pass's,
+    /// 1 the late pass's. Their buffers live as long as the culler.
+    pub fn lists(&self) -> &[VisibleList; 2] {
+        &self.lists
+    }
+
+    /// Renders a frame seen by `camera` (made with
+    /// [`Camera::from_matrices`] from the renderer's own view and
+    /// projection, `reverse_z` as its depth test says) into `target`, in
+    /// one submission: the early list is written and `draw(pass, list)`
+    /// draws it in a pass that clears the views; a depth pyramid is built
+    /// from the depth texture and every instance's box tested against it;
+    /// the late list is written and `draw` draws it in a pass that loads
+    /// them. Nothing comes back to the CPU. Views that are not what the
+    /// attachments say, a depth texture without `TEXTURE_BINDING` usage or
+    /// a camera whose depth order is not the depth test's are an error, and
+    /// nothing is drawn.
+    pub fn render<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, mut draw: F) -> Result<(), EmbedError>
+    where
+        F: FnMut(&mut wgpu::RenderPass<'_>, &VisibleList),
+    {
+        target.check(&self.attachments)?;
+        let depth = target.depth.texture();
+        if !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+            return Err(EmbedError::Attachments(
+                "the depth texture needs TEXTURE_BINDING usage: hiz builds its depth pyramid from it".into(),
+            ));
+        }
+        let reverse_z = camera.matrices.is_some_and(|m| m.reverse_z);
+        if reverse_z != self.attachments.reverse_z() {
+            return Err(EmbedError::Device(format!(
+                "the camera's reverse_z is {reverse_z} but the depth test {:?} is {}",
+                self.attachments.compare,
+                if self.attachments.reverse_z() { "reverse Z" } else { "forward Z" }
+            )));
+        }
+        self.ensure_pyramid(target.size());
+        write_cull_camera(&self.ctx.queue, &self.camera, camera);
+        let (now, before) = (self.parity, 1 - self.parity);
+        let device = &self.ctx.device;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        // Early list: last frame's visible instances still in view.
+        encoder.clear_buffer(&self.lists[0].ids, 0, Some(4));
+        encoder.clear_buffer(&self.lists[1].ids, 0, Some(4));
+        encoder.clear_buffer(&self.flags[now], 0, None);
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instances);
+            dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instances);
+        }
+        self.copy_count(&mut encoder, 0);
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, true, None), &self.lists[0]);
+        // The pyramid from that depth, every box tested, the late list.
+        let pyramid = self.pyramid.as_ref().expect("made above");
+        let depth_view = depth
+            .create_view(&wgpu::TextureViewDescriptor { aspect: wgpu::TextureAspect::DepthOnly, ..Default::default() });
+        let base = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hiz pyramid base"),
+            layout: &self.base.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 14, resource: pyramid.buffers.texels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 15, resource: pyramid.buffers.levels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 16, resource: self.reverse.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(&depth_view) },
+            ],
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            dispatch(&mut pass, &self.base, &base, pyramid.buffers.counts[0]);
+            dispatch_reductions(&mut pass, &self.reduce, &pyramid.reductions, &pyramid.buffers.counts);
+            dispatch(&mut pass, &self.test, &pyramid.tests[now], self.instances);
+            dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instances);
+        }
+        self.copy_count(&mut encoder, 1);
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, false, None), &self.lists[1]);
+        self.ctx.queue.submit([encoder.finish()]);
+        self.parity = before;
+        Ok(())
+    }
+
+    /// How many instances the last frame's early and late lists held,
+    /// read back (blocking until the GPU finished the frame). An
+    /// instrument, for tests and printouts: the frame itself never reads
+    /// anything back.
+    pub fn read_counts(&self) -> Result<[u32; 2], EmbedError> {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        for (k, list) in self.lists.iter().enumerate() {
+            encoder.copy_buffer_to_buffer(&list.ids, 0, &self.counts_staging, 4 * k as u64, 4);
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        Mapping::start(&self.counts_staging, 8).wait(&self.ctx).map_err(EmbedError::Device)?;
+        let bytes = take_bytes(&self.counts_staging, 8).map_err(EmbedError::Device)?;
+        let word = |k: usize| u32::from_le_bytes([bytes[4 * k], bytes[4 * k + 1], bytes[4 * k + 2], bytes[4 * k + 3]]);
+        Ok([word(0), word(1)])
+    }
+
+    /// Copies list `k`'s length into its draw's instance count.
+    fn copy_count(&self, encoder: &mut wgpu::CommandEncoder, k: usize) {
+        encoder.copy_buffer_to_buffer(&self.lists[k].ids, 0, &self.lists[k].indirect, 4, 4);
+    }
+
+    /// Makes the pyramid and its bind groups for a depth texture of `size`,
+    /// unless they are of that size already.
+    fn ensure_pyramid(&mut self, size: (u32, u32)) {
+        if self.pyramid.as_ref().is_some_and(|p| p.size == size) {
+            return;
+        }
+        let (ctx, device) = (&self.ctx, &self.ctx.device);
+        let buffers = PyramidBuffers::new(ctx, size.0, size.1, size.0);
+        let layout = self.reduce.get_bind_group_layout(0);
+        let reductions = (1..buffers.counts.len() as u32)
+            .map(|level| {
+                let param = param_buffer(device, level);
+                bind_group(ctx, "hiz reduction", &layout, &[(14, &buffers.texels), (15, &buffers.levels), (16, &param)])
+            })
+            .collect();
+        let layout = self.test.get_bind_group_layout(0);
+        let tests = [0, 1].map(|p| {
+            let entries = [
+                (0, &self.camera),
+                (1, &self.boxes),
+                (2, &self.all),
+                (3, &self.flags[p]),
+                (13, &self.stats),
+                (14, &buffers.texels),
+                (15, &buffers.levels),
+                (16, &self.reach),
+            ];
+            bind_group(ctx, "hiz test", &layout, &entries)
+        });
+        self.pyramid = Some(PyramidState { size, buffers, reductions, tests });
+    }
+}
+
+/// `pipeline`'s bind groups for flag parity 0 and 1, of the buffers
+/// `entries(parity)` names.
+fn parity_groups<'a>(
+    ctx: &GpuContext,
+    pipeline: &wgpu::ComputePipeline,
+    entries: impl Fn(usize) -> Vec<(u32, &'a wgpu::Buffer)>,
+) -> [wgpu::BindGroup; 2] {
+    [0, 1].map(|p| bind_group(ctx, "hiz", &pipeline.get_bind_group_layout(0), &entries(p)))
+}
+
+/// One dispatch of `pipeline` with `group` over `threads` threads.
+fn dispatch(pass: &mut wgpu::ComputePass<'_>, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, threads: u32) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    let (x, y) = workgroups(threads);
+    pass.dispatch_workgroups(x, y, 1);
+}
+
+/// Whether `device` can run the culling compute passes: compute shaders
+/// with workgroups of 64 and six storage buffers in a stage.
+fn check_device(device: &wgpu::Device) -> Result<(), EmbedError> {
+    let limits = device.limits();
+    let mut lacks = Vec::new();
+    if limits.max_compute_invocations_per_workgroup < WORKGROUP_THREADS
+        || limits.max_compute_workgroup_size_x < WORKGROUP_THREADS
+    {
+        lacks.push(format!("compute workgroups of {WORKGROUP_THREADS} threads"));
+    }
+    if limits.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS_NEEDED {
+        lacks.push(format!(
+            "{STORAGE_BUFFERS_NEEDED} storage buffers per shader stage (it has {})",
+            limits.max_storage_buffers_per_shader_stage
+        ));
+    }
+    if lacks.is_empty() {
+        Ok(())
+    } else {
+        Err(EmbedError::Adapter(format!("the device lacks {}, which GPU-driven culling needs", lacks.join(" and "))))
+    }
+}
