@@ -513,10 +513,11 @@ pub fn table_1(
             let light = light_position(&scene, k as f32 / (cameras.len() - 1).max(1) as f32);
             let p = passes.frame(light, &light_camera(&scene, light, aspect), camera);
             let lit: Vec<bool> = p.exact.iter().map(|&c| c > 0).collect();
+            let lit_count = lit.iter().filter(|&&l| l).count() as f64;
             for (method, sum) in METHODS.iter().zip(&mut sums) {
                 let (ms, drawn) = method.frame(&p, &base.gpu_model);
                 sum.frame_ms += ms;
-                sum.lit += lit.iter().filter(|&&l| l).count() as f64;
+                sum.lit += lit_count;
                 for ((&d, &l), &(t, frags)) in drawn.iter().zip(&lit).zip(&p.volumes) {
                     if d {
                         sum.volumes += 1.0;
