@@ -39,15 +39,23 @@ fn triangles(count: usize, legs: f32, rng: &mut Rng) -> (Vec<Vec3>, Vec<u32>) {
     (positions, indices)
 }
 
-/// The fastest of `runs` timings of `f`, in ns.
-fn fastest(runs: usize, mut f: impl FnMut()) -> f64 {
-    (0..runs)
-        .map(|_| {
-            let t = Instant::now();
+/// The time of one call of `f`, in ns: calls are timed in batches of at
+/// least 20 ms (so a short call is not lost in the clock's resolution or in
+/// one interruption) and the fastest of `runs` batches is kept, after one
+/// batch that is not timed (caches, page faults, clock frequency).
+fn per_call_ns(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut batch = |calls: u32| {
+        let t = Instant::now();
+        for _ in 0..calls {
             f();
-            t.elapsed().as_secs_f64() * 1e9
-        })
-        .fold(f64::INFINITY, f64::min)
+        }
+        t.elapsed().as_secs_f64() * 1e9
+    };
+    let mut calls = 1;
+    while batch(calls) < 20e6 {
+        calls *= 2;
+    }
+    (0..runs).map(|_| batch(calls) / calls as f64).fold(f64::INFINITY, f64::min)
 }
 
 fn main() {
@@ -60,11 +68,11 @@ fn main() {
         let count = (200_000.0 / (legs * legs)).clamp(200.0, 20_000.0) as usize;
         let (positions, indices) = triangles(count, legs, &mut rng);
         let mut work = Default::default();
-        let ns = fastest(5, || {
+        let ns = per_call_ns(5, || {
             buffer.clear();
             work = buffer.render_triangles(&positions, &indices, Mat4::IDENTITY, CullMode::Back);
         });
-        let clear_ns = fastest(5, || buffer.clear());
+        let clear_ns = per_call_ns(5, || buffer.clear());
         let ns = ns - clear_ns;
         println!(
             "{legs:7}  {:9}  {:9.2}  {:11.1}",
@@ -104,7 +112,7 @@ fn main() {
             .collect();
         let mut per_depth = [0.0; 2];
         for (k, z) in [0.95f32, 0.05].into_iter().enumerate() {
-            let ns = fastest(5, || {
+            let ns = per_call_ns(5, || {
                 for (lo, hi) in &boxes {
                     std::hint::black_box(buffer.test_aabb(
                         Vec3::new(lo.x, lo.y, z),
