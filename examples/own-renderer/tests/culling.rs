@@ -189,6 +189,17 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
     assert!(matches!(new(always, &bounds, "hiz"), Some(EmbedError::Attachments(_))));
 
+    // A group the pipeline does not have, or whose entry is not a storage
+    // buffer at that binding: an error.
+    let pipeline = list_pipeline(&device, depth_format);
+    let bind = |group, binding| {
+        let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+        culler.with_list_pipeline(&pipeline, group, binding).err()
+    };
+    for (group, binding) in [(0, 0), (1, 3), (2, 0)] {
+        assert!(matches!(bind(group, binding), Some(EmbedError::Binding(_))), "group {group}, binding {binding}");
+    }
+
     let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
     let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
     let depth = texture_view(&device, depth_format, 8, sampled);
@@ -213,4 +224,68 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     assert_eq!(culler.read_counts().unwrap(), [0, 1]);
     culler.render(&forward, target, |_, _| {}).unwrap();
     assert_eq!(culler.read_counts().unwrap(), [1, 0]);
+    // The same with occlude drawing the lists (non-indexed) with the
+    // pipeline: every setup call, two frames, the same lists.
+    let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    let mut culler = culler.with_list_pipeline(&pipeline, 1, 0).unwrap();
+    let uniform = wgpu::util::DeviceExt::create_buffer_init(
+        &device,
+        &wgpu::util::BufferInitDescriptor { label: None, contents: &[0; 16], usage: wgpu::BufferUsages::UNIFORM },
+    );
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+    });
+    let mut setups = 0;
+    for expected in [[0, 1], [1, 0]] {
+        culler
+            .render_lists(&forward, target, |pass| {
+                pass.set_bind_group(0, &group, &[]);
+                setups += 1;
+            })
+            .unwrap();
+        assert_eq!(culler.read_counts().unwrap(), expected);
+    }
+    assert_eq!(setups, 4);
+}
+
+/// A depth-only pipeline reading a uniform at group 0, binding 0 and a
+/// visible list at group 1, binding 0 (the list's triangles degenerate:
+/// what matters is that the pipeline binds and draws).
+fn list_pipeline(device: &wgpu::Device, depth_format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var<uniform> scale: vec4<f32>;
+             struct VisibleList { count: u32, capacity: u32, ids: array<u32> }
+             @group(1) @binding(0) var<storage, read> visible: VisibleList;
+             @vertex fn vs(@builtin(instance_index) k: u32) -> @builtin(position) vec4<f32> {
+                 return scale * f32(visible.ids[k]);
+             }"
+            .into(),
+        ),
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: None,
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: depth_format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
 }
