@@ -225,12 +225,17 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     culler.render(&forward, target, |_, _| {}).unwrap();
     assert_eq!(culler.read_counts().unwrap(), [1, 0]);
     // The same with occlude drawing the lists (non-indexed) with the
-    // pipeline: every setup call, two frames, the same lists.
-    let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    // pipeline, whose draw of the box covers the whole target at the
+    // nearest depth (outside the box, against the rules, to be seen): the
+    // box drawn late in frame 0 and early in frame 1 hides itself in frame
+    // 1's pyramid, so frame 2's early list is empty and its late list has
+    // it again. Were the lists not drawn, frame 2 would be frame 1.
+    let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
     let mut culler = culler.with_list_pipeline(&pipeline, 1, 0).unwrap();
+    let ones: Vec<u8> = [1f32; 4].iter().flat_map(|x| x.to_le_bytes()).collect();
     let uniform = wgpu::util::DeviceExt::create_buffer_init(
         &device,
-        &wgpu::util::BufferInitDescriptor { label: None, contents: &[0; 16], usage: wgpu::BufferUsages::UNIFORM },
+        &wgpu::util::BufferInitDescriptor { label: None, contents: &ones, usage: wgpu::BufferUsages::UNIFORM },
     );
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
@@ -238,7 +243,7 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
         entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
     });
     let mut setups = 0;
-    for expected in [[0, 1], [1, 0]] {
+    for expected in [[0, 1], [1, 0], [0, 1]] {
         culler
             .render_lists(&forward, target, |pass| {
                 pass.set_bind_group(0, &group, &[]);
@@ -247,12 +252,13 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
             .unwrap();
         assert_eq!(culler.read_counts().unwrap(), expected);
     }
-    assert_eq!(setups, 4);
+    assert_eq!(setups, 6);
 }
 
-/// A depth-only pipeline reading a uniform at group 0, binding 0 and a
-/// visible list at group 1, binding 0 (the list's triangles degenerate:
-/// what matters is that the pipeline binds and draws).
+/// A depth-only pipeline reading a uniform at group 0, binding 0 (a scale,
+/// all ones) and a visible list at group 1, binding 0, drawing instance 0
+/// of a list as one triangle over the whole target at depth 0 (its first
+/// three vertices; the others degenerate).
 fn list_pipeline(device: &wgpu::Device, depth_format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: None,
@@ -260,8 +266,13 @@ fn list_pipeline(device: &wgpu::Device, depth_format: wgpu::TextureFormat) -> wg
             "@group(0) @binding(0) var<uniform> scale: vec4<f32>;
              struct VisibleList { count: u32, capacity: u32, ids: array<u32> }
              @group(1) @binding(0) var<storage, read> visible: VisibleList;
-             @vertex fn vs(@builtin(instance_index) k: u32) -> @builtin(position) vec4<f32> {
-                 return scale * f32(visible.ids[k]);
+             @vertex
+             fn vs(@builtin(instance_index) k: u32, @builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
+                 if visible.ids[k] != 0u || v >= 3u {
+                     return vec4<f32>(0.0);
+                 }
+                 let corner = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u)) * 2.0 - 1.0;
+                 return scale * vec4<f32>(corner, 0.0, 1.0);
              }"
             .into(),
         ),

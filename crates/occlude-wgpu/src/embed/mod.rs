@@ -172,10 +172,13 @@
 //! - Your device has compute shaders with workgroups of 64 threads and 6
 //!   storage buffers per shader stage (checked by [`GpuCuller::new`]); your
 //!   vertex shader reads a storage buffer (the list).
-//! - Your callback binds its own pipeline and bind groups: it is called
-//!   once per list, at the start of each of the frame's two passes.
+//! - Your callback binds its own pipeline (with
+//!   [`GpuCuller::render_lists`], occlude sets the pipeline given to
+//!   [`GpuCuller::with_list_pipeline`]), bind groups and buffers: it is
+//!   called once per list, at the start of each of the frame's two passes.
 //! - With [`GpuCuller::with_list_pipeline`], your pipeline has a bind
-//!   group holding the list alone (one storage buffer).
+//!   group holding the list alone (one storage buffer), which your
+//!   callback leaves to occlude.
 //!
 //! ## Known limits
 //!
