@@ -51,13 +51,12 @@ struct InstanceData {
 }
 
 /// occlude: the culling method, query-driven (`chcpp` and the others) or
-/// GPU-driven (`hiz`, with a bind group of each of its lists and the
-/// instances for the listed pipeline). One per renderer, so the variants'
-/// sizes do not matter.
+/// GPU-driven (`hiz`). One per renderer, so the variants' sizes do not
+/// matter.
 #[allow(clippy::large_enum_variant)]
 enum Culling {
     Queries(Culler),
-    Gpu { culler: GpuCuller, lists: [wgpu::BindGroup; 2] },
+    Gpu(GpuCuller),
 }
 
 /// The renderer: device, pipelines, buffers and its off-screen image.
@@ -66,10 +65,13 @@ pub struct Renderer {
     queue: wgpu::Queue,
     options: Options,
     pipeline: wgpu::RenderPipeline,
-    /// Draws listed instances: ids from a list, instances from storage.
+    /// Draws listed instances: ids from a list (group 1), instances from
+    /// storage.
     listed: wgpu::RenderPipeline,
     uniforms: wgpu::Buffer,
     group: wgpu::BindGroup,
+    /// The listed pipeline's group 0: the uniforms and the instances.
+    listed_group: wgpu::BindGroup,
     cube_vertices: wgpu::Buffer,
     cube_indices: wgpu::Buffer,
     instances: wgpu::Buffer,
@@ -111,6 +113,14 @@ impl Renderer {
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
         });
+        let listed_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("uniforms and instances"),
+            layout: &listed.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: instances.as_entire_binding() },
+            ],
+        });
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -135,6 +145,7 @@ impl Renderer {
             listed,
             uniforms,
             group,
+            listed_group,
             cube_vertices,
             cube_indices,
             instances,
@@ -168,8 +179,7 @@ impl Renderer {
             Some(method) if GPU_METHODS.contains(&method) => {
                 let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
                 let culler = GpuCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draw)?;
-                let lists = culler.lists().each_ref().map(|list| self.list_group(list.ids()));
-                Some(Culling::Gpu { culler, lists })
+                Some(Culling::Gpu(culler.with_list_pipeline(&self.listed, 1, 0)?))
             }
             Some(method) => {
                 Some(Culling::Queries(Culler::new(&self.device, &self.queue, attachments, &self.bounds, method)?))
@@ -178,20 +188,6 @@ impl Renderer {
         };
         // occlude: end.
         Ok(())
-    }
-
-    /// occlude: the listed pipeline's group: the uniforms, a list of
-    /// visible instances and the instances.
-    fn list_group(&self, list: &wgpu::Buffer) -> wgpu::BindGroup {
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("visible instances"),
-            layout: &self.listed.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.uniforms.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: list.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.instances.as_entire_binding() },
-            ],
-        })
     }
 
     /// Renders frame `t` (0 to 1 along the camera's path) and returns how
@@ -243,13 +239,11 @@ impl Renderer {
                     drawn += instances.len() as u64;
                 })?;
             }
-            Culling::Gpu { culler, lists } => {
-                culler.render(&camera, target, |pass, list| {
-                    pass.set_pipeline(&self.listed);
-                    pass.set_bind_group(0, &lists[list.index()], &[]);
+            Culling::Gpu(culler) => {
+                culler.render_lists(&camera, target, |pass| {
+                    pass.set_bind_group(0, &self.listed_group, &[]);
                     pass.set_vertex_buffer(0, self.cube_vertices.slice(..));
                     pass.set_index_buffer(self.cube_indices.slice(..), wgpu::IndexFormat::Uint16);
-                    pass.draw_indexed_indirect(list.indirect(), 0);
                 })?;
                 // The lists' lengths, read back for the printout and the
                 // test (the frame itself reads nothing back).
@@ -376,9 +370,8 @@ fn pipeline(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
 }
 
 /// The pipeline drawing a list of visible instances (`vs_listed`): cube
-/// vertices as a vertex buffer, the list and the instances beside the
-/// uniforms in group 0;
-/// otherwise the render pipeline.
+/// vertices as a vertex buffer, the instances beside the uniforms in group
+/// 0, the list in group 1; otherwise the render pipeline.
 fn pipeline_listed(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
     render_pipeline(device, options, "vs_listed", &[Some(CUBE_LAYOUT)])
 }

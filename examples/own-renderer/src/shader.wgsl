@@ -38,9 +38,10 @@ fn fs_main(in: Shaded) -> @location(0) vec4<f32> {
 }
 
 // Drawing a list of visible instances written by occlude's GPU-driven
-// culling (`occlude::wgpu::embed::VisibleList`): one indirect draw, the
-// instance id read from the list, the instance from a storage buffer of
-// the same rows as the instance vertex buffer (offset, scale, colour).
+// culling (`occlude::wgpu::embed::VisibleList`, in group 1, whose bind
+// group occlude makes): one indirect draw, the instance id read from the
+// list, the instance from a storage buffer of the same rows as the
+// instance vertex buffer (offset, scale, colour).
 
 struct VisibleList {
     count: u32,
@@ -48,8 +49,8 @@ struct VisibleList {
     ids: array<u32>,
 }
 
-@group(0) @binding(1) var<storage, read> visible: VisibleList;
-@group(0) @binding(2) var<storage, read> instances: array<f32>;
+@group(0) @binding(1) var<storage, read> instances: array<f32>;
+@group(1) @binding(0) var<storage, read> visible: VisibleList;
 
 struct CubeVertex {
     @location(0) position: vec3<f32>,

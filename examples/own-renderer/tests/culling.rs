@@ -189,6 +189,17 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
     assert!(matches!(new(always, &bounds, "hiz"), Some(EmbedError::Attachments(_))));
 
+    // A group the pipeline does not have, or whose entry is not a storage
+    // buffer at that binding: an error.
+    let pipeline = list_pipeline(&device, depth_format);
+    let bind = |group, binding| {
+        let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+        culler.with_list_pipeline(&pipeline, group, binding).err()
+    };
+    for (group, binding) in [(0, 0), (1, 3), (2, 0)] {
+        assert!(matches!(bind(group, binding), Some(EmbedError::Binding(_))), "group {group}, binding {binding}");
+    }
+
     let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
     let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
     let depth = texture_view(&device, depth_format, 8, sampled);
@@ -213,4 +224,79 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     assert_eq!(culler.read_counts().unwrap(), [0, 1]);
     culler.render(&forward, target, |_, _| {}).unwrap();
     assert_eq!(culler.read_counts().unwrap(), [1, 0]);
+    // The same with occlude drawing the lists (non-indexed) with the
+    // pipeline, whose draw of the box covers the whole target at the
+    // nearest depth (outside the box, against the rules, to be seen): the
+    // box drawn late in frame 0 and early in frame 1 hides itself in frame
+    // 1's pyramid, so frame 2's early list is empty and its late list has
+    // it again. Were the lists not drawn, frame 2 would be frame 1.
+    let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    let mut culler = culler.with_list_pipeline(&pipeline, 1, 0).unwrap();
+    let ones: Vec<u8> = [1f32; 4].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let uniform = wgpu::util::DeviceExt::create_buffer_init(
+        &device,
+        &wgpu::util::BufferInitDescriptor { label: None, contents: &ones, usage: wgpu::BufferUsages::UNIFORM },
+    );
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+    });
+    let mut setups = 0;
+    for expected in [[0, 1], [1, 0], [0, 1]] {
+        culler
+            .render_lists(&forward, target, |pass| {
+                pass.set_bind_group(0, &group, &[]);
+                setups += 1;
+            })
+            .unwrap();
+        assert_eq!(culler.read_counts().unwrap(), expected);
+    }
+    assert_eq!(setups, 6);
+}
+
+/// A depth-only pipeline reading a uniform at group 0, binding 0 (a scale,
+/// all ones) and a visible list at group 1, binding 0, drawing instance 0
+/// of a list as one triangle over the whole target at depth 0 (its first
+/// three vertices; the others degenerate).
+fn list_pipeline(device: &wgpu::Device, depth_format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var<uniform> scale: vec4<f32>;
+             struct VisibleList { count: u32, capacity: u32, ids: array<u32> }
+             @group(1) @binding(0) var<storage, read> visible: VisibleList;
+             @vertex
+             fn vs(@builtin(instance_index) k: u32, @builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
+                 if visible.ids[k] != 0u || v >= 3u {
+                     return vec4<f32>(0.0);
+                 }
+                 let corner = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u)) * 2.0 - 1.0;
+                 return scale * vec4<f32>(corner, 0.0, 1.0);
+             }"
+            .into(),
+        ),
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: None,
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: depth_format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
 }

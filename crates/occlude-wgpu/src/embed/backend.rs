@@ -252,14 +252,18 @@ pub(super) fn begin_pass<'e>(
         .depth
         .has_stencil_aspect()
         .then_some(wgpu::Operations { load: stencil_load, store: wgpu::StoreOp::Store });
+    // Depth-only attachments: no colour slot at all, as a depth-only
+    // pipeline (no fragment stage, no targets) expects; `[None]` would not
+    // match it.
+    let color = [target.color.map(|view| wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
+    })];
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("occlude embedded frame"),
-        color_attachments: &[target.color.map(|view| wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
-        })],
+        color_attachments: if target.color.is_some() { &color } else { &[] },
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: target.depth,
             depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),

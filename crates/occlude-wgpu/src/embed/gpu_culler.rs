@@ -87,11 +87,21 @@ impl IndirectDraw {
 /// ```
 ///
 /// `indirect` holds the [`IndirectDraw`] arguments with the list's length
-/// as instance count: `pass.draw_indexed_indirect(list.indirect(), 0)` (or
-/// `draw_indirect`) draws the list.
+/// as instance count: [`VisibleList::draw`] (or
+/// `pass.draw_indexed_indirect(list.indirect(), 0)`, `draw_indirect` for
+/// [`IndirectDraw::NonIndexed`]) draws the list.
+///
+/// The renderer binds `ids` itself, in a bind group of its own, or has
+/// occlude make each list's bind group for its pipeline with
+/// [`GpuCuller::with_list_pipeline`], which [`VisibleList::draw`] then
+/// sets before drawing.
 pub struct VisibleList {
     ids: wgpu::Buffer,
     indirect: wgpu::Buffer,
+    draw: IndirectDraw,
+    /// The renderer's group index and the bind group holding the list
+    /// there ([`GpuCuller::with_list_pipeline`]).
+    group: Option<(u32, wgpu::BindGroup)>,
     index: usize,
 }
 
@@ -112,6 +122,22 @@ impl VisibleList {
     /// [`GpuCuller::lists`].
     pub fn index(&self) -> usize {
         self.index
+    }
+
+    /// Records the list's draw in `pass`: its bind group set at the
+    /// renderer's group index, when [`GpuCuller::with_list_pipeline`]
+    /// made one, then one `draw_indexed_indirect` (or `draw_indirect`, as
+    /// the culler's [`IndirectDraw`] says) of the list's arguments. The
+    /// renderer's pipeline, its other bind groups and its vertex and index
+    /// buffers must be set before.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some((index, group)) = &self.group {
+            pass.set_bind_group(*index, group, &[]);
+        }
+        match self.draw {
+            IndirectDraw::Indexed { .. } => pass.draw_indexed_indirect(&self.indirect, 0),
+            IndirectDraw::NonIndexed { .. } => pass.draw_indirect(&self.indirect, 0),
+        }
     }
 }
 
@@ -145,6 +171,9 @@ pub struct GpuCuller {
     flags: [wgpu::Buffer; 2],
     parity: usize,
     lists: [VisibleList; 2],
+    /// The renderer's pipeline drawing the lists
+    /// ([`GpuCuller::with_list_pipeline`]).
+    pipeline: Option<wgpu::RenderPipeline>,
     /// `param` uniforms: the pyramid test's reach, whether depth is reverse
     /// Z, and each reduction's level (made with the pyramid).
     reach: wgpu::Buffer,
@@ -203,6 +232,8 @@ impl GpuCuller {
         let lists = [0, 1].map(|index| VisibleList {
             ids: list(&[]),
             indirect: storage_init(&ctx, "visible draw", bytemuck::cast_slice(&draw.words()), indirect_usage),
+            draw,
+            group: None,
             index,
         });
         let boxes = box_set_buffer(&ctx, &boxes);
@@ -235,6 +266,7 @@ impl GpuCuller {
             flags,
             parity: 0,
             lists,
+            pipeline: None,
             pyramid: None,
             counts_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("visible counts read-back"),
@@ -244,6 +276,41 @@ impl GpuCuller {
             }),
             ctx,
         })
+    }
+
+    /// The culler drawing its lists with the renderer's `pipeline`, whose
+    /// vertex shader reads the list at `@group(group) @binding(binding)`
+    /// (`var<storage, read> visible: VisibleList;`, see [`VisibleList`]):
+    /// each list's bind group is made from the pipeline's own layout of
+    /// that group, holding the list alone, so group and pipeline always
+    /// fit; [`GpuCuller::render_lists`] sets the pipeline, and
+    /// [`VisibleList::draw`] the list's group, before each indirect draw.
+    /// The pipeline's other groups stay the renderer's. This saves the
+    /// renderer a bind group per list of its own making (wgpu binds buffers
+    /// only through bind groups). A group the pipeline does not have, or
+    /// one whose entries are not one storage buffer at `binding`, are an
+    /// [`EmbedError::Binding`].
+    pub fn with_list_pipeline(
+        mut self,
+        pipeline: &wgpu::RenderPipeline,
+        group: u32,
+        binding: u32,
+    ) -> Result<Self, EmbedError> {
+        let device = &self.ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let layout = pipeline.get_bind_group_layout(group);
+        let made =
+            self.lists.each_ref().map(|list| bind_group(&self.ctx, "visible list", &layout, &[(binding, &list.ids)]));
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(EmbedError::Binding(format!(
+                "the pipeline cannot read a visible list at group {group}, binding {binding}: {error}"
+            )));
+        }
+        for (list, made) in self.lists.iter_mut().zip(made) {
+            list.group = Some((group, made));
+        }
+        self.pipeline = Some(pipeline.clone());
+        Ok(self)
     }
 
     /// The two lists the frame's draws read: index 0 the early pass's,
@@ -324,6 +391,27 @@ impl GpuCuller {
         self.ctx.queue.submit([encoder.finish()]);
         self.parity = before;
         Ok(())
+    }
+
+    /// Renders a frame as [`GpuCuller::render`] does, drawing each list
+    /// itself: at the start of each of the two passes it sets the
+    /// pipeline given to [`GpuCuller::with_list_pipeline`] (if any),
+    /// `setup(pass)` sets the renderer's other bind groups and its buffers
+    /// (and the pipeline, if none was given), then [`VisibleList::draw`]
+    /// records the list's indirect draw. For a renderer whose lists draw
+    /// alike; one that draws them differently uses [`GpuCuller::render`].
+    pub fn render_lists<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, mut setup: F) -> Result<(), EmbedError>
+    where
+        F: FnMut(&mut wgpu::RenderPass<'_>),
+    {
+        let pipeline = self.pipeline.clone();
+        self.render(camera, target, |pass, list| {
+            if let Some(pipeline) = &pipeline {
+                pass.set_pipeline(pipeline);
+            }
+            setup(pass);
+            list.draw(pass);
+        })
     }
 
     /// How many instances the last frame's early and late lists held,

@@ -122,6 +122,12 @@
 //! instance count of an indirect draw of the mesh range you gave
 //! ([`IndirectDraw`]), so one `draw_indexed_indirect` draws the list. The
 //! first instance stays 0, so `INDIRECT_FIRST_INSTANCE` is not needed.
+//! Your shader declares the list in a bind group of its own, which
+//! [`GpuCuller::with_list_pipeline`] makes from your pipeline's layout,
+//! and [`GpuCuller::render_lists`] sets your pipeline and, after your
+//! callback has set your other bind groups and buffers, the list's group
+//! and its indirect draw (or bind the list in a group of yours and draw it
+//! yourself in [`GpuCuller::render`]'s callback).
 //!
 //! The image is the image without culling: an instance with a pixel in the
 //! final image is at that pixel no farther than the early pass's depth,
@@ -166,8 +172,13 @@
 //! - Your device has compute shaders with workgroups of 64 threads and 6
 //!   storage buffers per shader stage (checked by [`GpuCuller::new`]); your
 //!   vertex shader reads a storage buffer (the list).
-//! - Your callback binds its own pipeline and bind groups: it is called
-//!   once per list, at the start of each of the frame's two passes.
+//! - Your callback binds its own pipeline (with
+//!   [`GpuCuller::render_lists`], occlude sets the pipeline given to
+//!   [`GpuCuller::with_list_pipeline`]), bind groups and buffers: it is
+//!   called once per list, at the start of each of the frame's two passes.
+//! - With [`GpuCuller::with_list_pipeline`], your pipeline has a bind
+//!   group holding the list alone (one storage buffer), which your
+//!   callback leaves to occlude.
 //!
 //! ## Known limits
 //!
@@ -191,9 +202,9 @@
 //!
 //! # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, color: &wgpu::TextureView,
 //! #          depth: &wgpu::TextureView, pipeline: &wgpu::RenderPipeline,
-//! #          instances: &wgpu::Buffer) -> Result<(), Box<dyn std::error::Error>> {
+//! #          instances: &wgpu::BindGroup) -> Result<(), Box<dyn std::error::Error>> {
 //! // Once: your attachments, one box per instance, how an instance is drawn,
-//! // and a bind group of each list for your pipeline's vertex shader.
+//! // and where your vertex shader reads the list: group 1, binding 0.
 //! let attachments = Attachments {
 //!     color: Some(wgpu::TextureFormat::Rgba8Unorm),
 //!     depth: wgpu::TextureFormat::Depth32Float,
@@ -204,28 +215,16 @@
 //!     Aabb::new(at, at + Vec3::ONE)
 //! }).collect();
 //! let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-//! let mut culler = GpuCuller::new(device, queue, attachments, &bounds, "hiz", draw)?;
-//! let groups = culler.lists().each_ref().map(|list| {
-//!     device.create_bind_group(&wgpu::BindGroupDescriptor {
-//!         label: None,
-//!         layout: &pipeline.get_bind_group_layout(0),
-//!         entries: &[
-//!             wgpu::BindGroupEntry { binding: 0, resource: list.ids().as_entire_binding() },
-//!             wgpu::BindGroupEntry { binding: 1, resource: instances.as_entire_binding() },
-//!         ],
-//!     })
-//! });
+//! let mut culler = GpuCuller::new(device, queue, attachments, &bounds, "hiz", draw)?
+//!     .with_list_pipeline(pipeline, 1, 0)?;
 //!
-//! // Each frame: your camera, your views, one indirect draw per list.
+//! // Each frame: your camera, your views, your other bind groups and buffers;
+//! // occlude sets your pipeline and the list and draws it indirectly.
 //! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
 //! let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
 //! let camera = Camera::from_matrices(view, projection, false)?;
 //! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth };
-//! culler.render(&camera, target, |pass, list| {
-//!     pass.set_pipeline(pipeline);
-//!     pass.set_bind_group(0, &groups[list.index()], &[]);
-//!     pass.draw_indirect(list.indirect(), 0);
-//! })?;
+//! culler.render_lists(&camera, target, |pass| pass.set_bind_group(0, instances, &[]))?;
 //! # Ok(())
 //! # }
 //! ```
@@ -268,6 +267,10 @@ pub enum EmbedError {
     /// passes need.
     #[error("{0}")]
     Adapter(String),
+    /// A visible list cannot be bound as the renderer's pipeline asks
+    /// ([`GpuCuller::with_list_pipeline`]).
+    #[error("cannot bind the visible lists: {0}")]
+    Binding(String),
     /// Occlude's work on the device failed, or the camera's depth order is
     /// not the depth test's ([`occlude_core::Backend::failure`]).
     #[error("culling failed: {0}")]
