@@ -35,11 +35,12 @@
 //! the frustum test that drops objects is the conservative one box tests
 //! use, so a dropped object has no pixel.
 
+use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::TemporalSet;
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
-use crate::gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable};
+use crate::gpu_culling::{BoxSet, ExpandInto, GpuCulling, IdList, ItemRange, RangeTable};
 use crate::hierarchy::{Hierarchy, NodeId};
 use std::fmt;
 use std::str::FromStr;
@@ -141,22 +142,14 @@ impl IocParams {
 /// The device resources of `ioc`, made on its first frame.
 #[derive(Clone, Debug)]
 struct Resources {
-    /// Every node's box.
-    boxes: BoxSet,
+    /// The node boxes, flags, lists and tables of the level-by-level test.
+    walk: NodeWalk,
     /// Every instance's box, for the frustum test of what is drawn.
     instance_boxes: BoxSet,
-    /// Per node, whether its box passed this frame's test.
-    node_visible: Flags,
     /// Per depth down to the bottom, the nodes at that depth and the leaves
     /// above it: the start list of a frame starting there (made for the
     /// start depth only, unless `ioc.auto`).
     starts: Vec<Option<IdList>>,
-    /// The lists of the levels below, used in turn.
-    levels: [IdList; 2],
-    /// Per node, its children (none for a leaf).
-    children: RangeTable,
-    /// Per node, the instances of a leaf (none for an interior node).
-    leaf_instances: RangeTable,
     /// Per node, every instance in its subtree.
     subtree_instances: RangeTable,
     temporal: TemporalSet,
@@ -227,7 +220,6 @@ impl CullingMethod for IterativeOcclusion {
         let depths = self.depths(h);
         let Ok(gpu) = backend.gpu_culling() else { return };
         let nodes = h.node_count() as u32;
-        let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
         let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
         let auto = self.params.auto;
         let starts = (0..=depths.1)
@@ -239,16 +231,11 @@ impl CullingMethod for IterativeOcclusion {
                 })
             })
             .collect();
-        let (children, leaf_instances, subtree_instances) = tables(gpu, h);
         self.resources = Some(Resources {
-            boxes: gpu.create_boxes(&boxes),
+            walk: NodeWalk::new(gpu, h),
             instance_boxes: gpu.create_boxes(&instance_boxes),
-            node_visible: gpu.create_flags(nodes),
             starts,
-            levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
-            children,
-            leaf_instances,
-            subtree_instances,
+            subtree_instances: subtree_table(gpu, h),
             temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
             depths,
         });
@@ -268,19 +255,10 @@ impl CullingMethod for IterativeOcclusion {
         }
         let gpu = backend.gpu_culling().expect("checked above");
         let visible = r.temporal.begin(gpu, None);
-        gpu.clear_flags(r.node_visible);
-        let mut level = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
-        for depth in start..=bottom {
-            gpu.test_boxes(r.boxes, level, r.node_visible);
-            if depth == bottom {
-                gpu.expand(level, r.node_visible, r.subtree_instances, ExpandInto::Flags(visible));
-            } else {
-                gpu.expand(level, r.node_visible, r.leaf_instances, ExpandInto::Flags(visible));
-                let next = r.levels[(depth - start) as usize % 2];
-                gpu.expand(level, r.node_visible, r.children, ExpandInto::List(next));
-                level = next;
-            }
-        }
+        let first = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
+        let test: NodeTest<'_> = &mut |gpu, boxes, list, flags| gpu.test_boxes(boxes, list, flags);
+        let bottom_list = r.walk.walk(gpu, first, bottom - start + 1, test, visible);
+        gpu.expand(bottom_list, r.walk.visible, r.subtree_instances, ExpandInto::Flags(visible));
         if self.params.frustum {
             gpu.drop_outside_frustum(r.instance_boxes, visible);
         }
@@ -320,24 +298,10 @@ fn auto_start(ctx: &FrameContext<'_>, bottom: u32) -> (u32, u64) {
     (start.min(bottom), visited)
 }
 
-/// The three tables `ioc` walks: children, a leaf's instances and a
-/// subtree's instances (from the leaves' instances in depth-first order, in
-/// which every subtree's instances are one range).
-fn tables(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> (RangeTable, RangeTable, RangeTable) {
-    let n = h.node_count();
-    let mut child_ranges = vec![ItemRange::default(); n];
-    let mut child_items = Vec::with_capacity(n);
-    let mut leaf_ranges = vec![ItemRange::default(); n];
-    for id in 0..n as NodeId {
-        let node = h.node(id);
-        if node.is_leaf() {
-            leaf_ranges[id as usize] = ItemRange { first: node.first, count: node.count };
-        } else {
-            child_ranges[id as usize] = ItemRange { first: child_items.len() as u32, count: 2 };
-            child_items.extend_from_slice(h.children(id));
-        }
-    }
-    let mut subtree_ranges = vec![ItemRange::default(); n];
+/// Per node, every instance of its subtree: the leaves' instances in
+/// depth-first order, in which every subtree's instances are one range.
+fn subtree_table(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> RangeTable {
+    let mut subtree_ranges = vec![ItemRange::default(); h.node_count()];
     let mut in_order = Vec::with_capacity(h.items.len());
     // Depth first; a node is seen on the way down (`false`) and again once
     // its subtree is done (`true`).
@@ -353,11 +317,7 @@ fn tables(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> (RangeTable, RangeTable, R
         stack.push((id, true));
         stack.extend(h.children(id).iter().rev().map(|&c| (c, false)));
     }
-    (
-        gpu.create_table(&child_ranges, &child_items),
-        gpu.create_table(&leaf_ranges, &h.items),
-        gpu.create_table(&subtree_ranges, &in_order),
-    )
+    gpu.create_table(&subtree_ranges, &in_order)
 }
 
 #[cfg(test)]
