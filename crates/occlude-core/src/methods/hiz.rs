@@ -16,7 +16,7 @@
 //!    nothing, boxes at the eye are visible untested), setting this frame's
 //!    visibility (`hiz.granularity=instance`, the default); or, with
 //!    `hiz.granularity=node`, walk the hierarchy from the root down
-//!    ([`super::node_walk`]), testing the node boxes of each level against
+//!    (`methods/node_walk.rs`), testing the node boxes of each level against
 //!    the pyramid the same way and descending only into visible nodes, and
 //!    test against it the boxes of the instances of the visible leaves
 //!    (gathered as flags over the walk, compacted into one list, tested in
@@ -35,7 +35,7 @@
 //! (a node box is a box): the walk reaches the instance.
 //!
 //! What node granularity costs: three dispatches per level of the
-//! hierarchy (box test, leaves, children; [`super::node_walk`]) plus five
+//! hierarchy (box test, leaves, children; `methods/node_walk.rs`) plus five
 //! (clearing the node flags; clearing, gathering from the last level and
 //! compacting the leaves' instances; their test), against one dispatch
 //! over every instance; what it saves is the box tests of the
