@@ -114,7 +114,8 @@ fn methods_match_vfc_on_the_gpu_with_cameras_from_matrices() {
 
 /// `hiz` on the GPU at issue 18's six sizes and 67x45 (pyramids with odd
 /// levels, and a one-texel pyramid at 1x1), reading the field's 2x2 texels
-/// a box and 8x8: 0 missing pixels on every frame.
+/// a box and 8x8, and walking the hierarchy's nodes top-down
+/// (`hiz.granularity=node`): 0 missing pixels on every frame.
 #[test]
 fn hiz_matches_vfc_on_the_gpu_at_odd_and_tiny_sizes() {
     if GpuContext::for_test("hiz_matches_vfc_on_the_gpu_at_odd_and_tiny_sizes").is_none() {
@@ -122,7 +123,7 @@ fn hiz_matches_vfc_on_the_gpu_at_odd_and_tiny_sizes() {
     }
     let scene = small("city");
     for resolution in [(1024, 768), (1920, 1080), (1366, 768), (1023, 767), (641, 479), (67, 45), (1, 1)] {
-        for texels in ["hiz.texels=2", "hiz.texels=8"] {
+        for texels in ["hiz.texels=2", "hiz.texels=8", "hiz.granularity=node"] {
             let cfg = BenchConfig {
                 methods: vec!["vfc".into(), "hiz".into()],
                 options: MethodOptions::parse(&[texels]).unwrap(),

@@ -2,7 +2,8 @@
 //! [`occlude_core::GpuCulling`]: the correctness rule on every frame of
 //! every `small` scene of the papers with both hierarchies, `hiz` on
 //! the million-instance `swarm` at its small size, `hiz` at the resolutions
-//! where pyramids go wrong (odd sizes, 1x1), `ioc` over several depth
+//! where pyramids go wrong (odd sizes, 1x1), each `hiz` test with both
+//! granularities (instances, nodes top-down), `ioc` over several depth
 //! ranges, with its start chosen per frame, and with and without its
 //! frustum test, `roc.mode=last` reporting the pixels it misses, the frame
 //! statistics of a GPU-driven frame, and the depth options' errors and
@@ -54,6 +55,10 @@ fn roc_ioc_and_hiz_match_vfc_on_every_frame_and_cull() {
             let triangles = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
             assert!(triangles(1) < triangles(0), "{name}/{hierarchy}: roc culled nothing");
             assert!(triangles(3) < triangles(0), "{name}/{hierarchy}: hiz culled nothing");
+            let node = run(&scene, &config(name, hierarchy, &["vfc", "hiz"], &["hiz.granularity=node"]));
+            assert_exact(&node, &format!("{name}/{hierarchy}/hiz.granularity=node"));
+            let node_triangles = node.methods[1].frames.iter().map(|f| f.triangles).sum::<u64>();
+            assert!(node_triangles < triangles(0), "{name}/{hierarchy}: hiz.granularity=node culled nothing");
             // At its bottom depth ioc draws whole subtrees (frustum-culled), and
             // both draw last frame's visible set first, in view or not: ioc
             // draws less than vfc only where occlusion is strong.
@@ -68,14 +73,18 @@ fn roc_ioc_and_hiz_match_vfc_on_every_frame_and_cull() {
 fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
     let scene = small("city");
     for resolution in [(1024, 768), (1920, 1080), (1366, 768), (1023, 767), (641, 479), (1, 1)] {
-        // The field's 2x2 texels a box, and more texels of a finer level.
+        // The field's 2x2 texels a box, and more texels of a finer level,
+        // testing instances or the hierarchy's nodes top-down.
         for texels in ["hiz.texels=2", "hiz.texels=8"] {
-            let cfg = config("city", HierarchyKind::Bvh, &["vfc", "hiz"], &[texels]);
-            let r = run(&scene, &BenchConfig { frames: 6, resolution, ..cfg });
-            assert_exact(&r, &format!("city/{texels} at {resolution:?}"));
-            let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
-            if resolution.0 > 1 {
-                assert!(drawn(1) < drawn(0), "city/{texels} at {resolution:?} culled nothing");
+            for granularity in ["hiz.granularity=instance", "hiz.granularity=node"] {
+                let what = format!("city/{texels}/{granularity} at {resolution:?}");
+                let cfg = config("city", HierarchyKind::Bvh, &["vfc", "hiz"], &[texels, granularity]);
+                let r = run(&scene, &BenchConfig { frames: 6, resolution, ..cfg });
+                assert_exact(&r, &what);
+                let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+                if resolution.0 > 1 {
+                    assert!(drawn(1) < drawn(0), "{what} culled nothing");
+                }
             }
         }
     }
@@ -88,12 +97,15 @@ fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
 fn hiz_matches_vfc_on_every_frame_of_the_swarm() {
     let scene = small("swarm");
     for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
-        let cfg = BenchConfig { frames: 60, fps: None, ..config("swarm", hierarchy, &["vfc", "hiz"], &[]) };
-        let r = run(&scene, &cfg);
-        assert_eq!(r.methods[1].frames.len(), 60);
-        assert_exact(&r, &format!("swarm/{hierarchy}"));
-        let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
-        assert!(drawn(1) * 2 < drawn(0), "swarm/{hierarchy}: hiz drew {} triangles, vfc {}", drawn(1), drawn(0));
+        for granularity in ["hiz.granularity=instance", "hiz.granularity=node"] {
+            let what = format!("swarm/{hierarchy}/{granularity}");
+            let cfg = config("swarm", hierarchy, &["vfc", "hiz"], &[granularity]);
+            let r = run(&scene, &BenchConfig { frames: 60, fps: None, ..cfg });
+            assert_eq!(r.methods[1].frames.len(), 60);
+            assert_exact(&r, &what);
+            let drawn = |m: usize| r.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
+            assert!(drawn(1) * 2 < drawn(0), "{what}: hiz drew {} triangles, vfc {}", drawn(1), drawn(0));
+        }
     }
 }
 

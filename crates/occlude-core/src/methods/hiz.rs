@@ -14,7 +14,13 @@
 //!    at most `hiz.texels` x `hiz.texels` texels of the finest level that
 //!    fits (default 2, the field's 2x2; boxes outside the frustum set
 //!    nothing, boxes at the eye are visible untested), setting this frame's
-//!    visibility;
+//!    visibility (`hiz.granularity=instance`, the default); or, with
+//!    `hiz.granularity=node`, walk the hierarchy from the root down
+//!    (`methods/node_walk.rs`), testing the node boxes of each level against
+//!    the pyramid the same way and descending only into visible nodes, and
+//!    test against it the boxes of the instances of the visible leaves
+//!    (gathered as flags over the walk, compacted into one list, tested in
+//!    one dispatch);
 //! 4. draw the instances visible now that were not drawn in step 1, and keep
 //!    the visible set for the next frame.
 //!
@@ -23,13 +29,60 @@
 //! so its box, which contains it and is pulled towards the eye, passes the
 //! full-resolution box test at that pixel; the pyramid test never hides a
 //! box that test finds visible (the proof is `depth_pyramid`'s), so the
-//! instance is drawn in step 1 or 4.
+//! instance is drawn in step 1 or 4. With node granularity every node
+//! above such an instance holds its box, so the node's box passes the
+//! full-resolution test at the same pixel and the pyramid test keeps it
+//! (a node box is a box): the walk reaches the instance.
+//!
+//! What node granularity costs: three dispatches per level of the
+//! hierarchy (box test, leaves, children; `methods/node_walk.rs`) plus five
+//! (clearing the node flags; clearing, gathering from the last level and
+//! compacting the leaves' instances; their test), against one dispatch
+//! over every instance; what it saves is the box tests of the
+//! instances under hidden nodes. On the soft backend each dispatch is
+//! charged as the one it stands for (`GpuModel`'s per-dispatch, per-item,
+//! per-box and per-texel costs; nothing new). On wgpu every culling
+//! dispatch runs one thread per slot of its list's capacity (no indirect
+//! dispatch), here the node count, on every level.
 
+use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::{AllInstances, TemporalSet};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
-use crate::gpu_culling::Pyramid;
+use crate::gpu_culling::{ExpandInto, Flags, IdList, Pyramid};
+use std::fmt;
+use std::str::FromStr;
+
+/// What the late pass tests against the pyramid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Granularity {
+    /// `instance`: every instance's box, in one dispatch.
+    Instance,
+    /// `node`: the hierarchy's node boxes top-down, then the instances of
+    /// the visible leaves (module documentation).
+    Node,
+}
+
+impl fmt::Display for Granularity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Granularity::Instance => "instance",
+            Granularity::Node => "node",
+        })
+    }
+}
+
+impl FromStr for Granularity {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Self, ()> {
+        match s {
+            "instance" => Ok(Granularity::Instance),
+            "node" => Ok(Granularity::Node),
+            _ => Err(()),
+        }
+    }
+}
 
 /// Parameters of `hiz`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,13 +90,32 @@ pub struct HizParams {
     /// `hiz.texels`: most texels per axis a box test reads, 1 to 16
     /// (default 2).
     pub texels: u32,
+    /// `hiz.granularity`: `instance` (default) or `node`.
+    pub granularity: Granularity,
 }
 
 impl HizParams {
-    /// Reads `hiz.texels`.
+    /// Reads `hiz.texels` and `hiz.granularity`.
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self { texels: r.get("texels", 2, "an integer from 1 to 16", |t| (1..=16).contains(&t))? })
+        Ok(Self {
+            texels: r.get("texels", 2, "an integer from 1 to 16", |t| (1..=16).contains(&t))?,
+            granularity: r.get("granularity", Granularity::Instance, "instance or node", |_| true)?,
+        })
     }
+}
+
+/// The device resources of `hiz.granularity=node`'s walk.
+#[derive(Clone, Copy, Debug)]
+struct NodeResources {
+    walk: NodeWalk,
+    /// The list holding the root, where the walk starts.
+    root: IdList,
+    /// The levels of the hierarchy (its deepest depth + 1).
+    levels: u32,
+    /// Per instance, whether it lies in a leaf the walk found visible.
+    candidates: Flags,
+    /// Those instances, compacted for their box test.
+    candidate_list: IdList,
 }
 
 /// The device resources of `hiz`, made on its first frame.
@@ -52,6 +124,8 @@ struct Resources {
     all: AllInstances,
     pyramid: Pyramid,
     temporal: TemporalSet,
+    /// With `hiz.granularity=node`.
+    nodes: Option<NodeResources>,
 }
 
 /// `hiz`: two-phase occlusion culling against a depth pyramid (module
@@ -90,10 +164,20 @@ impl CullingMethod for TwoPhaseHiZ {
         if gpu.pyramid_support().is_err() {
             return;
         }
+        let instances = ctx.scene.instances.len() as u32;
+        let h = ctx.hierarchy;
+        let nodes = (self.params.granularity == Granularity::Node).then(|| NodeResources {
+            walk: NodeWalk::new(gpu, h),
+            root: gpu.create_list(1, &[h.root()]),
+            levels: h.max_depth() + 1,
+            candidates: gpu.create_flags(instances),
+            candidate_list: gpu.create_list(instances, &[]),
+        });
         self.resources = Some(Resources {
             all: AllInstances::new(gpu, ctx.scene),
             pyramid: gpu.create_pyramid(),
-            temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
+            temporal: TemporalSet::new(gpu, instances),
+            nodes,
         });
     }
 
@@ -105,7 +189,19 @@ impl CullingMethod for TwoPhaseHiZ {
         };
         let visible = r.temporal.begin(gpu, Some(r.all.boxes));
         gpu.build_pyramid(r.pyramid);
-        gpu.test_boxes_pyramid(r.all.boxes, r.all.ids, r.pyramid, self.params.texels, visible);
+        let (pyramid, reach) = (r.pyramid, self.params.texels);
+        match r.nodes {
+            None => gpu.test_boxes_pyramid(r.all.boxes, r.all.ids, pyramid, reach, visible),
+            Some(n) => {
+                gpu.clear_flags(n.candidates);
+                let test: NodeTest<'_> =
+                    &mut |gpu, boxes, list, flags| gpu.test_boxes_pyramid(boxes, list, pyramid, reach, flags);
+                let deepest = n.walk.walk(gpu, n.root, n.levels, test, n.candidates);
+                gpu.expand(deepest, n.walk.visible, n.walk.leaf_instances, ExpandInto::Flags(n.candidates));
+                gpu.compact(n.candidates, None, n.candidate_list);
+                gpu.test_boxes_pyramid(r.all.boxes, n.candidate_list, pyramid, reach, visible);
+            }
+        }
         r.temporal.finish(gpu, true);
     }
 }
@@ -113,17 +209,19 @@ impl CullingMethod for TwoPhaseHiZ {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Aabb;
     use crate::methods::test_rig::{
-        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, culling_steps,
-        method, Rig,
+        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling,
+        assert_walks_top_down, culling_steps, method, Rig,
     };
     use crate::methods::MethodOptions;
 
     #[test]
     fn texels_default_to_two_and_stay_in_range() {
         let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
-        assert_eq!(read(&[]), Ok(HizParams { texels: 2 }));
-        assert_eq!(read(&["hiz.texels=8"]), Ok(HizParams { texels: 8 }));
+        let instance = Granularity::Instance;
+        assert_eq!(read(&[]), Ok(HizParams { texels: 2, granularity: instance }));
+        assert_eq!(read(&["hiz.texels=8"]), Ok(HizParams { texels: 8, granularity: instance }));
         let err = read(&["hiz.texels=0"]).unwrap_err();
         assert!(err.to_string().contains("hiz.texels = 0: expected an integer from 1 to 16"), "{err}");
     }
@@ -151,5 +249,38 @@ mod tests {
         let turned = &rig.run(&mut hiz, &mut mock, 1)[0];
         assert_eq!(culling_steps(turned).last(), Some(&("draw", vec![2])));
         assert_draws_exactly(turned, &[0, 1, 2, 3]);
+    }
+
+    /// `hiz.granularity=node`: after the early pass and the pyramid, one
+    /// pyramid test per level from the root, each of the children of the
+    /// nodes the last level found visible, then one of the instances of the
+    /// visible leaves; a hidden subtree is not opened, and exactly the
+    /// visible objects are drawn.
+    #[test]
+    fn node_granularity_tests_visible_nodes_top_down_then_their_instances() {
+        let (rig, frames) = assert_walks_top_down("hiz", &["hiz.granularity=node"], "pyramid test");
+        let h = &rig.hierarchy;
+        let seen: Vec<Aabb> = (0..4).map(|i| rig.scene.instances[i].bounds).collect();
+        let visible = |n: &u32| seen.iter().any(|b| b.overlaps(h.bounds(*n)));
+        for (nodes, rest) in frames {
+            let mut reached: Vec<u32> = nodes
+                .iter()
+                .flatten()
+                .filter(|&n| h.is_leaf(*n) && visible(n))
+                .flat_map(|&n| h.instances(n).to_vec())
+                .collect();
+            reached.sort_unstable();
+            assert_eq!(rest, [reached]);
+            assert!(rest[0].len() < rig.scene.instances.len(), "no hidden instance was left untested");
+        }
+    }
+
+    #[test]
+    fn granularity_reads_instance_or_node() {
+        let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
+        assert_eq!(read(&["hiz.granularity=node"]).unwrap().granularity, Granularity::Node);
+        assert_eq!(read(&["hiz.granularity=instance"]).unwrap().granularity, Granularity::Instance);
+        let err = read(&["hiz.granularity=leaf"]).unwrap_err();
+        assert!(err.to_string().contains("hiz.granularity = leaf: expected instance or node"), "{err}");
     }
 }

@@ -35,11 +35,12 @@
 //! the frustum test that drops objects is the conservative one box tests
 //! use, so a dropped object has no pixel.
 
+use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::TemporalSet;
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
-use crate::gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable};
+use crate::gpu_culling::{BoxSet, ExpandInto, GpuCulling, IdList, ItemRange, RangeTable};
 use crate::hierarchy::{Hierarchy, NodeId};
 use std::fmt;
 use std::str::FromStr;
@@ -141,22 +142,14 @@ impl IocParams {
 /// The device resources of `ioc`, made on its first frame.
 #[derive(Clone, Debug)]
 struct Resources {
-    /// Every node's box.
-    boxes: BoxSet,
+    /// The node boxes, flags, lists and tables of the level-by-level test.
+    walk: NodeWalk,
     /// Every instance's box, for the frustum test of what is drawn.
     instance_boxes: BoxSet,
-    /// Per node, whether its box passed this frame's test.
-    node_visible: Flags,
     /// Per depth down to the bottom, the nodes at that depth and the leaves
     /// above it: the start list of a frame starting there (made for the
     /// start depth only, unless `ioc.auto`).
     starts: Vec<Option<IdList>>,
-    /// The lists of the levels below, used in turn.
-    levels: [IdList; 2],
-    /// Per node, its children (none for a leaf).
-    children: RangeTable,
-    /// Per node, the instances of a leaf (none for an interior node).
-    leaf_instances: RangeTable,
     /// Per node, every instance in its subtree.
     subtree_instances: RangeTable,
     temporal: TemporalSet,
@@ -227,7 +220,6 @@ impl CullingMethod for IterativeOcclusion {
         let depths = self.depths(h);
         let Ok(gpu) = backend.gpu_culling() else { return };
         let nodes = h.node_count() as u32;
-        let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
         let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
         let auto = self.params.auto;
         let starts = (0..=depths.1)
@@ -239,16 +231,11 @@ impl CullingMethod for IterativeOcclusion {
                 })
             })
             .collect();
-        let (children, leaf_instances, subtree_instances) = tables(gpu, h);
         self.resources = Some(Resources {
-            boxes: gpu.create_boxes(&boxes),
+            walk: NodeWalk::new(gpu, h),
             instance_boxes: gpu.create_boxes(&instance_boxes),
-            node_visible: gpu.create_flags(nodes),
             starts,
-            levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
-            children,
-            leaf_instances,
-            subtree_instances,
+            subtree_instances: subtree_table(gpu, h),
             temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
             depths,
         });
@@ -268,19 +255,10 @@ impl CullingMethod for IterativeOcclusion {
         }
         let gpu = backend.gpu_culling().expect("checked above");
         let visible = r.temporal.begin(gpu, None);
-        gpu.clear_flags(r.node_visible);
-        let mut level = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
-        for depth in start..=bottom {
-            gpu.test_boxes(r.boxes, level, r.node_visible);
-            if depth == bottom {
-                gpu.expand(level, r.node_visible, r.subtree_instances, ExpandInto::Flags(visible));
-            } else {
-                gpu.expand(level, r.node_visible, r.leaf_instances, ExpandInto::Flags(visible));
-                let next = r.levels[(depth - start) as usize % 2];
-                gpu.expand(level, r.node_visible, r.children, ExpandInto::List(next));
-                level = next;
-            }
-        }
+        let first = r.starts[start as usize].expect("a start list for every depth ioc.auto may choose");
+        let test: NodeTest<'_> = &mut |gpu, boxes, list, flags| gpu.test_boxes(boxes, list, flags);
+        let bottom_list = r.walk.walk(gpu, first, bottom - start + 1, test, visible);
+        gpu.expand(bottom_list, r.walk.visible, r.subtree_instances, ExpandInto::Flags(visible));
         if self.params.frustum {
             gpu.drop_outside_frustum(r.instance_boxes, visible);
         }
@@ -320,24 +298,10 @@ fn auto_start(ctx: &FrameContext<'_>, bottom: u32) -> (u32, u64) {
     (start.min(bottom), visited)
 }
 
-/// The three tables `ioc` walks: children, a leaf's instances and a
-/// subtree's instances (from the leaves' instances in depth-first order, in
-/// which every subtree's instances are one range).
-fn tables(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> (RangeTable, RangeTable, RangeTable) {
-    let n = h.node_count();
-    let mut child_ranges = vec![ItemRange::default(); n];
-    let mut child_items = Vec::with_capacity(n);
-    let mut leaf_ranges = vec![ItemRange::default(); n];
-    for id in 0..n as NodeId {
-        let node = h.node(id);
-        if node.is_leaf() {
-            leaf_ranges[id as usize] = ItemRange { first: node.first, count: node.count };
-        } else {
-            child_ranges[id as usize] = ItemRange { first: child_items.len() as u32, count: 2 };
-            child_items.extend_from_slice(h.children(id));
-        }
-    }
-    let mut subtree_ranges = vec![ItemRange::default(); n];
+/// Per node, every instance of its subtree: the leaves' instances in
+/// depth-first order, in which every subtree's instances are one range.
+fn subtree_table(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> RangeTable {
+    let mut subtree_ranges = vec![ItemRange::default(); h.node_count()];
     let mut in_order = Vec::with_capacity(h.items.len());
     // Depth first; a node is seen on the way down (`false`) and again once
     // its subtree is done (`true`).
@@ -353,20 +317,14 @@ fn tables(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> (RangeTable, RangeTable, R
         stack.push((id, true));
         stack.extend(h.children(id).iter().rev().map(|&c| (c, false)));
     }
-    (
-        gpu.create_table(&child_ranges, &child_items),
-        gpu.create_table(&leaf_ranges, &h.items),
-        gpu.create_table(&subtree_ranges, &in_order),
-    )
+    gpu.create_table(&subtree_ranges, &in_order)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Aabb;
     use crate::methods::test_rig::{
-        assert_draws_exactly, assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, culling_steps,
-        method, Rig,
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, assert_walks_top_down,
     };
     use crate::methods::MethodOptions;
 
@@ -409,32 +367,12 @@ mod tests {
     }
 
     /// From the root to the deepest level, one box test per level, each of
-    /// the children of the nodes the last level found visible (a node whose
-    /// box meets a visible object in view): a hidden subtree is not opened,
-    /// and exactly the visible objects in view are drawn.
+    /// the children of the nodes the last level found visible, and no other
+    /// test: a hidden subtree is not opened, and exactly the visible objects
+    /// in view are drawn.
     #[test]
     fn tests_level_by_level_the_children_of_visible_nodes() {
-        let rig = Rig::row(8);
-        let h = &rig.hierarchy;
-        let mut mock = rig.mock().with_gpu_culling();
-        for hidden in 4..8 {
-            mock.set_visible(hidden, false);
-        }
-        let seen: Vec<Aabb> = (0..4).map(|i| rig.scene.instances[i].bounds).collect();
-        let visible = |n: &u32| seen.iter().any(|b| b.overlaps(h.bounds(*n)));
-        let mut ioc = method("ioc", &["ioc.start=0", "ioc.bottom=deepest"]);
-        for calls in rig.run(&mut ioc, &mut mock, 3) {
-            let tests: Vec<Vec<u32>> =
-                culling_steps(&calls).into_iter().filter(|(s, _)| *s == "test").map(|(_, ids)| ids).collect();
-            assert_eq!(tests.len() as u32, h.max_depth() + 1);
-            assert_eq!(tests[0], [h.root()]);
-            for pair in tests.windows(2) {
-                let mut opened: Vec<u32> =
-                    pair[0].iter().filter(|n| visible(n)).flat_map(|&n| h.children(n).to_vec()).collect();
-                opened.sort_unstable();
-                assert_eq!(pair[1], opened);
-            }
-            assert_draws_exactly(&calls, &[0, 1, 2, 3]);
-        }
+        let (_, frames) = assert_walks_top_down("ioc", &["ioc.start=0", "ioc.bottom=deepest"], "test");
+        assert!(frames.iter().all(|(_, rest)| rest.is_empty()));
     }
 }

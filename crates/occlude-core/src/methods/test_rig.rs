@@ -198,3 +198,45 @@ pub(crate) fn assert_refused_without_gpu_culling_and_falls_back_to_frustum_culli
         assert!(queries(&calls).is_empty());
     }
 }
+
+/// A frame's box tests of one kind: the ids tested by each level of a
+/// top-down walk, and by each test after it.
+pub(crate) type WalkTests = (Vec<Vec<u32>>, Vec<Vec<u32>>);
+
+/// Runs `name` with `options` for 3 frames on a row of 8 objects whose
+/// last four are hidden, and checks that each frame's first
+/// `max_depth + 1` box tests of kind `step` walk the hierarchy top-down:
+/// the root, then exactly the children of the nodes the level before found
+/// visible (a node whose box meets a visible object), so that a hidden
+/// subtree is not opened; and that each frame draws exactly the visible
+/// objects. Returns the rig and, per frame, the walk's levels and the
+/// `step` tests after them.
+pub(crate) fn assert_walks_top_down(name: &str, options: &[&str], step: &str) -> (Rig, Vec<WalkTests>) {
+    let rig = Rig::row(8);
+    let h = &rig.hierarchy;
+    let mut mock = rig.mock().with_gpu_culling();
+    for hidden in 4..8 {
+        mock.set_visible(hidden, false);
+    }
+    let seen: Vec<Aabb> = (0..4).map(|i| rig.scene.instances[i].bounds).collect();
+    let visible = |n: &u32| seen.iter().any(|b| b.overlaps(h.bounds(*n)));
+    let mut built = method(name, options);
+    let mut frames = Vec::new();
+    for calls in rig.run(&mut built, &mut mock, 3) {
+        let mut tests: Vec<Vec<u32>> =
+            culling_steps(&calls).into_iter().filter(|(s, _)| *s == step).map(|(_, ids)| ids).collect();
+        let levels = h.max_depth() as usize + 1;
+        assert!(tests.len() >= levels, "{name}: {} {step}s for {levels} levels", tests.len());
+        let rest = tests.split_off(levels);
+        assert_eq!(tests[0], [h.root()]);
+        for pair in tests.windows(2) {
+            let mut opened: Vec<u32> =
+                pair[0].iter().filter(|n| visible(n)).flat_map(|&n| h.children(n).to_vec()).collect();
+            opened.sort_unstable();
+            assert_eq!(pair[1], opened);
+        }
+        assert_draws_exactly(&calls, &[0, 1, 2, 3]);
+        frames.push((tests, rest));
+    }
+    (rig, frames)
+}
