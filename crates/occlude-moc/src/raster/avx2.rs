@@ -253,19 +253,14 @@ unsafe fn depth_bounds(plane: &DepthPlane, x: __m128i, y_term: __m256d) -> __m12
     round_far(_mm256_min_pd(at, _mm256_set1_pd(plane.zmax)))
 }
 
-/// [`super::round_far`] on four lanes: nudged farther, rounded to `f32`, one
-/// unit up where rounding went nearer and the result is not negative.
+/// [`super::round_far`] on four lanes: nudged farther, rounded to the nearest
+/// `f32`.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn round_far(depth: __m256d) -> __m128 {
     let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), depth);
-    let depth = _mm256_add_pd(_mm256_add_pd(depth, _mm256_mul_pd(abs, _mm256_set1_pd(1e-9))), _mm256_set1_pd(1e-12));
-    let d = _mm256_cvtpd_ps(depth);
-    let nearer = _mm256_castpd_si256(_mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_cvtps_pd(d), depth));
-    // The low half of each 64-bit comparison lane, packed into four 32-bit lanes.
-    let nearer = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(nearer, _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
-    let up = _mm_and_si128(nearer, _mm_castps_si128(_mm_cmpge_ps(d, _mm_setzero_ps())));
-    _mm_castsi128_ps(_mm_sub_epi32(_mm_castps_si128(d), up))
+    let nudge = _mm256_mul_pd(abs, _mm256_set1_pd(super::FAR_NUDGE));
+    _mm256_cvtpd_ps(_mm256_add_pd(_mm256_add_pd(depth, nudge), _mm256_set1_pd(1e-12)))
 }
 
 /// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each
