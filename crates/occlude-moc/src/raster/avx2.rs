@@ -148,16 +148,18 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
             _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset)),
             half,
         );
-        let ordered = _mm256_cmp_pd::<_CMP_ORD_Q>(t, t);
+        // A NaN intercept becomes `t_max` (as in the portable clamp). On a
+        // row of the triangle that leaves the edge to the exact rule all the
+        // same: an intercept there is NaN or infinite only where the slope, the
+        // offset or their terms' sum bounded by `|slope| y_max + |offset|` is,
+        // so the band ([`Edge::band`](super::Edge)) is infinite or NaN too,
+        // and no fraction exceeds it. Rows beyond the triangle stay empty.
         let t = _mm256_max_pd(_mm256_min_pd(t, t_max), t_min);
         let k = _mm256_floor_pd(t);
         let fraction = _mm256_sub_pd(t, k);
         let safe = _mm256_and_pd(
-            ordered,
-            _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_GT_OQ>(fraction, band),
-                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_sub_pd(one, fraction), band),
-            ),
+            _mm256_cmp_pd::<_CMP_GT_OQ>(fraction, band),
+            _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_sub_pd(one, fraction), band),
         );
         (k, safe)
     };
