@@ -53,8 +53,9 @@
 //!   displacements away from `p`, so within `s` in x and in y): at most the
 //!   raised plane at `p`. Over a subtile that is bounded by the raised plane's
 //!   largest value at the subtile's four corners (computed in `f64`, nudged
-//!   farther by a relative epsilon), capped by the farthest vertex (the depth
-//!   is a convex combination of the vertices').
+//!   farther by `2^-22` of itself, more than its rounding to the nearest `f32`
+//!   can take back), capped by the farthest vertex (the depth is a convex
+//!   combination of the vertices').
 //! - Layer merge: a merge of a triangle (mask `C`, depth `t`) into the working
 //!   layer (mask `M`, depth `w`) gives `M | C` the depth `max(w, t)`, which bounds
 //!   both; the working layer is only discarded (its pixels falling back to the

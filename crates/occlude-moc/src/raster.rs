@@ -209,7 +209,7 @@ impl DepthPlane {
     /// corner is (`bx`, `by`): the plane's largest value at the subtile's corners
     /// (a rounded product and sum are monotone in each coordinate, so that is the
     /// corner the plane's slopes point to), capped by the farthest vertex, nudged
-    /// farther and rounded up to `f32`.
+    /// farther and rounded to `f32` ([`round_far`]).
     #[inline]
     pub(crate) fn subtile_bound(&self, bx: f64, by: f64) -> f32 {
         let x = if self.zx > 0.0 { bx + 8.0 } else { bx };
@@ -218,16 +218,18 @@ impl DepthPlane {
     }
 }
 
-/// `depth` nudged farther by a relative epsilon, then rounded up to `f32`.
+/// Relative nudge of a depth bound before its rounding to `f32` ([`round_far`]):
+/// `2^-22`, more than the `2^-24` relative error of rounding to the nearest `f32`.
+pub(crate) const FAR_NUDGE: f64 = 1.0 / (1u32 << 22) as f64;
+
+/// `depth` nudged farther, then rounded to the nearest `f32`, which is never
+/// nearer than `depth`: the nudge `|depth| 2^-22 + 1e-12` exceeds the rounding's
+/// error, at most `2^-24` of the nudged value (or `2^-150` below the normal
+/// range), and the `f64` operations' own (`2^-53` of their operands). A single
+/// conversion, where rounding up would take a comparison and a correction.
 #[inline]
 pub(crate) fn round_far(depth: f64) -> f32 {
-    let depth = depth + depth.abs() * 1e-9 + 1e-12;
-    let d = depth as f32;
-    if (d as f64) < depth {
-        f32::from_bits(d.to_bits() + if d >= 0.0 { 1 } else { 0 })
-    } else {
-        d
-    }
+    (depth + depth.abs() * FAR_NUDGE + 1e-12) as f32
 }
 
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC

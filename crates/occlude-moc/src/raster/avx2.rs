@@ -125,6 +125,10 @@ unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
     merge(group, &cover, &depth, mode);
 }
 
+/// [`lanes::edge_spans`](super::lanes::edge_spans) in AVX2: the three edges'
+/// intercepts computed side by side (unrolled), one test of all twelve rows
+/// against their bands, and only where one fails (rare) the per-edge
+/// [`Spans::exact`] bits.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
@@ -136,33 +140,47 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
         _mm_andnot_si128(_mm_cmpgt_epi32(_mm_set1_epi32(tri.y0), rows), _mm_cmpgt_epi32(_mm_set1_epi32(tri.y1), rows));
     let (x0, x1) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
     let (mut lo, mut hi) = (_mm_blendv_epi8(x1, x0, inside), _mm_blendv_epi8(x0, x1, inside));
-    let mut exact = 0u8;
-    for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+    // Per edge: the floor of its four intercepts, and which of them lie
+    // farther than the band from a pixel boundary.
+    let intercepts = |i: usize| {
+        let (edge, band) = (&tri.edges[i], _mm256_set1_pd(tri.bands[i]));
         let t = _mm256_sub_pd(
             _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset)),
             half,
         );
-        let ordered = _mm256_cmp_pd::<_CMP_ORD_Q>(t, t);
+        // A NaN intercept becomes `t_max` (as in the portable clamp). On a
+        // row of the triangle that leaves the edge to the exact rule all the
+        // same: an intercept there is NaN or infinite only where the slope, the
+        // offset or their terms' sum bounded by `|slope| y_max + |offset|` is,
+        // so the band ([`Edge::band`](super::Edge)) is infinite or NaN too,
+        // and no fraction exceeds it. Rows beyond the triangle stay empty.
         let t = _mm256_max_pd(_mm256_min_pd(t, t_max), t_min);
         let k = _mm256_floor_pd(t);
         let fraction = _mm256_sub_pd(t, k);
-        let band = _mm256_set1_pd(band);
         let safe = _mm256_and_pd(
-            ordered,
-            _mm256_and_pd(
-                _mm256_cmp_pd::<_CMP_GT_OQ>(fraction, band),
-                _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_sub_pd(one, fraction), band),
-            ),
+            _mm256_cmp_pd::<_CMP_GT_OQ>(fraction, band),
+            _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_sub_pd(one, fraction), band),
         );
-        if _mm256_movemask_pd(safe) != 0xF {
-            exact |= 1 << i;
-            continue;
+        (k, safe)
+    };
+    let edges = [intercepts(0), intercepts(1), intercepts(2)];
+    let all_safe = _mm256_and_pd(_mm256_and_pd(edges[0].1, edges[1].1), edges[2].1);
+    let mut exact = 0u8;
+    if _mm256_movemask_pd(all_safe) != 0xF {
+        for (i, (_, safe)) in edges.iter().enumerate() {
+            if _mm256_movemask_pd(*safe) != 0xF {
+                exact |= 1 << i;
+            }
         }
-        let bound = _mm_add_epi32(_mm256_cvttpd_epi32(k), _mm_set1_epi32(1));
-        if edge.a > 0.0 {
-            lo = _mm_max_epi32(lo, bound);
-        } else {
-            hi = _mm_min_epi32(hi, bound);
+    }
+    for (i, (k, _)) in edges.iter().enumerate() {
+        if exact >> i & 1 == 0 {
+            let bound = _mm_add_epi32(_mm256_cvttpd_epi32(*k), _mm_set1_epi32(1));
+            if tri.edges[i].a > 0.0 {
+                lo = _mm_max_epi32(lo, bound);
+            } else {
+                hi = _mm_min_epi32(hi, bound);
+            }
         }
     }
     let mut spans = Spans { lo: [0; 4], hi: [0; 4], exact };
@@ -237,19 +255,14 @@ unsafe fn depth_bounds(plane: &DepthPlane, x: __m128i, y_term: __m256d) -> __m12
     round_far(_mm256_min_pd(at, _mm256_set1_pd(plane.zmax)))
 }
 
-/// [`super::round_far`] on four lanes: nudged farther, rounded to `f32`, one
-/// unit up where rounding went nearer and the result is not negative.
+/// [`super::round_far`] on four lanes: nudged farther, rounded to the nearest
+/// `f32`.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn round_far(depth: __m256d) -> __m128 {
     let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), depth);
-    let depth = _mm256_add_pd(_mm256_add_pd(depth, _mm256_mul_pd(abs, _mm256_set1_pd(1e-9))), _mm256_set1_pd(1e-12));
-    let d = _mm256_cvtpd_ps(depth);
-    let nearer = _mm256_castpd_si256(_mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_cvtps_pd(d), depth));
-    // The low half of each 64-bit comparison lane, packed into four 32-bit lanes.
-    let nearer = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(nearer, _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)));
-    let up = _mm_and_si128(nearer, _mm_castps_si128(_mm_cmpge_ps(d, _mm_setzero_ps())));
-    _mm_castsi128_ps(_mm_sub_epi32(_mm_castps_si128(d), up))
+    let nudge = _mm256_mul_pd(abs, _mm256_set1_pd(super::FAR_NUDGE));
+    _mm256_cvtpd_ps(_mm256_add_pd(_mm256_add_pd(depth, nudge), _mm256_set1_pd(1e-12)))
 }
 
 /// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each

@@ -70,7 +70,9 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
         let mut bound = [0i32; 4];
         for (r, b) in bound.iter_mut().enumerate() {
             let py = f64::from(y + r as i32) + 0.5;
-            let t = (edge.slope * py + edge.offset - 0.5).clamp(tri.t_min, tri.t_max);
+            // Clamped as the AVX2 `min` and `max` clamp (a NaN intercept
+            // becomes `t_max`; see there why its band then fails).
+            let t = (edge.slope * py + edge.offset - 0.5).min(tri.t_max).max(tri.t_min);
             let k = floor_in(t, tri.t_min, tri.t_max);
             let fraction = t - f64::from(k);
             if !(fraction > band && 1.0 - fraction > band) {
