@@ -103,11 +103,11 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 256.0;
+const MOC_TRIANGLE_NS: f64 = 207.0;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 17.7;
+const MOC_TILE_NS: f64 = 17.5;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 2104.0;
+const MOC_BOX_NS: f64 = 1476.0;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
