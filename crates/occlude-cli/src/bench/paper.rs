@@ -19,7 +19,8 @@
 //!   (default `modern`; the result hangs on what a box test costs, which
 //!   `occlude calibrate` measures); Table 1 (the
 //!   occlusion test's and the occludees' GPU time of ROC and IOC, each beside
-//!   the poster's figure) and Figure 4 (frame time of VFC, ROC, IOC and the
+//!   the poster's figure, and of two-phase Hi-Z, `hiz`, which the poster does
+//!   not have) and Figure 4 (frame time of VFC, ROC, IOC, `hiz` and the
 //!   ideal set; the poster gives that one as a chart, without figures, and
 //!   its NOCULL has no method here).
 //! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
@@ -303,7 +304,7 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
     for (&(scene_name, label), published) in IOC_SCENES.iter().zip(IOC_TABLE_1) {
         let config = BenchConfig {
             scene: scene_name.into(),
-            methods: ["vfc", "roc", "ioc", "opt"].map(String::from).to_vec(),
+            methods: ["vfc", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions { leaf_size: 1, ..base.build },
             // The user's model (default `modern`): the poster's result hangs
@@ -314,20 +315,26 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
         };
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
-        let report = run_labelled(&scene, &config, progress, "vfc, roc, ioc, opt")?;
+        let report = run_labelled(&scene, &config, progress, "vfc, roc, ioc, hiz, opt")?;
         let method = |name: &str| report.methods.iter().find(|m| m.name == name);
         let roc_test = method("roc").map_or(0.0, |m| m.cull_ms_per_frame);
         let shown = format!("{scene_name} ({label})");
-        for (name, (test, render)) in ["roc", "ioc"].into_iter().zip(published) {
+        // `hiz` (two-phase Hi-Z, not in the poster) beside ROC and IOC, with
+        // no published figure.
+        let rows = [("roc", Some(published[0])), ("ioc", Some(published[1])), ("hiz", None)];
+        for (name, poster) in rows {
             let Some(m) = method(name) else { continue };
+            let figure = |f: Option<f64>| f.map_or("-".to_string(), |f| format!("{f:.2}"));
+            let (test, render) = (figure(poster.map(|p| p.0)), figure(poster.map(|p| p.1)));
             let ratio = if name == "roc" || roc_test == 0.0 {
                 format!("{:>11}  {:>8}", "", "")
             } else {
-                format!("{:>11.2}  {:>8.2}", m.cull_ms_per_frame / roc_test, test / published[0].0)
+                let posters = figure(poster.map(|p| p.0 / published[0].0));
+                format!("{:>11.2}  {posters:>8}", m.cull_ms_per_frame / roc_test)
             };
             let _ = writeln!(
                 table,
-                "{shown:<14} {name:<6} {:>15.3}  {test:>8.2}  {:>18.3}  {render:>8.2}  {ratio}",
+                "{shown:<14} {name:<6} {:>15.3}  {test:>8}  {:>18.3}  {render:>8}  {ratio}",
                 m.cull_ms_per_frame, m.render_ms_per_frame,
             );
         }
@@ -452,7 +459,7 @@ mod tests {
             for m in &report.methods {
                 assert_eq!(m.missing_pixels, 0, "{scene}/{}", m.name);
             }
-            for method in ["roc", "ioc"] {
+            for method in ["roc", "ioc", "hiz"] {
                 let row = format!("{scene} ({label})");
                 let lines = result.text.lines().filter(|l| l.starts_with(&row) && l.contains(method)).count();
                 assert_eq!(lines, 2, "{scene}/{method}: a Table 1 row and a Figure 4 row\n{}", result.text);
