@@ -203,6 +203,26 @@ impl GpuModel {
         }
     }
 
+    /// GPU time of a draw before its fragments: the call's fixed cost
+    /// `call_us` (`gpu_draw_call_us`, or `gpu_indirect_draw_us` for a draw
+    /// from an indirect list) plus `gpu_triangle_ns` per triangle, µs. The
+    /// soft backend and the `--paper gvq` experiments charge draws by it.
+    pub fn draw_us(&self, call_us: f64, triangles: u64) -> f64 {
+        call_us + triangles as f64 * self.gpu_triangle_ns * 1e-3
+    }
+
+    /// GPU time of `fragments` drawn fragments, `gpu_fragment_ns` each, µs.
+    pub fn fragments_us(&self, fragments: u64) -> f64 {
+        fragments as f64 * self.gpu_fragment_ns * 1e-3
+    }
+
+    /// GPU work of a compute dispatch over `items` elements,
+    /// `gpu_compute_item_ns` each, on top of the dispatch's fixed
+    /// `gpu_dispatch_us`, µs.
+    pub fn compute_items_us(&self, items: u64) -> f64 {
+        items as f64 * self.gpu_compute_item_ns * 1e-3
+    }
+
     /// The costs of draws and queries this model charges, for methods
     /// that decide by cost whether a query pays (`nohc`).
     pub fn cost_model(&self) -> CostModel {

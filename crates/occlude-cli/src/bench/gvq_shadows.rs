@@ -435,10 +435,7 @@ impl Method {
                 f.draw(all_triangles, light_fragments);
                 for (&t, &frags) in p.object_triangles.iter().zip(&p.light_fragments) {
                     f.cpu_work(model.cpu_query_us);
-                    f.gpu(
-                        model.gpu_query_box_us
-                            + (t as f64 * model.gpu_triangle_ns + frags as f64 * model.gpu_query_fragment_ns) * 1e-3,
-                    );
+                    f.gpu(model.draw_us(model.gpu_query_box_us, t) + frags as f64 * model.gpu_query_fragment_ns * 1e-3);
                 }
                 let drawn = keep(&p.hardware);
                 for ((&d, &(t, frags)), &input) in drawn.iter().zip(&p.volumes).zip(&p.object_triangles) {

@@ -35,16 +35,14 @@ impl<'m> SimFrame<'m> {
     pub fn draw(&mut self, triangles: u64, fragments: u64) {
         let m = self.model;
         self.cpu_work(m.cpu_draw_call_us);
-        self.gpu(
-            m.gpu_draw_call_us + (triangles as f64 * m.gpu_triangle_ns + fragments as f64 * m.gpu_fragment_ns) * 1e-3,
-        );
+        self.gpu(m.draw_us(m.gpu_draw_call_us, triangles) + m.fragments_us(fragments));
     }
 
     /// A compute dispatch over `items`.
     pub fn dispatch(&mut self, items: u64) {
         let m = self.model;
         self.cpu_work(m.cpu_dispatch_us);
-        self.gpu(m.gpu_dispatch_us + items as f64 * m.gpu_compute_item_ns * 1e-3);
+        self.gpu(m.gpu_dispatch_us + m.compute_items_us(items));
     }
 
     /// `reads` texel reads of shaders' visibility tests (item-buffer bins,

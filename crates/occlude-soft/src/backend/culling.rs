@@ -43,7 +43,7 @@ impl SoftBackend<'_> {
     /// Charges one compute dispatch over `items` elements, after everything
     /// recorded before it has run.
     fn dispatch(&mut self, items: usize) {
-        self.dispatch_costing(items as f64 * self.model.gpu_compute_item_ns * 1e-3);
+        self.dispatch_costing(self.model.compute_items_us(items as u64));
     }
 
     /// Charges one compute dispatch doing `work_us` of GPU work, after

@@ -254,7 +254,7 @@ impl<'s> SoftBackend<'s> {
         self.push_instance_triangles(i);
         let op = GpuOp {
             issued_us: self.clock.cpu,
-            fixed_us: fixed_us + triangles as f64 * self.model.gpu_triangle_ns * 1e-3,
+            fixed_us: self.model.draw_us(fixed_us, triangles),
             fragment_ns: self.model.gpu_fragment_ns,
             passed_ns: 0.0,
             query: None,
