@@ -121,12 +121,7 @@ impl CullingScene {
     /// Builds the pipelines and uploads the per-instance data of `scene`.
     pub fn new(gpu: &GpuScene, scene: &Scene) -> Self {
         let device = &gpu.ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("occlude culling shaders"),
-            source: wgpu::ShaderSource::Wgsl(
-                concat!(include_str!("cull.wgsl"), include_str!("cull_fragments.wgsl")).into(),
-            ),
-        });
+        let module = cull_module(device, true);
         let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
             .instances
@@ -704,6 +699,22 @@ impl Culling {
             drawn: words[4..].to_vec(),
         }))
     }
+}
+
+/// The culling shaders: `cull.wgsl`, with `cull_fragments.wgsl` appended
+/// when `fragments` (box tests and counted queries rasterize; the device
+/// must have `SHADER_EARLY_DEPTH_TEST`); the compute passes alone need only
+/// `cull.wgsl`.
+pub(crate) fn cull_module(device: &wgpu::Device, fragments: bool) -> wgpu::ShaderModule {
+    let source = if fragments {
+        concat!(include_str!("cull.wgsl"), include_str!("cull_fragments.wgsl"))
+    } else {
+        include_str!("cull.wgsl")
+    };
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("occlude culling shaders"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
 }
 
 /// Writes the culling camera uniform `buffer` (`Cull` of `cull.wgsl`) for

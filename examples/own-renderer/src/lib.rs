@@ -12,7 +12,7 @@
 //! the README).
 
 use glam::{Mat4, Vec3};
-use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS};
+use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, RASTER_FEATURES};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -88,7 +88,11 @@ pub struct Renderer {
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))?;
-    Ok(pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))?)
+    // occlude: the features `roc` needs (forced early depth tests), where the adapter has them.
+    let required_features = adapter.features() & RASTER_FEATURES;
+    // occlude: end.
+    let descriptor = wgpu::DeviceDescriptor { required_features, ..Default::default() };
+    Ok(pollster::block_on(adapter.request_device(&descriptor))?)
 }
 
 impl Renderer {

@@ -233,12 +233,13 @@
 //! [`FrameStats::wait_ms`]: occlude_core::FrameStats::wait_ms
 
 mod backend;
+mod box_tests;
 mod culler;
 mod gpu_culler;
 
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
-pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS};
+pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS, RASTER_FEATURES};
 
 use occlude_core::methods::MethodError;
 use occlude_core::SceneError;
