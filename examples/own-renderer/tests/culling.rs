@@ -1,5 +1,5 @@
 //! The example renderer with occlude's culling on (the query-driven methods
-//! through `Culler`, `hiz` through `GpuCuller`) draws fewer instances than
+//! through `Culler`, `hiz` and `roc` through `GpuCuller`) draws fewer instances than
 //! with culling off, and its images are the same, bit for bit (colour and
 //! depth), on every frame of a moving camera, with forward and with reverse
 //! Z (with `Depth24Plus`, whose depth cannot be read back, the colour); and
@@ -35,7 +35,7 @@ fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
 /// Renders the walk with culling off and with each method (query-driven and
 /// GPU-driven), comparing every frame's images (the depth image where it
 /// can be read back), and checks that `chcpp` draws fewer instances than
-/// culling off on every frame, and `hiz` fewer than `vfc` (frustum culling)
+/// culling off on every frame, and `hiz` and `roc` fewer than `vfc` (frustum culling)
 /// from the third frame on: its first frame has no depth to test against
 /// and draws every instance in the frustum, its second draws those again
 /// in its early pass.

@@ -303,7 +303,12 @@ fn query_group(
 /// (reverse Z as it is; for a look-at camera
 /// [`Camera::view_projection`]), the boxes pulled towards the eye by
 /// [`QUERY_DEPTH_BIAS`] in the attachments' depth order.
-pub(super) fn write_query_camera(queue: &wgpu::Queue, buffer: &wgpu::Buffer, camera: &Camera, attachments: &Attachments) {
+pub(super) fn write_query_camera(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    camera: &Camera,
+    attachments: &Attachments,
+) {
     let clip = match camera.matrices {
         Some(m) => m.projection * m.view,
         None => camera.view_projection(),

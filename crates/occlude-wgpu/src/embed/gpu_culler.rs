@@ -15,8 +15,8 @@ use super::box_tests::{BoxTest, BoxTests, TestInputs};
 use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
 use crate::culling::{
-    bind_group, box_set_buffer, cull_camera_buffer, cull_module, dispatch_reductions, param_buffer, storage_init, workgroups,
-    write_cull_camera, PyramidBuffers,
+    bind_group, box_set_buffer, cull_camera_buffer, cull_module, dispatch_reductions, param_buffer, storage_init,
+    workgroups, write_cull_camera, PyramidBuffers,
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
