@@ -192,9 +192,20 @@ struct ListBuffer {
 }
 
 /// A range table: ranges as `(first, count)` pairs, and the items.
-struct TableBuffers {
-    ranges: wgpu::Buffer,
-    items: wgpu::Buffer,
+pub(crate) struct TableBuffers {
+    pub ranges: wgpu::Buffer,
+    pub items: wgpu::Buffer,
+}
+
+impl TableBuffers {
+    /// The table giving id `k` the items `items[ranges[k]]`, uploaded.
+    pub fn new(ctx: &GpuContext, ranges: &[ItemRange], items: &[u32]) -> Self {
+        let pairs: Vec<[u32; 2]> = ranges.iter().map(|r| [r.first, r.count]).collect();
+        let empty = wgpu::BufferUsages::empty();
+        let ranges = storage_init(ctx, "table ranges", bytemuck::cast_slice(&pairs), empty);
+        let items = storage_init(ctx, "table items", bytemuck::cast_slice(items), empty);
+        Self { ranges, items }
+    }
 }
 
 /// A depth pyramid: its levels one after the other in `texels` (level 0 with
@@ -384,11 +395,8 @@ impl Culling {
 
     /// A table giving id `k` the items `items[ranges[k]]`.
     pub fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
-        let pairs: Vec<[u32; 2]> = ranges.iter().map(|r| [r.first, r.count]).collect();
-        let empty = wgpu::BufferUsages::empty();
-        let ranges = storage_init(self.ctx(), "table ranges", bytemuck::cast_slice(&pairs), empty);
-        let items = storage_init(self.ctx(), "table items", bytemuck::cast_slice(items), empty);
-        self.tables.push(TableBuffers { ranges, items });
+        let table = TableBuffers::new(self.ctx(), ranges, items);
+        self.tables.push(table);
         RangeTable(self.tables.len() as u32 - 1)
     }
 

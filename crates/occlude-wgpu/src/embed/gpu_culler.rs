@@ -12,6 +12,7 @@
 
 use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
+use super::node_levels::{NodeLevels, WalkInputs};
 use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
 use crate::culling::{
@@ -20,16 +21,18 @@ use crate::culling::{
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
+use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::hiz::HizParams;
+use occlude_core::methods::ioc::{IocParams, IocWalk};
 use occlude_core::methods::{MethodError, MethodOptions};
-use occlude_core::{Aabb, Camera, Scene};
+use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
 
 /// The methods [`GpuCuller`] runs: `hiz`, whose every step is a compute
 /// pass over the renderer's depth, and `roc`, whose box tests rasterize
 /// the boxes against the renderer's depth texture with a fragment stage
 /// writing flags (its device needs [`RASTER_FEATURES`]). `ioc` (`roc` over
 /// a BVH, level by level) is not embedded.
-pub const GPU_METHODS: [&str; 2] = ["hiz", "roc"];
+pub const GPU_METHODS: [&str; 3] = ["hiz", "roc", "ioc"];
 
 /// The device features `roc` needs in a [`GpuCuller`] (checked only for
 /// it): forced early depth tests, so that a box's fragments set its flag
@@ -180,7 +183,10 @@ enum LateTest {
     Pyramid(PyramidTest),
     /// `roc`: every instance's box rasterized against the depth texture,
     /// its test's groups for flag parity 0 and 1.
-    Raster(BoxTests, [BoxTest; 2]),
+    Every(BoxTests, [BoxTest; 2]),
+    /// `ioc`: the BVH's node boxes rasterized level by level, then the
+    /// instances marked visible outside the frustum dropped.
+    Nodes(BoxTests, NodeLevels),
 }
 
 /// Two-phase GPU-driven culling (`hiz`, `roc`) in a renderer's own passes:
@@ -233,10 +239,11 @@ impl GpuCuller {
             return Err(EmbedError::Unsupported(method.to_string()));
         }
         let raster = method != "hiz";
+        let options = MethodOptions::default();
         let reach = if raster {
             0
         } else {
-            HizParams::read(&mut MethodOptions::default().for_method(method)).map_err(MethodError::from)?.texels
+            HizParams::read(&mut options.for_method(method)).map_err(MethodError::from)?.texels
         };
         attachments.check()?;
         check_device(device, raster)?;
@@ -280,14 +287,24 @@ impl GpuCuller {
         let compact_late = compute("cs_compact_unless");
         let late_groups =
             parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &lists[1].ids)]);
-        let late = if raster {
+        let late = if method == "ioc" {
+            let params = IocParams::read(&mut options.for_method(method)).map_err(MethodError::from)?;
+            let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
+            let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
+            // Depths past the tree's are clamped to it, as `ioc` does
+            // (IocWalk::warnings say so; the embedding runs the defaults).
+            let walk = IocWalk::new(&params, &hierarchy);
+            let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
+            let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
+            LateTest::Nodes(tests, levels)
+        } else if raster {
             let tests = BoxTests::new(&ctx, &attachments, &module, n);
             let every = [0, 1].map(|p| {
                 let inputs =
                     TestInputs { cull_camera: &camera, boxes: &boxes, ids: (&all, n), flags: &flags[p], stats: &stats };
                 tests.test(&ctx, inputs)
             });
-            LateTest::Raster(tests, every)
+            LateTest::Every(tests, every)
         } else {
             LateTest::Pyramid(PyramidTest {
                 base: compute("cs_pyramid_base"),
@@ -415,14 +432,24 @@ impl GpuCuller {
         // Every box tested against that depth, this frame's flags set.
         match &self.late {
             LateTest::Pyramid(_) => self.encode_pyramid_test(&mut encoder, target.depth, now),
-            LateTest::Raster(tests, every) => {
+            LateTest::Every(tests, every) => {
                 tests.set_camera(&self.ctx.queue, camera, &self.attachments);
                 tests.encode(&mut encoder, &target, &self.attachments, &every[now]);
+            }
+            LateTest::Nodes(tests, levels) => {
+                tests.set_camera(&self.ctx.queue, camera, &self.attachments);
+                levels.encode(&mut encoder, tests, &target, &self.attachments, now);
             }
         }
         // The late list: visible now, not drawn early.
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
+            if matches!(self.late, LateTest::Nodes(..)) {
+                // `ioc.frustum`: the instances below a visible node that lie
+                // outside the frustum (the drop's groups of parity `before`
+                // clear this frame's flags).
+                dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instances);
+            }
             dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instances);
         }
         self.copy_count(&mut encoder, 1);

@@ -258,6 +258,7 @@ mod backend;
 mod box_tests;
 mod culler;
 mod gpu_culler;
+mod node_levels;
 
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
