@@ -368,7 +368,7 @@ fn subtree_table(h: &Hierarchy) -> TableData {
 mod tests {
     use super::*;
     use crate::methods::test_rig::{
-        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, assert_walks_top_down,
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, assert_walks_top_down, Rig,
     };
     use crate::methods::MethodOptions;
 
@@ -395,6 +395,43 @@ mod tests {
         for bad in ["ioc.start=-1", "ioc.bottom=deep", "ioc.bottom=deepest-", "ioc.start=deepest+1"] {
             assert!(read(&[bad]).is_err(), "{bad} accepted");
         }
+    }
+
+    /// The walk as data describes the hierarchy: the start list is the
+    /// nodes at the start depth and the leaves above it; each node's
+    /// children, a leaf's instances and every instance below each node are
+    /// its ranges of the tables; depths past the tree's are clamped, with
+    /// a warning.
+    #[test]
+    fn the_walk_as_data_lists_the_start_and_each_nodes_children_leaf_and_subtree() {
+        let rig = Rig::row(16);
+        let h = &rig.hierarchy;
+        let walk = IocWalk::new(&read(&["ioc.start=2", "ioc.bottom=deepest"]).unwrap(), h);
+        assert_eq!(walk.depths, (2, h.max_depth()));
+        assert!(walk.warnings.is_empty(), "{:?}", walk.warnings);
+        let items = |t: &TableData, n: NodeId| {
+            let r = t.ranges[n as usize];
+            let mut items = t.items[r.first as usize..(r.first + r.count) as usize].to_vec();
+            items.sort_unstable();
+            items
+        };
+        for n in 0..h.node_count() as NodeId {
+            let depth = h.node(n).depth;
+            assert_eq!(walk.start.contains(&n), depth == 2 || (h.is_leaf(n) && depth < 2), "node {n}");
+            assert_eq!(items(&walk.children, n), h.children(n), "node {n}");
+            assert_eq!(items(&walk.leaf_instances, n), h.instances(n), "node {n}");
+            let (mut below, mut stack) = (Vec::new(), vec![n]);
+            while let Some(m) = stack.pop() {
+                below.extend_from_slice(h.instances(m));
+                stack.extend_from_slice(h.children(m));
+            }
+            below.sort_unstable();
+            assert_eq!(items(&walk.subtree_instances, n), below, "node {n}");
+        }
+        assert_eq!(items(&walk.subtree_instances, h.root()).len(), rig.scene.instances.len());
+        let clamped = IocWalk::new(&read(&["ioc.start=40"]).unwrap(), h);
+        assert_eq!(clamped.depths, (h.max_depth() - 2, h.max_depth() - 2));
+        assert_eq!(clamped.warnings.len(), 2, "{:?}", clamped.warnings);
     }
 
     #[test]
