@@ -1,5 +1,5 @@
 //! The example renderer with occlude's culling on (the query-driven methods
-//! through `Culler`, `hiz` and `roc` through `GpuCuller`) draws fewer instances than
+//! through `Culler`, `hiz`, `roc` and `ioc` through `GpuCuller`) draws fewer instances than
 //! with culling off, and its images are the same, bit for bit (colour and
 //! depth), on every frame of a moving camera, with forward and with reverse
 //! Z (with `Depth24Plus`, whose depth cannot be read back, the colour); and
@@ -35,7 +35,7 @@ fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
 /// Renders the walk with culling off and with each method (query-driven and
 /// GPU-driven), comparing every frame's images (the depth image where it
 /// can be read back), and checks that `chcpp` draws fewer instances than
-/// culling off on every frame, and `hiz` and `roc` fewer than `vfc` (frustum culling)
+/// culling off on every frame, and `hiz`, `roc` and `ioc` fewer than `vfc` (frustum culling)
 /// from the third frame on: its first frame has no depth to test against
 /// and draws every instance in the frustum, its second draws those again
 /// in its early pass.
@@ -271,12 +271,12 @@ fn the_gpu_driven_embedding_draws_its_lists(device: &wgpu::Device, queue: &wgpu:
     assert_eq!(setups, 6);
 }
 
-/// `roc` on a device opened without `SHADER_EARLY_DEPTH_TEST` (as wgpu
-/// opens one by default) is refused, naming the feature; `hiz`, which
-/// needs no feature, runs there.
+/// `roc` and `ioc` on a device opened without `SHADER_EARLY_DEPTH_TEST`
+/// (as wgpu opens one by default) are refused, naming the feature; `hiz`,
+/// which needs no feature, runs there.
 #[test]
-fn roc_is_refused_on_a_device_without_forced_early_depth_tests() {
-    if device("roc_is_refused_on_a_device_without_forced_early_depth_tests").is_none() {
+fn box_tests_are_refused_on_a_device_without_forced_early_depth_tests() {
+    if device("box_tests_are_refused_on_a_device_without_forced_early_depth_tests").is_none() {
         return;
     }
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -286,9 +286,11 @@ fn roc_is_refused_on_a_device_without_forced_early_depth_tests() {
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let new = |method| GpuCuller::new(&device, &queue, attachments, &bounds, method, draw);
-    match new("roc").err() {
-        Some(EmbedError::Adapter(message)) => assert!(message.contains("SHADER_EARLY_DEPTH_TEST"), "{message}"),
-        other => panic!("roc without the feature: {other:?}"),
+    for method in ["roc", "ioc"] {
+        match new(method).err() {
+            Some(EmbedError::Adapter(message)) => assert!(message.contains("SHADER_EARLY_DEPTH_TEST"), "{message}"),
+            other => panic!("{method} without the feature: {other:?}"),
+        }
     }
     assert!(new("hiz").is_ok());
 }

@@ -1,14 +1,17 @@
 //! [`GpuCuller`]: two-phase GPU-driven culling in a renderer's own passes,
 //! its visibility never leaving the GPU: Hi-Z (`hiz`,
-//! [`occlude_core::methods::hiz`]) or raster occlusion culling (`roc`,
-//! [`occlude_core::methods::roc`]; IOC poster, section 1). Each frame
+//! [`occlude_core::methods::hiz`]), raster occlusion culling (`roc`,
+//! [`occlude_core::methods::roc`]; IOC poster, section 1) or its
+//! hierarchical form (`ioc`, [`occlude_core::methods::ioc`]; IOC poster,
+//! section 2). Each frame
 //! occlude writes two lists of visible instance ids (the early pass's and
 //! the late pass's) with an indirect draw's arguments each, and the
 //! renderer draws each list with one indirect draw of its own. The compute
 //! shaders are `cull.wgsl`'s, as the wgpu backend's GPU-resident culling
 //! runs them (frustum drop, compaction, pyramid reduction and pyramid box
 //! test), plus `cs_pyramid_base`, which reads level 0 from the renderer's
-//! depth texture; `roc`'s box tests are the backend's too (`box_tests.rs`).
+//! depth texture; `roc`'s and `ioc`'s box tests are the backend's too
+//! (`box_tests.rs`), `ioc`'s walk is `node_levels.rs`.
 
 use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
@@ -28,14 +31,14 @@ use occlude_core::methods::{MethodError, MethodOptions};
 use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
 
 /// The methods [`GpuCuller`] runs: `hiz`, whose every step is a compute
-/// pass over the renderer's depth, and `roc`, whose box tests rasterize
-/// the boxes against the renderer's depth texture with a fragment stage
-/// writing flags (its device needs [`RASTER_FEATURES`]). `ioc` (`roc` over
-/// a BVH, level by level) is not embedded.
+/// pass over the renderer's depth, and `roc` and `ioc` (`roc` over a BVH
+/// of the boxes, level by level), whose box tests rasterize the boxes
+/// against the renderer's depth texture with a fragment stage writing
+/// flags (their device needs [`RASTER_FEATURES`]).
 pub const GPU_METHODS: [&str; 3] = ["hiz", "roc", "ioc"];
 
-/// The device features `roc` needs in a [`GpuCuller`] (checked only for
-/// it): forced early depth tests, so that a box's fragments set its flag
+/// The device features `roc` and `ioc` need in a [`GpuCuller`] (checked
+/// only for them): forced early depth tests, so that a box's fragments set its flag
 /// only where they passed the depth test.
 pub const RASTER_FEATURES: wgpu::Features = wgpu::Features::SHADER_EARLY_DEPTH_TEST;
 
@@ -189,7 +192,7 @@ enum LateTest {
     Nodes(BoxTests, NodeLevels),
 }
 
-/// Two-phase GPU-driven culling (`hiz`, `roc`) in a renderer's own passes:
+/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own passes:
 /// give it the renderer's device, attachments, per-instance boxes and how
 /// it draws an instance once; each frame, the camera, the frame's views and
 /// a callback that draws a [`VisibleList`] with one indirect draw.
@@ -225,7 +228,7 @@ impl GpuCuller {
     /// parameters) on the renderer's `device` and `queue`, whose passes
     /// draw into `attachments`, each instance drawn as `draw` says. A
     /// method that does not run here, bad boxes or attachments, or a device
-    /// without what the method needs (compute passes; for `roc` also
+    /// without what the method needs (compute passes; for `roc` and `ioc` also
     /// `SHADER_EARLY_DEPTH_TEST`) are an error.
     pub fn new(
         device: &wgpu::Device,
@@ -390,7 +393,9 @@ impl GpuCuller {
     /// one submission: the early list is written and `draw(pass, list)`
     /// draws it in a pass that clears the views; every instance's box is
     /// tested against that depth (`hiz`: a depth pyramid built from the
-    /// depth texture; `roc`: the boxes rasterized in a pass of their own);
+    /// depth texture; `roc`: the boxes rasterized in a pass of their own;
+    /// `ioc`: the BVH's node boxes so, level by level, then the instances
+    /// outside the frustum dropped);
     /// the late list is written and `draw` draws it in a pass that loads
     /// them. Nothing comes back to the CPU. Views that are not what the
     /// attachments say, for `hiz` a depth texture without
@@ -601,7 +606,7 @@ fn check_device(device: &wgpu::Device, raster: bool) -> Result<(), EmbedError> {
     if lacks.is_empty() {
         Ok(())
     } else {
-        let which = if raster { "GPU-driven culling with box tests (roc)" } else { "GPU-driven culling" };
+        let which = if raster { "GPU-driven culling with box tests (roc, ioc)" } else { "GPU-driven culling" };
         Err(EmbedError::Adapter(format!("the device lacks {}, which {which} needs", lacks.join(" and "))))
     }
 }
