@@ -178,7 +178,6 @@ fn texture_view(
 fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_gpu_driven_embedding_refuses_what_it_cannot_cull") else { return };
     let (attachments, bounds) = one_box();
-    let depth_format = attachments.depth;
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let new =
         |attachments, bounds: &[Aabb], method| GpuCuller::new(&device, &queue, attachments, bounds, method, draw).err();

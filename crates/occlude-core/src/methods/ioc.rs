@@ -2,7 +2,7 @@
 //! Figure 2): raster occlusion culling (`roc`) applied to the nodes of the
 //! hierarchy level by level instead of to every object.
 //!
-//! Per frame, on [`GpuCulling`]: last frame's potentially visible objects are
+//! Per frame, on [`GpuCulling`](crate::GpuCulling): last frame's potentially visible objects are
 //! drawn (the occluders). Then, from the start depth to the bottom depth, one
 //! batch tests the boxes of the level's nodes against that depth. A culled
 //! node ends the descent: nothing below it is marked, so its whole subtree
@@ -285,7 +285,7 @@ impl CullingMethod for IterativeOcclusion {
         });
     }
 
-    /// A backend without [`GpuCulling`] (which the runner refuses first)
+    /// A backend without [`GpuCulling`](crate::GpuCulling) (which the runner refuses first)
     /// gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let Some(r) = self.resources.as_mut().filter(|_| backend.gpu_culling().is_ok()) else {
