@@ -188,17 +188,27 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
         assert!(matches!(new(attachments, &[], method), Some(EmbedError::Scene(_))), "{method}");
         let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
         assert!(matches!(new(always, &bounds, method), Some(EmbedError::Attachments(_))), "{method}");
-        the_gpu_driven_embedding_draws_its_lists(&device, &queue, method);
+        // A depth-stencil format too: roc's and ioc's box tests hold its
+        // stencil read-only as well.
+        for depth in [wgpu::TextureFormat::Depth32Float, wgpu::TextureFormat::Depth24PlusStencil8] {
+            the_gpu_driven_embedding_draws_its_lists(&device, &queue, method, depth);
+        }
     }
 }
 
-/// `method` through a [`GpuCuller`] on the one-box scene: refusals of a
-/// pipeline that cannot read the list, of a depth texture `hiz` cannot read
-/// and of a camera of the wrong depth order; then the box's way through
-/// the lists, drawn by the renderer and by occlude.
-fn the_gpu_driven_embedding_draws_its_lists(device: &wgpu::Device, queue: &wgpu::Queue, method: &str) {
+/// `method` through a [`GpuCuller`] on the one-box scene, depth format
+/// `depth_format`: refusals of a pipeline that cannot read the list, of a
+/// depth texture `hiz` cannot read and of a camera of the wrong depth
+/// order; then the box's way through the lists, drawn by the renderer and
+/// by occlude.
+fn the_gpu_driven_embedding_draws_its_lists(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    method: &str,
+    depth_format: wgpu::TextureFormat,
+) {
     let (attachments, bounds) = one_box();
-    let depth_format = attachments.depth;
+    let attachments = Attachments { depth: depth_format, ..attachments };
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     // A group the pipeline does not have, or whose entry is not a storage
     // buffer at that binding: an error.
