@@ -145,9 +145,9 @@
 //! final image is at that pixel no farther than the early pass's depth,
 //! so its box (which holds it, padded and pulled towards the eye as query
 //! boxes are) passes `roc`'s depth test there (as does the box of every
-//! node above it, for `ioc`), and is not hidden by `hiz`'s pyramid, whose texels are at least the
-//! farthest depth of the pixels they cover (the proof is
-//! [`occlude_core::depth_pyramid`]'s). Your depth texture is read into
+//! node above it, for `ioc`), and is not hidden by `hiz`'s pyramid, whose
+//! texels are at least the farthest depth of the pixels they cover (the
+//! proof is [`occlude_core::depth_pyramid`]'s). Your depth texture is read into
 //! level 0 with two changes: reverse Z is turned into depth 0 nearest
 //! (`1 - d`), and each texel is taken 2^-22 farther, which covers both a
 //! 24-bit depth buffer's rounding of the fragments' depth and the rounding
@@ -163,22 +163,22 @@
 //!   over its texels); for `roc` a render pass of its own drawing every
 //!   box in the frustum (12 triangles each, their fragments tested against
 //!   your depth: fill rate grows with the boxes' screen area); for `ioc`
-//!   per level of the walk such a pass over that level's node boxes and
-//!   two dispatches over the nodes, and one more dispatch over the nodes
-//!   and one over the instances. One
-//!   submission; nothing is read back, so the CPU never waits for the GPU.
+//!   per level of the walk a dispatch over the nodes and such a pass
+//!   drawing the level's node boxes in the frustum, two dispatches over
+//!   the nodes between levels and one after the last. One submission;
+//!   nothing is read back, so the CPU never waits for the GPU.
 //! - **Memory:** per instance a 32-byte box, two flag words and three list
 //!   entries; `hiz`'s pyramid is about 4/3 of a 32-bit depth image, `roc`
 //!   keeps a second 32-byte box per instance (the boxes to draw); `ioc`
 //!   per node (about two per instance) two boxes, a flag, three list
 //!   entries and table entries.
 //! - **Latency of visibility:** an instance hidden last frame and visible
-//!   now is drawn in the late pass of this frame, after the pyramid: never
-//!   missing, but its draw waits for the pyramid.
+//!   now is drawn in the late pass of this frame, after the late test:
+//!   never missing, but its draw waits for the test.
 //! - **Warm-up:** the first frame has no visible set from a frame before,
-//!   so its pyramid (or for `roc` and `ioc` its depth) is empty and it draws every
-//!   instance in the frustum;
-//!   the second frame draws those again in its early pass. Occlusion
+//!   so its pyramid (or for `roc` and `ioc` its depth) is empty and it
+//!   draws every instance in the frustum; the second frame draws those
+//!   again in its early pass. Occlusion
 //!   shows from the third frame on, and again two frames after a camera
 //!   cut (in the example, 2,717 of 3,603 instances in frames 0 and 1,
 //!   then for `hiz` about 130 to 270 a frame, `roc` 30 to 140, `ioc` 130
