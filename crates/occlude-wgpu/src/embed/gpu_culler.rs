@@ -3,10 +3,10 @@
 //! [`occlude_core::methods::hiz`]), raster occlusion culling (`roc`,
 //! [`occlude_core::methods::roc`]; IOC poster, section 1) or its
 //! hierarchical form (`ioc`, [`occlude_core::methods::ioc`]; IOC poster,
-//! section 2). Each frame
-//! occlude writes two lists of visible instance ids (the early pass's and
-//! the late pass's) with an indirect draw's arguments each, and the
-//! renderer draws each list with one indirect draw of its own. The compute
+//! section 2). Each frame occlude writes two lists of visible instance ids
+//! (the early pass's and the late pass's) with an indirect draw's
+//! arguments each, and the renderer draws each list with one indirect draw
+//! of its own. The compute
 //! shaders are `cull.wgsl`'s, as the wgpu backend's GPU-resident culling
 //! runs them (frustum drop, compaction, pyramid reduction and pyramid box
 //! test), plus `cs_pyramid_base`, which reads level 0 from the renderer's
@@ -38,8 +38,8 @@ use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
 pub const GPU_METHODS: [&str; 3] = ["hiz", "roc", "ioc"];
 
 /// The device features `roc` and `ioc` need in a [`GpuCuller`] (checked
-/// only for them): forced early depth tests, so that a box's fragments set its flag
-/// only where they passed the depth test.
+/// only for them): forced early depth tests, so that a box's fragments set
+/// its flag only where they passed the depth test.
 pub const RASTER_FEATURES: wgpu::Features = wgpu::Features::SHADER_EARLY_DEPTH_TEST;
 
 /// The storage buffers `cs_test_boxes_pyramid`, the culling shader using
@@ -192,9 +192,9 @@ enum LateTest {
     Nodes(BoxTests, NodeLevels),
 }
 
-/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own passes:
-/// give it the renderer's device, attachments, per-instance boxes and how
-/// it draws an instance once; each frame, the camera, the frame's views and
+/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
+/// passes: give it the renderer's device, attachments, per-instance boxes
+/// and how it draws an instance once; each frame, the camera, the frame's views and
 /// a callback that draws a [`VisibleList`] with one indirect draw.
 pub struct GpuCuller {
     ctx: GpuContext,
@@ -228,8 +228,8 @@ impl GpuCuller {
     /// parameters) on the renderer's `device` and `queue`, whose passes
     /// draw into `attachments`, each instance drawn as `draw` says. A
     /// method that does not run here, bad boxes or attachments, or a device
-    /// without what the method needs (compute passes; for `roc` and `ioc` also
-    /// `SHADER_EARLY_DEPTH_TEST`) are an error.
+    /// without what the method needs (compute passes; for `roc` and `ioc`
+    /// also `SHADER_EARLY_DEPTH_TEST`) are an error.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
