@@ -79,6 +79,16 @@ pub struct ItemRange {
     pub count: u32,
 }
 
+/// A range table's contents before upload: id `k`'s items are
+/// `items[ranges[k]]` ([`GpuCulling::create_table`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TableData {
+    /// Per id, its range of `items`.
+    pub ranges: Vec<ItemRange>,
+    /// The items.
+    pub items: Vec<u32>,
+}
+
 /// Why a backend cannot run GPU-resident culling: the device lacks a
 /// feature, named in the message. Like a missing adapter, a user's matter
 /// (the command line maps it to exit code 2).

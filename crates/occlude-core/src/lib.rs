@@ -80,7 +80,7 @@ pub use cost_model::CostModel;
 pub use frame::{differing_pixels, render_frame};
 pub use geometry::Aabb;
 pub use gpu_culling::{
-    BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable,
+    BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable, TableData,
 };
 pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
 pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, QueryMode, NO_ITEM};

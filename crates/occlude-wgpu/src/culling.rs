@@ -121,12 +121,7 @@ impl CullingScene {
     /// Builds the pipelines and uploads the per-instance data of `scene`.
     pub fn new(gpu: &GpuScene, scene: &Scene) -> Self {
         let device = &gpu.ctx.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("occlude culling shaders"),
-            source: wgpu::ShaderSource::Wgsl(
-                concat!(include_str!("cull.wgsl"), include_str!("cull_fragments.wgsl")).into(),
-            ),
-        });
+        let module = cull_module(device, true);
         let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let draws: Vec<[u32; 4]> = scene
             .instances
@@ -197,9 +192,20 @@ struct ListBuffer {
 }
 
 /// A range table: ranges as `(first, count)` pairs, and the items.
-struct TableBuffers {
-    ranges: wgpu::Buffer,
-    items: wgpu::Buffer,
+pub(crate) struct TableBuffers {
+    pub ranges: wgpu::Buffer,
+    pub items: wgpu::Buffer,
+}
+
+impl TableBuffers {
+    /// The table giving id `k` the items `items[ranges[k]]`, uploaded.
+    pub fn new(ctx: &GpuContext, ranges: &[ItemRange], items: &[u32]) -> Self {
+        let pairs: Vec<[u32; 2]> = ranges.iter().map(|r| [r.first, r.count]).collect();
+        let empty = wgpu::BufferUsages::empty();
+        let ranges = storage_init(ctx, "table ranges", bytemuck::cast_slice(&pairs), empty);
+        let items = storage_init(ctx, "table items", bytemuck::cast_slice(items), empty);
+        Self { ranges, items }
+    }
 }
 
 /// A depth pyramid: its levels one after the other in `texels` (level 0 with
@@ -389,11 +395,8 @@ impl Culling {
 
     /// A table giving id `k` the items `items[ranges[k]]`.
     pub fn create_table(&mut self, ranges: &[ItemRange], items: &[u32]) -> RangeTable {
-        let pairs: Vec<[u32; 2]> = ranges.iter().map(|r| [r.first, r.count]).collect();
-        let empty = wgpu::BufferUsages::empty();
-        let ranges = storage_init(self.ctx(), "table ranges", bytemuck::cast_slice(&pairs), empty);
-        let items = storage_init(self.ctx(), "table items", bytemuck::cast_slice(items), empty);
-        self.tables.push(TableBuffers { ranges, items });
+        let table = TableBuffers::new(self.ctx(), ranges, items);
+        self.tables.push(table);
         RangeTable(self.tables.len() as u32 - 1)
     }
 
@@ -704,6 +707,22 @@ impl Culling {
             drawn: words[4..].to_vec(),
         }))
     }
+}
+
+/// The culling shaders: `cull.wgsl`, with `cull_fragments.wgsl` appended
+/// when `fragments` (box tests and counted queries rasterize; the device
+/// must have `SHADER_EARLY_DEPTH_TEST`); the compute passes alone need only
+/// `cull.wgsl`.
+pub(crate) fn cull_module(device: &wgpu::Device, fragments: bool) -> wgpu::ShaderModule {
+    let source = if fragments {
+        concat!(include_str!("cull.wgsl"), include_str!("cull_fragments.wgsl"))
+    } else {
+        include_str!("cull.wgsl")
+    };
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("occlude culling shaders"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
 }
 
 /// Writes the culling camera uniform `buffer` (`Cull` of `cull.wgsl`) for

@@ -102,7 +102,9 @@ pub(crate) struct Variant<'a> {
     pub label: &'a str,
     pub vertex_entry: &'a str,
     pub fragment_entry: &'a str,
-    /// Module of the fragment entry, when not the scene shaders'.
+    /// Module of the fragment entry, when not the scene shaders': the
+    /// culling fragments (`cull_fragments.wgsl`), which write storage, so
+    /// their stage is kept even without a colour target.
     pub fragment_module: Option<&'a wgpu::ShaderModule>,
     pub instance_vertices: bool,
     pub depth_write: bool,
@@ -288,12 +290,14 @@ pub(crate) fn build_pipeline(
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        // Without a colour target, a depth-only pipeline (no fragment stage).
-        fragment: targets.color.map(|_| wgpu::FragmentState {
+        // Without a colour target, a depth-only pipeline (no fragment stage),
+        // unless its fragments write storage; their colour output is then
+        // ignored.
+        fragment: (targets.color.is_some() || v.fragment_module.is_some()).then(|| wgpu::FragmentState {
             module: v.fragment_module.unwrap_or(module),
             entry_point: Some(v.fragment_entry),
             compilation_options: Default::default(),
-            targets: color_targets,
+            targets: if targets.color.is_some() { color_targets } else { &[] },
         }),
         multiview_mask: None,
         cache: None,

@@ -4,15 +4,15 @@
 //! culling off it draws every box in one instanced draw; with culling on,
 //! occlude's `chcpp` (`occlude::wgpu::embed::Culler`) decides which boxes
 //! to draw and calls this renderer's draw code for them, inside its own
-//! passes on this renderer's device and attachments; or occlude's `hiz`
-//! (`occlude::wgpu::embed::GpuCuller`) writes the visible boxes' ids into
+//! passes on this renderer's device and attachments; or occlude's `hiz`,
+//! `roc` or `ioc` (`occlude::wgpu::embed::GpuCuller`) writes the visible boxes' ids into
 //! lists on the GPU, which this renderer draws with one indirect draw each.
 //!
 //! The lines that integrate occlude are marked `occlude:` (counted in
 //! the README).
 
 use glam::{Mat4, Vec3};
-use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS};
+use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, RASTER_FEATURES};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -51,7 +51,7 @@ struct InstanceData {
 }
 
 /// occlude: the culling method, query-driven (`chcpp` and the others) or
-/// GPU-driven (`hiz`). One per renderer, so the variants' sizes do not
+/// GPU-driven (`hiz`, `roc`, `ioc`). One per renderer, so the variants' sizes do not
 /// matter.
 #[allow(clippy::large_enum_variant)]
 enum Culling {
@@ -88,7 +88,11 @@ pub struct Renderer {
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))?;
-    Ok(pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))?)
+    // occlude: the features `roc` and `ioc` need (forced early depth tests), where the adapter has them.
+    let required_features = adapter.features() & RASTER_FEATURES;
+    // occlude: end.
+    let descriptor = wgpu::DeviceDescriptor { required_features, ..Default::default() };
+    Ok(pollster::block_on(adapter.request_device(&descriptor))?)
 }
 
 impl Renderer {

@@ -4,7 +4,7 @@
 //! printing what each frame drew and how long it took until the GPU was
 //! idle, and writes the last frame as a PNG.
 //!
-//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz]
+//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc]
 //! [--frames N] [--grid N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
 
 use own_renderer::{open_device, Options, Renderer};

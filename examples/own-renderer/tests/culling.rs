@@ -1,5 +1,5 @@
 //! The example renderer with occlude's culling on (the query-driven methods
-//! through `Culler`, `hiz` through `GpuCuller`) draws fewer instances than
+//! through `Culler`, `hiz`, `roc` and `ioc` through `GpuCuller`) draws fewer instances than
 //! with culling off, and its images are the same, bit for bit (colour and
 //! depth), on every frame of a moving camera, with forward and with reverse
 //! Z (with `Depth24Plus`, whose depth cannot be read back, the colour); and
@@ -9,7 +9,7 @@
 
 use occlude::glam::{Mat4, Vec3};
 use occlude::wgpu::embed::{
-    Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS,
+    Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
 use occlude::{Aabb, Camera};
 use own_renderer::{open_device, Options, Renderer};
@@ -35,7 +35,7 @@ fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
 /// Renders the walk with culling off and with each method (query-driven and
 /// GPU-driven), comparing every frame's images (the depth image where it
 /// can be read back), and checks that `chcpp` draws fewer instances than
-/// culling off on every frame, and `hiz` fewer than `vfc` (frustum culling)
+/// culling off on every frame, and `hiz`, `roc` and `ioc` fewer than `vfc` (frustum culling)
 /// from the third frame on: its first frame has no depth to test against
 /// and draws every instance in the frustum, its second draws those again
 /// in its early pass.
@@ -77,9 +77,9 @@ fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::Text
                     "chcpp, frame {frame}: drew {drawn} of {} instances",
                     on.instance_count()
                 ),
-                "hiz" if frame >= 2 => assert!(
+                "hiz" | "roc" | "ioc" if frame >= 2 => assert!(
                     drawn < in_frustum[frame],
-                    "hiz, frame {frame}: drew {drawn} instances, frustum culling {}",
+                    "{method}, frame {frame}: drew {drawn} instances, frustum culling {}",
                     in_frustum[frame]
                 ),
                 _ => {}
@@ -178,38 +178,62 @@ fn texture_view(
 fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_gpu_driven_embedding_refuses_what_it_cannot_cull") else { return };
     let (attachments, bounds) = one_box();
-    let depth_format = attachments.depth;
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let new =
         |attachments, bounds: &[Aabb], method| GpuCuller::new(&device, &queue, attachments, bounds, method, draw).err();
-    for method in ["chcpp", "roc", "ioc", "opt"] {
+    for method in ["chcpp", "opt"] {
         assert!(matches!(new(attachments, &bounds, method), Some(EmbedError::Unsupported(_))), "{method}");
     }
-    assert!(matches!(new(attachments, &[], "hiz"), Some(EmbedError::Scene(_))));
-    let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
-    assert!(matches!(new(always, &bounds, "hiz"), Some(EmbedError::Attachments(_))));
+    for method in GPU_METHODS {
+        assert!(matches!(new(attachments, &[], method), Some(EmbedError::Scene(_))), "{method}");
+        let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
+        assert!(matches!(new(always, &bounds, method), Some(EmbedError::Attachments(_))), "{method}");
+        // A depth-stencil format too: roc's and ioc's box tests hold its
+        // stencil read-only as well.
+        for depth in [wgpu::TextureFormat::Depth32Float, wgpu::TextureFormat::Depth24PlusStencil8] {
+            the_gpu_driven_embedding_draws_its_lists(&device, &queue, method, depth);
+        }
+    }
+}
 
+/// `method` through a [`GpuCuller`] on the one-box scene, depth format
+/// `depth_format`: refusals of a pipeline that cannot read the list, of a
+/// depth texture `hiz` cannot read and of a camera of the wrong depth
+/// order; then the box's way through the lists, drawn by the renderer and
+/// by occlude.
+fn the_gpu_driven_embedding_draws_its_lists(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    method: &str,
+    depth_format: wgpu::TextureFormat,
+) {
+    let (attachments, bounds) = one_box();
+    let attachments = Attachments { depth: depth_format, ..attachments };
+    let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     // A group the pipeline does not have, or whose entry is not a storage
     // buffer at that binding: an error.
-    let pipeline = list_pipeline(&device, depth_format);
+    let pipeline = list_pipeline(device, depth_format);
     let bind = |group, binding| {
-        let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+        let culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
         culler.with_list_pipeline(&pipeline, group, binding).err()
     };
     for (group, binding) in [(0, 0), (1, 3), (2, 0)] {
         assert!(matches!(bind(group, binding), Some(EmbedError::Binding(_))), "group {group}, binding {binding}");
     }
 
-    let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    let mut culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
     let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-    let depth = texture_view(&device, depth_format, 8, sampled);
+    let depth = texture_view(device, depth_format, 8, sampled);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
     let mut calls = 0;
-    // A depth texture the pyramid cannot be read from: an error, nothing drawn.
-    let unsampled = texture_view(&device, depth_format, 8, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
-    let result = culler.render(&forward, FrameTarget { depth: &unsampled, ..target }, |_, _| calls += 1);
-    assert!(matches!(result, Err(EmbedError::Attachments(_))), "{result:?}");
+    if method == "hiz" {
+        // A depth texture the pyramid cannot be read from: an error,
+        // nothing drawn (roc only renders into it).
+        let unsampled = texture_view(device, depth_format, 8, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let result = culler.render(&forward, FrameTarget { depth: &unsampled, ..target }, |_, _| calls += 1);
+        assert!(matches!(result, Err(EmbedError::Attachments(_))), "{result:?}");
+    }
     // A reverse-Z camera over a forward depth test: an error, nothing drawn.
     let reverse = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_infinite_reverse_rh(1.0, 1.0, 0.1), true);
     let result = culler.render(&reverse.unwrap(), target, |_, _| calls += 1);
@@ -228,13 +252,14 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     // pipeline, whose draw of the box covers the whole target at the
     // nearest depth (outside the box, against the rules, to be seen): the
     // box drawn late in frame 0 and early in frame 1 hides itself in frame
-    // 1's pyramid, so frame 2's early list is empty and its late list has
-    // it again. Were the lists not drawn, frame 2 would be frame 1.
-    let culler = GpuCuller::new(&device, &queue, attachments, &bounds, "hiz", draw).unwrap();
+    // 1's test (its pyramid, or its depth for roc), so frame 2's early list
+    // is empty and its late list has it again. Were the lists not drawn,
+    // frame 2 would be frame 1.
+    let culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
     let mut culler = culler.with_list_pipeline(&pipeline, 1, 0).unwrap();
     let ones: Vec<u8> = [1f32; 4].iter().flat_map(|x| x.to_le_bytes()).collect();
     let uniform = wgpu::util::DeviceExt::create_buffer_init(
-        &device,
+        device,
         &wgpu::util::BufferInitDescriptor { label: None, contents: &ones, usage: wgpu::BufferUsages::UNIFORM },
     );
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -253,6 +278,30 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
         assert_eq!(culler.read_counts().unwrap(), expected);
     }
     assert_eq!(setups, 6);
+}
+
+/// `roc` and `ioc` on a device opened without `SHADER_EARLY_DEPTH_TEST`
+/// (as wgpu opens one by default) are refused, naming the feature; `hiz`,
+/// which needs no feature, runs there.
+#[test]
+fn box_tests_are_refused_on_a_device_without_forced_early_depth_tests() {
+    if device("box_tests_are_refused_on_a_device_without_forced_early_depth_tests").is_none() {
+        return;
+    }
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&Default::default())).unwrap();
+    let (device, queue) = pollster::block_on(adapter.request_device(&Default::default())).unwrap();
+    assert!(!device.features().contains(RASTER_FEATURES));
+    let (attachments, bounds) = one_box();
+    let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+    let new = |method| GpuCuller::new(&device, &queue, attachments, &bounds, method, draw);
+    for method in ["roc", "ioc"] {
+        match new(method).err() {
+            Some(EmbedError::Adapter(message)) => assert!(message.contains("SHADER_EARLY_DEPTH_TEST"), "{message}"),
+            other => panic!("{method} without the feature: {other:?}"),
+        }
+    }
+    assert!(new("hiz").is_ok());
 }
 
 /// A depth-only pipeline reading a uniform at group 0, binding 0 (a scale,

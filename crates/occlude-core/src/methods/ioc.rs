@@ -2,7 +2,7 @@
 //! Figure 2): raster occlusion culling (`roc`) applied to the nodes of the
 //! hierarchy level by level instead of to every object.
 //!
-//! Per frame, on [`GpuCulling`]: last frame's potentially visible objects are
+//! Per frame, on [`GpuCulling`](crate::GpuCulling): last frame's potentially visible objects are
 //! drawn (the occluders). Then, from the start depth to the bottom depth, one
 //! batch tests the boxes of the level's nodes against that depth. A culled
 //! node ends the descent: nothing below it is marked, so its whole subtree
@@ -35,12 +35,12 @@
 //! the frustum test that drops objects is the conservative one box tests
 //! use, so a dropped object has no pixel.
 
-use super::node_walk::{NodeTest, NodeWalk};
+use super::node_walk::{walk_tables, NodeTest, NodeWalk};
 use super::roc::TemporalSet;
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
-use crate::gpu_culling::{BoxSet, ExpandInto, GpuCulling, IdList, ItemRange, RangeTable};
+use crate::gpu_culling::{BoxSet, ExpandInto, IdList, ItemRange, RangeTable, TableData};
 use crate::hierarchy::{Hierarchy, NodeId};
 use std::fmt;
 use std::str::FromStr;
@@ -171,31 +171,79 @@ impl IterativeOcclusion {
     pub fn new(params: IocParams) -> Self {
         Self { params, resources: None, warnings: Vec::new() }
     }
+}
 
-    /// The start and bottom depths of the parameters in `h`, clamped to its
-    /// depth with a warning.
-    fn depths(&mut self, h: &Hierarchy) -> (u32, u32) {
-        let deepest = h.max_depth();
-        let (mut start, start_clamped) = self.params.start.resolve(deepest);
-        let (bottom, bottom_clamped) = self.params.bottom.resolve(deepest);
-        for (key, level, clamped) in
-            [("start", self.params.start, start_clamped), ("bottom", self.params.bottom, bottom_clamped)]
-        {
-            if clamped {
-                self.warnings.push(format!(
-                    "ioc.{key} = {level} is past the hierarchy's depth {deepest}: using {}",
-                    if key == "start" { start } else { bottom }
-                ));
-            }
-        }
-        if start > bottom {
-            self.warnings.push(format!(
-                "ioc.start = {} (depth {start}) lies below ioc.bottom = {} (depth {bottom}) in this hierarchy: starting at {bottom}",
-                self.params.start, self.params.bottom
+/// The start and bottom depths of `params` in `h`, clamped to its depth,
+/// and a warning for each depth clamped.
+fn resolve_depths(params: &IocParams, h: &Hierarchy) -> ((u32, u32), Vec<String>) {
+    let mut warnings = Vec::new();
+    let deepest = h.max_depth();
+    let (mut start, start_clamped) = params.start.resolve(deepest);
+    let (bottom, bottom_clamped) = params.bottom.resolve(deepest);
+    for (key, level, clamped) in [("start", params.start, start_clamped), ("bottom", params.bottom, bottom_clamped)] {
+        if clamped {
+            warnings.push(format!(
+                "ioc.{key} = {level} is past the hierarchy's depth {deepest}: using {}",
+                if key == "start" { start } else { bottom }
             ));
-            start = bottom;
         }
-        (start, bottom)
+    }
+    if start > bottom {
+        warnings.push(format!(
+            "ioc.start = {} (depth {start}) lies below ioc.bottom = {} (depth {bottom}) in this hierarchy: starting at {bottom}",
+            params.start, params.bottom
+        ));
+        start = bottom;
+    }
+    ((start, bottom), warnings)
+}
+
+/// The start list of a walk starting at `depth`: the nodes at that depth
+/// and the leaves above it.
+fn start_list(h: &Hierarchy, depth: u32) -> Vec<NodeId> {
+    (0..h.node_count() as NodeId)
+        .filter(|&n| h.node(n).depth == depth || (h.is_leaf(n) && h.node(n).depth < depth))
+        .collect()
+}
+
+/// `ioc`'s walk of one hierarchy as plain data, before upload: what
+/// [`IterativeOcclusion`] puts on the device on its first frame (without
+/// `ioc.auto`), for a renderer that records the walk itself
+/// (`occlude_wgpu::embed::GpuCuller`). Per frame: the start list's node
+/// boxes are tested, the instances of the visible leaves marked and the
+/// children of the visible nodes listed for the next depth, down to the
+/// bottom, whose visible nodes mark every instance of their subtrees.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IocWalk {
+    /// The start and bottom depths of the parameters in the hierarchy,
+    /// clamped to its depth.
+    pub depths: (u32, u32),
+    /// Why a depth was clamped (empty when none was).
+    pub warnings: Vec<String>,
+    /// The nodes at the start depth and the leaves above it.
+    pub start: Vec<NodeId>,
+    /// Per node, its children (none for a leaf).
+    pub children: TableData,
+    /// Per node, a leaf's instances (none for an interior node).
+    pub leaf_instances: TableData,
+    /// Per node, every instance of its subtree.
+    pub subtree_instances: TableData,
+}
+
+impl IocWalk {
+    /// The walk of `h` with `params`' start and bottom (`ioc.auto` and
+    /// `ioc.frustum` are the walker's to apply).
+    pub fn new(params: &IocParams, h: &Hierarchy) -> Self {
+        let (depths, warnings) = resolve_depths(params, h);
+        let (children, leaf_instances) = walk_tables(h);
+        Self {
+            depths,
+            warnings,
+            start: start_list(h, depths.0),
+            children,
+            leaf_instances,
+            subtree_instances: subtree_table(h),
+        }
     }
 }
 
@@ -217,31 +265,27 @@ impl CullingMethod for IterativeOcclusion {
             return;
         }
         let h = ctx.hierarchy;
-        let depths = self.depths(h);
+        let (depths, warnings) = resolve_depths(&self.params, h);
+        self.warnings.extend(warnings);
         let Ok(gpu) = backend.gpu_culling() else { return };
         let nodes = h.node_count() as u32;
         let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
         let auto = self.params.auto;
         let starts = (0..=depths.1)
-            .map(|d| {
-                (auto || d == depths.0).then(|| {
-                    let start: Vec<NodeId> =
-                        (0..nodes).filter(|&n| h.node(n).depth == d || (h.is_leaf(n) && h.node(n).depth < d)).collect();
-                    gpu.create_list(nodes, &start)
-                })
-            })
+            .map(|d| (auto || d == depths.0).then(|| gpu.create_list(nodes, &start_list(h, d))))
             .collect();
+        let subtree = subtree_table(h);
         self.resources = Some(Resources {
             walk: NodeWalk::new(gpu, h),
             instance_boxes: gpu.create_boxes(&instance_boxes),
             starts,
-            subtree_instances: subtree_table(gpu, h),
+            subtree_instances: gpu.create_table(&subtree.ranges, &subtree.items),
             temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32),
             depths,
         });
     }
 
-    /// A backend without [`GpuCulling`] (which the runner refuses first)
+    /// A backend without [`GpuCulling`](crate::GpuCulling) (which the runner refuses first)
     /// gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         let Some(r) = self.resources.as_mut().filter(|_| backend.gpu_culling().is_ok()) else {
@@ -300,7 +344,7 @@ fn auto_start(ctx: &FrameContext<'_>, bottom: u32) -> (u32, u64) {
 
 /// Per node, every instance of its subtree: the leaves' instances in
 /// depth-first order, in which every subtree's instances are one range.
-fn subtree_table(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> RangeTable {
+fn subtree_table(h: &Hierarchy) -> TableData {
     let mut subtree_ranges = vec![ItemRange::default(); h.node_count()];
     let mut in_order = Vec::with_capacity(h.items.len());
     // Depth first; a node is seen on the way down (`false`) and again once
@@ -317,14 +361,14 @@ fn subtree_table(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> RangeTable {
         stack.push((id, true));
         stack.extend(h.children(id).iter().rev().map(|&c| (c, false)));
     }
-    gpu.create_table(&subtree_ranges, &in_order)
+    TableData { ranges: subtree_ranges, items: in_order }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::methods::test_rig::{
-        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, assert_walks_top_down,
+        assert_refused_without_gpu_culling_and_falls_back_to_frustum_culling, assert_walks_top_down, Rig,
     };
     use crate::methods::MethodOptions;
 
@@ -351,6 +395,43 @@ mod tests {
         for bad in ["ioc.start=-1", "ioc.bottom=deep", "ioc.bottom=deepest-", "ioc.start=deepest+1"] {
             assert!(read(&[bad]).is_err(), "{bad} accepted");
         }
+    }
+
+    /// The walk as data describes the hierarchy: the start list is the
+    /// nodes at the start depth and the leaves above it; each node's
+    /// children, a leaf's instances and every instance below each node are
+    /// its ranges of the tables; depths past the tree's are clamped, with
+    /// a warning.
+    #[test]
+    fn the_walk_as_data_lists_the_start_and_each_nodes_children_leaf_and_subtree() {
+        let rig = Rig::row(16);
+        let h = &rig.hierarchy;
+        let walk = IocWalk::new(&read(&["ioc.start=2", "ioc.bottom=deepest"]).unwrap(), h);
+        assert_eq!(walk.depths, (2, h.max_depth()));
+        assert!(walk.warnings.is_empty(), "{:?}", walk.warnings);
+        let items = |t: &TableData, n: NodeId| {
+            let r = t.ranges[n as usize];
+            let mut items = t.items[r.first as usize..(r.first + r.count) as usize].to_vec();
+            items.sort_unstable();
+            items
+        };
+        for n in 0..h.node_count() as NodeId {
+            let depth = h.node(n).depth;
+            assert_eq!(walk.start.contains(&n), depth == 2 || (h.is_leaf(n) && depth < 2), "node {n}");
+            assert_eq!(items(&walk.children, n), h.children(n), "node {n}");
+            assert_eq!(items(&walk.leaf_instances, n), h.instances(n), "node {n}");
+            let (mut below, mut stack) = (Vec::new(), vec![n]);
+            while let Some(m) = stack.pop() {
+                below.extend_from_slice(h.instances(m));
+                stack.extend_from_slice(h.children(m));
+            }
+            below.sort_unstable();
+            assert_eq!(items(&walk.subtree_instances, n), below, "node {n}");
+        }
+        assert_eq!(items(&walk.subtree_instances, h.root()).len(), rig.scene.instances.len());
+        let clamped = IocWalk::new(&read(&["ioc.start=40"]).unwrap(), h);
+        assert_eq!(clamped.depths, (h.max_depth() - 2, h.max_depth() - 2));
+        assert_eq!(clamped.warnings.len(), 2, "{:?}", clamped.warnings);
     }
 
     #[test]

@@ -10,7 +10,7 @@
 //! dispatches a level (test, leaves, children), no read-back; a level's
 //! list length is read on the device by the next dispatch.
 
-use crate::gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable};
+use crate::gpu_culling::{BoxSet, ExpandInto, Flags, GpuCulling, IdList, ItemRange, RangeTable, TableData};
 use crate::hierarchy::{Hierarchy, NodeId};
 
 /// A box test of a level: the boxes of `BoxSet` named by `IdList`, setting
@@ -35,27 +35,15 @@ pub(crate) struct NodeWalk {
 impl NodeWalk {
     /// Uploads `h`'s node boxes and its children and leaf tables.
     pub(crate) fn new(gpu: &mut dyn GpuCulling, h: &Hierarchy) -> Self {
-        let n = h.node_count();
-        let mut child_ranges = vec![ItemRange::default(); n];
-        let mut child_items = Vec::with_capacity(n);
-        let mut leaf_ranges = vec![ItemRange::default(); n];
-        for id in 0..n as NodeId {
-            let node = h.node(id);
-            if node.is_leaf() {
-                leaf_ranges[id as usize] = ItemRange { first: node.first, count: node.count };
-            } else {
-                child_ranges[id as usize] = ItemRange { first: child_items.len() as u32, count: 2 };
-                child_items.extend_from_slice(h.children(id));
-            }
-        }
+        let (children, leaf_instances) = walk_tables(h);
         let boxes: Vec<_> = h.nodes.iter().map(|n| n.bounds).collect();
-        let nodes = n as u32;
+        let nodes = h.node_count() as u32;
         Self {
             boxes: gpu.create_boxes(&boxes),
             visible: gpu.create_flags(nodes),
             levels: [gpu.create_list(nodes, &[]), gpu.create_list(nodes, &[])],
-            children: gpu.create_table(&child_ranges, &child_items),
-            leaf_instances: gpu.create_table(&leaf_ranges, &h.items),
+            children: gpu.create_table(&children.ranges, &children.items),
+            leaf_instances: gpu.create_table(&leaf_instances.ranges, &leaf_instances.items),
         }
     }
 
@@ -87,4 +75,22 @@ impl NodeWalk {
         }
         level
     }
+}
+
+/// The walk's tables of `h`: per node its children (none for a leaf), and
+/// per node a leaf's instances (none for an interior node).
+pub(crate) fn walk_tables(h: &Hierarchy) -> (TableData, TableData) {
+    let n = h.node_count();
+    let mut children = TableData { ranges: vec![ItemRange::default(); n], items: Vec::with_capacity(n) };
+    let mut leaves = TableData { ranges: vec![ItemRange::default(); n], items: h.items.clone() };
+    for id in 0..n as NodeId {
+        let node = h.node(id);
+        if node.is_leaf() {
+            leaves.ranges[id as usize] = ItemRange { first: node.first, count: node.count };
+        } else {
+            children.ranges[id as usize] = ItemRange { first: children.items.len() as u32, count: 2 };
+            children.items.extend_from_slice(h.children(id));
+        }
+    }
+    (children, leaves)
 }

@@ -232,30 +232,41 @@ impl QueryBackend {
     }
 }
 
+/// How a render pass of a frame begins on the renderer's views.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum PassStart {
+    /// Clears them (colour to its clear colour, depth to
+    /// [`Attachments::far_depth`], stencil to 0): the frame's first pass.
+    Clear,
+    /// Loads them, to draw on.
+    Load,
+    /// The depth view alone, read-only (no colour attachment): box tests,
+    /// which test against the depth and write neither depth nor colour.
+    TestDepth,
+}
+
 /// Begins a render pass of a frame on the renderer's views in `target`,
-/// clearing them (colour to its clear colour, depth to
-/// [`Attachments::far_depth`], stencil to 0) when `clear`, else loading
-/// them; its occlusion queries go to `queries`.
+/// as `start` says; its occlusion queries go to `queries`.
 pub(super) fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     target: &FrameTarget<'_>,
     attachments: &Attachments,
-    clear: bool,
+    start: PassStart,
     queries: Option<&wgpu::QuerySet>,
 ) -> wgpu::RenderPass<'e> {
-    let (color_load, depth_load, stencil_load) = if clear {
+    let (color_load, depth_load, stencil_load) = if start == PassStart::Clear {
         (wgpu::LoadOp::Clear(target.clear_color), wgpu::LoadOp::Clear(attachments.far_depth()), wgpu::LoadOp::Clear(0))
     } else {
         (wgpu::LoadOp::Load, wgpu::LoadOp::Load, wgpu::LoadOp::Load)
     };
-    let stencil = attachments
-        .depth
-        .has_stencil_aspect()
+    // Read-only aspects have no operations.
+    let writes = start != PassStart::TestDepth;
+    let stencil = (writes && attachments.depth.has_stencil_aspect())
         .then_some(wgpu::Operations { load: stencil_load, store: wgpu::StoreOp::Store });
     // Depth-only attachments: no colour slot at all, as a depth-only
     // pipeline (no fragment stage, no targets) expects; `[None]` would not
     // match it.
-    let color = [target.color.map(|view| wgpu::RenderPassColorAttachment {
+    let color = [target.color.filter(|_| writes).map(|view| wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,
         resolve_target: None,
@@ -263,10 +274,10 @@ pub(super) fn begin_pass<'e>(
     })];
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("occlude embedded frame"),
-        color_attachments: if target.color.is_some() { &color } else { &[] },
+        color_attachments: if color[0].is_some() { &color } else { &[] },
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: target.depth,
-            depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+            depth_ops: writes.then_some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
             stencil_ops: stencil,
         }),
         timestamp_writes: None,
@@ -287,14 +298,23 @@ fn query_group(
     bind_group(device, "embedded queries", &layout, &[(0, camera.as_entire_binding()), (2, boxes.as_entire_binding())])
 }
 
-/// The clip-space matrix of `camera` as the renderer draws with it: its own
-/// projection times view (reverse Z as it is), or for a look-at camera
-/// [`Camera::view_projection`].
-fn clip_matrix(camera: &Camera) -> glam::Mat4 {
-    match camera.matrices {
+/// Writes the query boxes' camera uniform (`Camera` of `shader.wgsl`) for
+/// `camera` as the renderer draws with it: its own projection times view
+/// (reverse Z as it is; for a look-at camera
+/// [`Camera::view_projection`]), the boxes pulled towards the eye by
+/// [`QUERY_DEPTH_BIAS`] in the attachments' depth order.
+pub(super) fn write_query_camera(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    camera: &Camera,
+    attachments: &Attachments,
+) {
+    let clip = match camera.matrices {
         Some(m) => m.projection * m.view,
         None => camera.view_projection(),
-    }
+    };
+    let bias = if attachments.reverse_z() { -QUERY_DEPTH_BIAS } else { QUERY_DEPTH_BIAS };
+    write_camera(queue, buffer, &clip, bias);
 }
 
 /// One frame of a [`QueryBackend`] in a renderer's views, with its draw
@@ -333,7 +353,8 @@ where
         let set = pending.map(|p| s.book.set(&s.ctx, p.set).clone());
         let mut encoder = s.ctx.device.create_command_encoder(&Default::default());
         {
-            let mut pass = begin_pass(&mut encoder, target, &s.attachments, !s.cleared, set.as_ref());
+            let start = if s.cleared { PassStart::Load } else { PassStart::Clear };
+            let mut pass = begin_pass(&mut encoder, target, &s.attachments, start, set.as_ref());
             // The query pipeline is bound again after each of the
             // renderer's draws, which bind their own.
             let mut bound = false;
@@ -403,8 +424,7 @@ where
                 if s.attachments.reverse_z() { "reverse Z" } else { "forward Z" }
             ));
         }
-        let bias = if s.attachments.reverse_z() { -QUERY_DEPTH_BIAS } else { QUERY_DEPTH_BIAS };
-        write_camera(&s.ctx.queue, &s.camera_buffer, &clip_matrix(camera), bias);
+        write_query_camera(&s.ctx.queue, &s.camera_buffer, camera, &s.attachments);
         s.camera = Some(*camera);
         s.cleared = false;
         s.book.start_frame();

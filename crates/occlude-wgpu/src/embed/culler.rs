@@ -9,8 +9,8 @@ use occlude_core::{render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameSta
 /// The methods that run embedded: those that draw and query through the
 /// [`occlude_core::Backend`] interface alone. `vfc` (frustum culling)
 /// issues no query and is the baseline the others are checked against.
-/// The GPU-driven methods do not run here: `hiz` runs in a
-/// [`GpuCuller`](super::GpuCuller), `roc` and `ioc` not embedded; nor do
+/// The GPU-driven methods do not run here: `hiz`, `roc` and `ioc` run in
+/// a [`GpuCuller`](super::GpuCuller); nor do
 /// `opt` (an oracle pass) and `moc` (the meshes' triangles).
 pub const QUERY_METHODS: [&str; 5] = ["vfc", "sw", "chc", "chcpp", "om"];
 

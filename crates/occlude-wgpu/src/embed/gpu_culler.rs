@@ -1,31 +1,46 @@
-//! [`GpuCuller`]: two-phase Hi-Z culling (`hiz`, [`occlude_core::methods::hiz`])
-//! in a renderer's own passes, its visibility never leaving the GPU. Each
-//! frame occlude writes two lists of visible instance ids (the early pass's
-//! and the late pass's) with an indirect draw's arguments each, and the
-//! renderer draws each list with one indirect draw of its own. The compute
+//! [`GpuCuller`]: two-phase GPU-driven culling in a renderer's own passes,
+//! its visibility never leaving the GPU: Hi-Z (`hiz`,
+//! [`occlude_core::methods::hiz`]), raster occlusion culling (`roc`,
+//! [`occlude_core::methods::roc`]; IOC poster, section 1) or its
+//! hierarchical form (`ioc`, [`occlude_core::methods::ioc`]; IOC poster,
+//! section 2). Each frame occlude writes two lists of visible instance ids
+//! (the early pass's and the late pass's) with an indirect draw's
+//! arguments each, and the renderer draws each list with one indirect draw
+//! of its own. The compute
 //! shaders are `cull.wgsl`'s, as the wgpu backend's GPU-resident culling
 //! runs them (frustum drop, compaction, pyramid reduction and pyramid box
 //! test), plus `cs_pyramid_base`, which reads level 0 from the renderer's
-//! depth texture.
+//! depth texture; `roc`'s and `ioc`'s box tests are the backend's too
+//! (`box_tests.rs`), `ioc`'s walk is `node_levels.rs`.
 
-use super::backend::begin_pass;
+use super::backend::{begin_pass, PassStart};
+use super::box_tests::{BoxTest, BoxTests, TestInputs};
+use super::node_levels::{NodeLevels, WalkInputs};
 use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
 use crate::culling::{
-    bind_group, box_set_buffer, cull_camera_buffer, dispatch_reductions, param_buffer, storage_init, workgroups,
-    write_cull_camera, PyramidBuffers,
+    bind_group, box_set_buffer, cull_camera_buffer, cull_module, dispatch_reductions, param_buffer, storage_init,
+    workgroups, write_cull_camera, PyramidBuffers,
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
+use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::hiz::HizParams;
+use occlude_core::methods::ioc::{IocParams, IocWalk};
 use occlude_core::methods::{MethodError, MethodOptions};
-use occlude_core::{Aabb, Camera, Scene};
+use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
 
-/// The methods [`GpuCuller`] runs: the GPU-driven ones whose every step is
-/// a compute pass over the renderer's depth. `roc` and `ioc` rasterize
-/// their boxes with a fragment stage writing flags, which would need
-/// occlude's pipelines inside the renderer's passes: not embedded.
-pub const GPU_METHODS: [&str; 1] = ["hiz"];
+/// The methods [`GpuCuller`] runs: `hiz`, whose every step is a compute
+/// pass over the renderer's depth, and `roc` and `ioc` (`roc` over a BVH
+/// of the boxes, level by level), whose box tests rasterize the boxes
+/// against the renderer's depth texture with a fragment stage writing
+/// flags (their device needs [`RASTER_FEATURES`]).
+pub const GPU_METHODS: [&str; 3] = ["hiz", "roc", "ioc"];
+
+/// The device features `roc` and `ioc` need in a [`GpuCuller`] (checked
+/// only for them): forced early depth tests, so that a box's fragments set
+/// its flag only where they passed the depth test.
+pub const RASTER_FEATURES: wgpu::Features = wgpu::Features::SHADER_EARLY_DEPTH_TEST;
 
 /// The storage buffers `cs_test_boxes_pyramid`, the culling shader using
 /// most, binds in one stage.
@@ -151,17 +166,40 @@ struct PyramidState {
     tests: [wgpu::BindGroup; 2],
 }
 
-/// Two-phase Hi-Z culling (`hiz`) in a renderer's own passes, GPU-driven:
-/// give it the renderer's device, attachments, per-instance boxes and how
-/// it draws an instance once; each frame, the camera, the frame's views and
+/// `hiz`'s late test: a depth pyramid of the early pass's depth, every
+/// instance's box tested against it.
+struct PyramidTest {
+    base: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    test: wgpu::ComputePipeline,
+    /// `param` uniforms: the pyramid test's reach and whether depth is
+    /// reverse Z (each reduction's level is made with the pyramid).
+    reach: wgpu::Buffer,
+    reverse: wgpu::Buffer,
+    /// Made for the first frame's depth size, and again when it changes.
+    state: Option<PyramidState>,
+}
+
+/// How the late phase finds this frame's visible instances.
+enum LateTest {
+    /// `hiz`: against a depth pyramid, in compute passes.
+    Pyramid(PyramidTest),
+    /// `roc`: every instance's box rasterized against the depth texture,
+    /// its test's groups for flag parity 0 and 1.
+    Every(BoxTests, [BoxTest; 2]),
+    /// `ioc`: the BVH's node boxes rasterized level by level, then the
+    /// instances marked visible outside the frustum dropped.
+    Nodes(BoxTests, NodeLevels),
+}
+
+/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
+/// passes: give it the renderer's device, attachments, per-instance boxes
+/// and how it draws an instance once; each frame, the camera, the frame's views and
 /// a callback that draws a [`VisibleList`] with one indirect draw.
 pub struct GpuCuller {
     ctx: GpuContext,
     attachments: Attachments,
     instances: u32,
-    base: wgpu::ComputePipeline,
-    reduce: wgpu::ComputePipeline,
-    test: wgpu::ComputePipeline,
     camera: wgpu::Buffer,
     boxes: wgpu::Buffer,
     all: wgpu::Buffer,
@@ -174,16 +212,12 @@ pub struct GpuCuller {
     /// The renderer's pipeline drawing the lists
     /// ([`GpuCuller::with_list_pipeline`]).
     pipeline: Option<wgpu::RenderPipeline>,
-    /// `param` uniforms: the pyramid test's reach, whether depth is reverse
-    /// Z, and each reduction's level (made with the pyramid).
-    reach: wgpu::Buffer,
-    reverse: wgpu::Buffer,
     /// Drop outside the frustum, compact into the early list, compact the
     /// newly visible into the late list; each for flag parity 0 and 1.
     drop_outside: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     compact_early: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     compact_late: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
-    pyramid: Option<PyramidState>,
+    late: LateTest,
     counts_staging: wgpu::Buffer,
 }
 
@@ -194,7 +228,8 @@ impl GpuCuller {
     /// parameters) on the renderer's `device` and `queue`, whose passes
     /// draw into `attachments`, each instance drawn as `draw` says. A
     /// method that does not run here, bad boxes or attachments, or a device
-    /// without what the compute passes need are an error.
+    /// without what the method needs (compute passes; for `roc` and `ioc`
+    /// also `SHADER_EARLY_DEPTH_TEST`) are an error.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -206,15 +241,22 @@ impl GpuCuller {
         if !GPU_METHODS.contains(&method) {
             return Err(EmbedError::Unsupported(method.to_string()));
         }
-        let params = HizParams::read(&mut MethodOptions::default().for_method(method)).map_err(MethodError::from)?;
+        let raster = method != "hiz";
+        let options = MethodOptions::default();
+        let reach = if raster {
+            0
+        } else {
+            HizParams::read(&mut options.for_method(method)).map_err(MethodError::from)?.texels
+        };
         attachments.check()?;
-        check_device(device)?;
+        check_device(device, raster)?;
         let scene = Scene::from_bounds("embedded", bounds)?;
         let ctx = GpuContext::from_device(device, queue);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("occlude culling shaders"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../cull.wgsl").into()),
-        });
+        // Where the device lacks what the box tests need after all (storage
+        // written by fragment shaders, on some GL drivers), making their
+        // pipelines fails validation: that is the device's refusal.
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = cull_module(device, raster);
         let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let n = scene.instances.len() as u32;
         let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
@@ -238,6 +280,7 @@ impl GpuCuller {
         });
         let boxes = box_set_buffer(&ctx, &boxes);
         let camera = cull_camera_buffer(device);
+        let stats = storage_init(&ctx, "culling statistics", &[], wgpu::BufferUsages::empty());
         // Flag parity p: this frame's flags are flags[p], last frame's
         // flags[1 - p].
         let drop_outside = compute("cs_drop_outside");
@@ -247,16 +290,41 @@ impl GpuCuller {
         let compact_late = compute("cs_compact_unless");
         let late_groups =
             parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &lists[1].ids)]);
-        let reverse = param_buffer(device, u32::from(attachments.reverse_z()));
+        let late = if method == "ioc" {
+            let params = IocParams::read(&mut options.for_method(method)).map_err(MethodError::from)?;
+            let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
+            let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
+            // Depths past the tree's are clamped to it, as `ioc` does
+            // (IocWalk::warnings say so; the embedding runs the defaults).
+            let walk = IocWalk::new(&params, &hierarchy);
+            let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
+            let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
+            LateTest::Nodes(tests, levels)
+        } else if raster {
+            let tests = BoxTests::new(&ctx, &attachments, &module, n);
+            let every = [0, 1].map(|p| {
+                let inputs =
+                    TestInputs { cull_camera: &camera, boxes: &boxes, ids: (&all, n), flags: &flags[p], stats: &stats };
+                tests.test(&ctx, inputs)
+            });
+            LateTest::Every(tests, every)
+        } else {
+            LateTest::Pyramid(PyramidTest {
+                base: compute("cs_pyramid_base"),
+                reduce: compute("cs_pyramid_level"),
+                test: compute("cs_test_boxes_pyramid"),
+                reach: param_buffer(device, reach),
+                reverse: param_buffer(device, u32::from(attachments.reverse_z())),
+                state: None,
+            })
+        };
+        if let Some(error) = pollster::block_on(scope.pop()) {
+            return Err(EmbedError::Adapter(format!("the device cannot run {method}'s culling passes: {error}")));
+        }
         Ok(Self {
             attachments,
             instances: n,
-            base: compute("cs_pyramid_base"),
-            reduce: compute("cs_pyramid_level"),
-            test: compute("cs_test_boxes_pyramid"),
-            stats: storage_init(&ctx, "hiz statistics", &[], wgpu::BufferUsages::empty()),
-            reach: param_buffer(device, params.texels),
-            reverse,
+            stats,
             drop_outside: (drop_outside, drop_groups),
             compact_early: (compact_early, early_groups),
             compact_late: (compact_late, late_groups),
@@ -267,7 +335,7 @@ impl GpuCuller {
             parity: 0,
             lists,
             pipeline: None,
-            pyramid: None,
+            late,
             counts_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("visible counts read-back"),
                 size: 8,
@@ -323,20 +391,23 @@ impl GpuCuller {
     /// [`Camera::from_matrices`] from the renderer's own view and
     /// projection, `reverse_z` as its depth test says) into `target`, in
     /// one submission: the early list is written and `draw(pass, list)`
-    /// draws it in a pass that clears the views; a depth pyramid is built
-    /// from the depth texture and every instance's box tested against it;
+    /// draws it in a pass that clears the views; every instance's box is
+    /// tested against that depth (`hiz`: a depth pyramid built from the
+    /// depth texture; `roc`: the boxes rasterized in a pass of their own;
+    /// `ioc`: the BVH's node boxes so, level by level, then the instances
+    /// outside the frustum dropped);
     /// the late list is written and `draw` draws it in a pass that loads
     /// them. Nothing comes back to the CPU. Views that are not what the
-    /// attachments say, a depth texture without `TEXTURE_BINDING` usage or
-    /// a camera whose depth order is not the depth test's are an error, and
-    /// nothing is drawn.
+    /// attachments say, for `hiz` a depth texture without
+    /// `TEXTURE_BINDING` usage, or a camera whose depth order is not the
+    /// depth test's are an error, and nothing is drawn.
     pub fn render<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, mut draw: F) -> Result<(), EmbedError>
     where
         F: FnMut(&mut wgpu::RenderPass<'_>, &VisibleList),
     {
         target.check(&self.attachments)?;
         let depth = target.depth.texture();
-        if !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        if matches!(self.late, LateTest::Pyramid(_)) && !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
             return Err(EmbedError::Attachments(
                 "the depth texture needs TEXTURE_BINDING usage: hiz builds its depth pyramid from it".into(),
             ));
@@ -349,11 +420,9 @@ impl GpuCuller {
                 if self.attachments.reverse_z() { "reverse Z" } else { "forward Z" }
             )));
         }
-        self.ensure_pyramid(target.size());
         write_cull_camera(&self.ctx.queue, &self.camera, camera);
         let (now, before) = (self.parity, 1 - self.parity);
-        let device = &self.ctx.device;
-        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         // Early list: last frame's visible instances still in view.
         encoder.clear_buffer(&self.lists[0].ids, 0, Some(4));
         encoder.clear_buffer(&self.lists[1].ids, 0, Some(4));
@@ -364,30 +433,32 @@ impl GpuCuller {
             dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instances);
         }
         self.copy_count(&mut encoder, 0);
-        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, true, None), &self.lists[0]);
-        // The pyramid from that depth, every box tested, the late list.
-        let pyramid = self.pyramid.as_ref().expect("made above");
-        let depth_view = depth
-            .create_view(&wgpu::TextureViewDescriptor { aspect: wgpu::TextureAspect::DepthOnly, ..Default::default() });
-        let base = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hiz pyramid base"),
-            layout: &self.base.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 14, resource: pyramid.buffers.texels.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 15, resource: pyramid.buffers.levels.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 16, resource: self.reverse.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(&depth_view) },
-            ],
-        });
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Clear, None), &self.lists[0]);
+        // Every box tested against that depth, this frame's flags set.
+        match &self.late {
+            LateTest::Pyramid(_) => self.encode_pyramid_test(&mut encoder, target.depth, now),
+            LateTest::Every(tests, every) => {
+                tests.set_camera(&self.ctx.queue, camera, &self.attachments);
+                tests.encode(&mut encoder, &target, &self.attachments, &every[now]);
+            }
+            LateTest::Nodes(tests, levels) => {
+                tests.set_camera(&self.ctx.queue, camera, &self.attachments);
+                levels.encode(&mut encoder, tests, &target, &self.attachments, now);
+            }
+        }
+        // The late list: visible now, not drawn early.
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            dispatch(&mut pass, &self.base, &base, pyramid.buffers.counts[0]);
-            dispatch_reductions(&mut pass, &self.reduce, &pyramid.reductions, &pyramid.buffers.counts);
-            dispatch(&mut pass, &self.test, &pyramid.tests[now], self.instances);
+            if matches!(self.late, LateTest::Nodes(..)) {
+                // `ioc.frustum`: the instances below a visible node that lie
+                // outside the frustum (the drop's groups of parity `before`
+                // clear this frame's flags).
+                dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instances);
+            }
             dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instances);
         }
         self.copy_count(&mut encoder, 1);
-        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, false, None), &self.lists[1]);
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Load, None), &self.lists[1]);
         self.ctx.queue.submit([encoder.finish()]);
         self.parity = before;
         Ok(())
@@ -435,36 +506,58 @@ impl GpuCuller {
         encoder.copy_buffer_to_buffer(&self.lists[k].ids, 0, &self.lists[k].indirect, 4, 4);
     }
 
-    /// Makes the pyramid and its bind groups for a depth texture of `size`,
-    /// unless they are of that size already.
-    fn ensure_pyramid(&mut self, size: (u32, u32)) {
-        if self.pyramid.as_ref().is_some_and(|p| p.size == size) {
-            return;
-        }
+    /// Records `hiz`'s test into `encoder`: the pyramid built from the
+    /// depth texture of `depth` (made, with its bind groups, for the
+    /// texture's size unless it is of that size already), every box tested
+    /// against it, setting flag buffer `now`.
+    fn encode_pyramid_test(&mut self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, now: usize) {
+        let LateTest::Pyramid(p) = &mut self.late else { return };
         let (ctx, device) = (&self.ctx, &self.ctx.device);
-        let buffers = PyramidBuffers::new(ctx, size.0, size.1, size.0);
-        let layout = self.reduce.get_bind_group_layout(0);
-        let reductions = (1..buffers.counts.len() as u32)
-            .map(|level| {
-                let param = param_buffer(device, level);
-                bind_group(ctx, "hiz reduction", &layout, &[(14, &buffers.texels), (15, &buffers.levels), (16, &param)])
-            })
-            .collect();
-        let layout = self.test.get_bind_group_layout(0);
-        let tests = [0, 1].map(|p| {
-            let entries = [
-                (0, &self.camera),
-                (1, &self.boxes),
-                (2, &self.all),
-                (3, &self.flags[p]),
-                (13, &self.stats),
-                (14, &buffers.texels),
-                (15, &buffers.levels),
-                (16, &self.reach),
-            ];
-            bind_group(ctx, "hiz test", &layout, &entries)
+        let depth = depth.texture();
+        let size = (depth.width(), depth.height());
+        if p.state.as_ref().is_none_or(|state| state.size != size) {
+            let buffers = PyramidBuffers::new(ctx, size.0, size.1, size.0);
+            let layout = p.reduce.get_bind_group_layout(0);
+            let reductions = (1..buffers.counts.len() as u32)
+                .map(|level| {
+                    let param = param_buffer(device, level);
+                    let entries = [(14, &buffers.texels), (15, &buffers.levels), (16, &param)];
+                    bind_group(ctx, "hiz reduction", &layout, &entries)
+                })
+                .collect();
+            let layout = p.test.get_bind_group_layout(0);
+            let tests = [0, 1].map(|f| {
+                let entries = [
+                    (0, &self.camera),
+                    (1, &self.boxes),
+                    (2, &self.all),
+                    (3, &self.flags[f]),
+                    (13, &self.stats),
+                    (14, &buffers.texels),
+                    (15, &buffers.levels),
+                    (16, &p.reach),
+                ];
+                bind_group(ctx, "hiz test", &layout, &entries)
+            });
+            p.state = Some(PyramidState { size, buffers, reductions, tests });
+        }
+        let pyramid = p.state.as_ref().expect("made above");
+        let depth_view = depth
+            .create_view(&wgpu::TextureViewDescriptor { aspect: wgpu::TextureAspect::DepthOnly, ..Default::default() });
+        let base = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hiz pyramid base"),
+            layout: &p.base.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 14, resource: pyramid.buffers.texels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 15, resource: pyramid.buffers.levels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 16, resource: p.reverse.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(&depth_view) },
+            ],
         });
-        self.pyramid = Some(PyramidState { size, buffers, reductions, tests });
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        dispatch(&mut pass, &p.base, &base, pyramid.buffers.counts[0]);
+        dispatch_reductions(&mut pass, &p.reduce, &pyramid.reductions, &pyramid.buffers.counts);
+        dispatch(&mut pass, &p.test, &pyramid.tests[now], self.instances);
     }
 }
 
@@ -486,9 +579,10 @@ fn dispatch(pass: &mut wgpu::ComputePass<'_>, pipeline: &wgpu::ComputePipeline, 
     pass.dispatch_workgroups(x, y, 1);
 }
 
-/// Whether `device` can run the culling compute passes: compute shaders
-/// with workgroups of 64 and six storage buffers in a stage.
-fn check_device(device: &wgpu::Device) -> Result<(), EmbedError> {
+/// Whether `device` can run the culling passes: compute shaders with
+/// workgroups of 64 and six storage buffers in a stage; for box tests
+/// (`raster`) also forced early depth tests in fragment shaders.
+fn check_device(device: &wgpu::Device, raster: bool) -> Result<(), EmbedError> {
     let limits = device.limits();
     let mut lacks = Vec::new();
     if limits.max_compute_invocations_per_workgroup < WORKGROUP_THREADS
@@ -502,9 +596,17 @@ fn check_device(device: &wgpu::Device) -> Result<(), EmbedError> {
             limits.max_storage_buffers_per_shader_stage
         ));
     }
+    if raster && !device.features().contains(RASTER_FEATURES) {
+        lacks.push(
+            "the feature SHADER_EARLY_DEPTH_TEST (forced early depth tests: a box's fragments set its flag only \
+             where they passed the depth test; request it when creating the device)"
+                .to_string(),
+        );
+    }
     if lacks.is_empty() {
         Ok(())
     } else {
-        Err(EmbedError::Adapter(format!("the device lacks {}, which GPU-driven culling needs", lacks.join(" and "))))
+        let which = if raster { "GPU-driven culling with box tests (roc, ioc)" } else { "GPU-driven culling" };
+        Err(EmbedError::Adapter(format!("the device lacks {}, which {which} needs", lacks.join(" and "))))
     }
 }

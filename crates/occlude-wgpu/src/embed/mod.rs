@@ -6,9 +6,9 @@
 //! - [`Culler`], the query-driven methods (`chc`, `chcpp`, `om`, `sw`;
 //!   `vfc` as the baseline): occlude calls your draw code with lists of
 //!   instances decided on the CPU from occlusion queries (below).
-//! - [`GpuCuller`], the GPU-driven method `hiz`: occlude writes lists of
-//!   visible instance ids into buffers on the GPU and you draw each with
-//!   one indirect draw (section "GPU-driven culling" below).
+//! - [`GpuCuller`], the GPU-driven methods `hiz`, `roc` and `ioc`: occlude writes
+//!   lists of visible instance ids into buffers on the GPU and you draw
+//!   each with one indirect draw (section "GPU-driven culling" below).
 //!
 //! # Query-driven culling
 //!
@@ -100,8 +100,11 @@
 //!
 //! [`GpuCuller`] runs two-phase Hi-Z culling (`hiz`,
 //! [`occlude_core::methods::hiz`]; zeux's niagara, nvpro's
-//! `gl_occlusion_culling`, Bevy's occlusion culling) with every decision
-//! on the GPU. Each frame, in one submission:
+//! `gl_occlusion_culling`, Bevy's occlusion culling) or raster occlusion
+//! culling (`roc`, [`occlude_core::methods::roc`]; IOC poster, section 1;
+//! nvpro's "raster" technique) or its hierarchical form (`ioc`,
+//! [`occlude_core::methods::ioc`]; IOC poster, section 2) with every
+//! decision on the GPU. Each frame, in one submission:
 //!
 //! 1. a compute pass drops last frame's visible instances whose boxes left
 //!    the view frustum and compacts the rest into the early
@@ -111,9 +114,18 @@
 //!    ([`occlude_core::depth_pyramid`]: level 0 your depth, each level the
 //!    2x2 maximum of the one before) and tests every instance's box
 //!    against it (at most 2 x 2 texels of the finest level that fits, as
-//!    `hiz` does by default), setting this frame's visibility; it compacts
-//!    the instances visible now that the early pass did not draw into the
-//!    late list;
+//!    `hiz` does by default), setting this frame's visibility; `roc`
+//!    instead rasterizes every instance's box against your depth texture
+//!    (a pass of occlude's holding your depth view alone, read-only,
+//!    tested with your compare function, no depth or colour writes), each
+//!    fragment that passes the depth test (forced early, before the
+//!    fragment shader writes) setting its instance's flag; `ioc` tests so
+//!    the node boxes of a BVH over your boxes (built once), level by level
+//!    from depth 4 to two above the deepest (`ioc`'s defaults): a hidden
+//!    node ends the descent, a visible leaf marks its instances, a visible
+//!    node at the bottom level all instances below it, and those outside
+//!    the frustum are dropped; a compute pass compacts the instances
+//!    visible now that the early pass did not draw into the late list;
 //! 4. your callback draws the late list in a pass that loads your views.
 //!
 //! A list is one buffer: its length, its capacity and the ids, which your
@@ -132,9 +144,10 @@
 //! The image is the image without culling: an instance with a pixel in the
 //! final image is at that pixel no farther than the early pass's depth,
 //! so its box (which holds it, padded and pulled towards the eye as query
-//! boxes are) is not hidden by the pyramid, whose texels are at least the
-//! farthest depth of the pixels they cover (the proof is
-//! [`occlude_core::depth_pyramid`]'s). Your depth texture is read into
+//! boxes are) passes `roc`'s depth test there (as does the box of every
+//! node above it, for `ioc`), and is not hidden by `hiz`'s pyramid, whose
+//! texels are at least the farthest depth of the pixels they cover (the
+//! proof is [`occlude_core::depth_pyramid`]'s). Your depth texture is read into
 //! level 0 with two changes: reverse Z is turned into depth 0 nearest
 //! (`1 - d`), and each texel is taken 2^-22 farther, which covers both a
 //! 24-bit depth buffer's rounding of the fragments' depth and the rounding
@@ -144,34 +157,51 @@
 //!
 //! ## Costs
 //!
-//! - **Per frame:** four compute dispatches over the instances, one per
+//! - **Per frame:** four compute dispatches over the instances, two 4-byte
+//!   buffer copies and your two indirect draws; for `hiz` one dispatch per
 //!   pyramid level (level 0 over your depth's pixels, each further level
-//!   over its texels), two 4-byte buffer copies and your two indirect
-//!   draws. One submission; nothing is
-//!   read back, so the CPU never waits for the GPU.
+//!   over its texels); for `roc` a render pass of its own drawing every
+//!   box in the frustum (12 triangles each, their fragments tested against
+//!   your depth: fill rate grows with the boxes' screen area); for `ioc`
+//!   per level of the walk a dispatch over the nodes and such a pass
+//!   drawing the level's node boxes in the frustum, two dispatches over
+//!   the nodes between levels and one after the last. One submission;
+//!   nothing is read back, so the CPU never waits for the GPU.
 //! - **Memory:** per instance a 32-byte box, two flag words and three list
-//!   entries; the pyramid is about 4/3 of a 32-bit depth image.
+//!   entries; `hiz`'s pyramid is about 4/3 of a 32-bit depth image, `roc`
+//!   keeps a second 32-byte box per instance (the boxes to draw); `ioc`
+//!   per node (about two per instance) two boxes, a flag, three list
+//!   entries and table entries.
 //! - **Latency of visibility:** an instance hidden last frame and visible
-//!   now is drawn in the late pass of this frame, after the pyramid: never
-//!   missing, but its draw waits for the pyramid.
+//!   now is drawn in the late pass of this frame, after the late test:
+//!   never missing, but its draw waits for the test.
 //! - **Warm-up:** the first frame has no visible set from a frame before,
-//!   so its pyramid is empty and it draws every instance in the frustum;
-//!   the second frame draws those again in its early pass. Occlusion
+//!   so its pyramid (or for `roc` and `ioc` its depth) is empty and it
+//!   draws every instance in the frustum; the second frame draws those
+//!   again in its early pass. Occlusion
 //!   shows from the third frame on, and again two frames after a camera
 //!   cut (in the example, 2,717 of 3,603 instances in frames 0 and 1,
-//!   then about 150 to 230).
+//!   then for `hiz` about 130 to 270 a frame, `roc` 30 to 140, `ioc` 130
+//!   to 390: docs/benchmarks.md).
 //!
 //! ## Requirements
 //!
 //! - As for [`Culler`]: draws of instance `i` stay inside `bounds[i]`, the
 //!   camera is [`occlude_core::Camera::from_matrices`] of your matrices
 //!   with `reverse_z` matching the depth test.
-//! - Your depth texture has `TEXTURE_BINDING` usage (the pyramid reads
-//!   it in a compute shader); otherwise [`GpuCuller::render`] refuses
-//!   the frame.
+//! - `hiz`: your depth texture has `TEXTURE_BINDING` usage (the pyramid
+//!   reads it in a compute shader); otherwise [`GpuCuller::render`]
+//!   refuses the frame. `roc` and `ioc` only render into it.
 //! - Your device has compute shaders with workgroups of 64 threads and 6
 //!   storage buffers per shader stage (checked by [`GpuCuller::new`]); your
 //!   vertex shader reads a storage buffer (the list).
+//! - `roc` and `ioc`: your device was created with [`RASTER_FEATURES`]
+//!   (`SHADER_EARLY_DEPTH_TEST`: a fragment shader with side effects runs
+//!   only for fragments that passed the depth test) and writes storage
+//!   buffers from fragment shaders (Vulkan, Metal and DX12 do; some GL
+//!   drivers not). [`GpuCuller::new`] checks the feature for them only and
+//!   refuses a device without it ([`EmbedError::Adapter`], naming it), and
+//!   refuses likewise a device on which occlude's pipelines fail to build.
 //! - Your callback binds its own pipeline (with
 //!   [`GpuCuller::render_lists`], occlude sets the pipeline given to
 //!   [`GpuCuller::with_list_pipeline`]), bind groups and buffers: it is
@@ -185,9 +215,13 @@
 //! - One mesh range per culler: every instance is drawn by the same
 //!   indirect draw (different meshes need a culler each, or your own
 //!   compute pass over the list).
-//! - `hiz` only. `roc` and `ioc` rasterize their boxes with a fragment
-//!   stage of occlude's setting flags, inside the passes: not embedded
-//!   ([`GPU_METHODS`]).
+//! - `hiz`, `roc` and `ioc` ([`GPU_METHODS`]), each with its default
+//!   parameters only (`roc.mode=exact`; `ioc.start=4`,
+//!   `ioc.bottom=deepest-2`, clamped to the BVH's depth, `ioc.frustum` on,
+//!   no `ioc.auto`).
+//! - `roc`'s box test has a render pass of its own between your two
+//!   passes (three passes a frame; `hiz` has two), `ioc` one per level of
+//!   its walk.
 //! - No statistics from the frame: [`GpuCuller::read_counts`] reads the
 //!   lists' lengths back (blocking), for tests and printouts.
 //! - The attachment rules of [`Culler`] (one colour attachment, one
@@ -233,12 +267,14 @@
 //! [`FrameStats::wait_ms`]: occlude_core::FrameStats::wait_ms
 
 mod backend;
+mod box_tests;
 mod culler;
 mod gpu_culler;
+mod node_levels;
 
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
-pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS};
+pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS, RASTER_FEATURES};
 
 use occlude_core::methods::MethodError;
 use occlude_core::SceneError;
@@ -263,8 +299,9 @@ pub enum EmbedError {
     /// The attachments' depth format or test cannot be culled against.
     #[error("unsupported attachments: {0}")]
     Attachments(String),
-    /// The renderer's device lacks what GPU-driven culling's compute
-    /// passes need.
+    /// The renderer's device lacks what GPU-driven culling needs: compute
+    /// limits, or for `roc` and `ioc` the feature `SHADER_EARLY_DEPTH_TEST`
+    /// ([`RASTER_FEATURES`]), named in the message.
     #[error("{0}")]
     Adapter(String),
     /// A visible list cannot be bound as the renderer's pipeline asks
