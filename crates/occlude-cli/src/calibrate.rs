@@ -138,6 +138,7 @@ fn synthetic_scene() -> Scene {
         path: CameraPath {
             keyframes: vec![Keyframe { time: 0.0, position: Vec3::ZERO, target: Vec3::NEG_Z, fov_y_deg: 60.0 }],
         },
+        triangle_counts: Vec::new(),
     };
     let triangle = scene.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]));
     let off_screen = Mat4::from_translation(Vec3::new(1000.0, 0.0, -10.0));

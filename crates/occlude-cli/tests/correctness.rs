@@ -290,6 +290,7 @@ fn node_seen_from_inside_its_box_is_never_culled() {
             ],
             70.0,
         ),
+        triangle_counts: Vec::new(),
     };
     let corners: Vec<Vec3> =
         occlude_core::Aabb::new(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 4.0, 5.0)).corners().to_vec();

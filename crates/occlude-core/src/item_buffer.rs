@@ -254,7 +254,14 @@ mod tests {
             .iter()
             .map(|&mesh| Instance { mesh, transform: Mat4::IDENTITY, material: 0, bounds: Aabb::default() })
             .collect();
-        Scene { name: "items".into(), meshes: vec![mesh; 3], instances, material_count: 1, path: Default::default() }
+        Scene {
+            name: "items".into(),
+            meshes: vec![mesh; 3],
+            instances,
+            material_count: 1,
+            path: Default::default(),
+            triangle_counts: Vec::new(),
+        }
     }
 
     #[test]

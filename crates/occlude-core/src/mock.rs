@@ -189,7 +189,7 @@ impl MockBackend {
         let instances = &scene.instances;
         Self {
             bounds: instances.iter().map(|i| i.bounds).collect(),
-            triangles: instances.iter().map(|i| scene.meshes[i.mesh as usize].triangle_count() as u64).collect(),
+            triangles: (0..instances.len()).map(|i| scene.instance_triangles(i)).collect(),
             materials: instances.iter().map(|i| i.material).collect(),
             visible: vec![true; instances.len()],
             latency: 0,

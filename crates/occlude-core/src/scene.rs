@@ -93,6 +93,15 @@ pub enum SceneError {
     /// minimum above its maximum.
     #[error("instance {0}'s bounds are not a finite box with min <= max")]
     BadBounds(usize),
+    /// [`Scene::with_triangle_counts`] got a count list whose length is not
+    /// the number of instances.
+    #[error("{given} triangle counts for {instances} instances")]
+    TriangleCounts {
+        /// Counts given.
+        given: usize,
+        /// Instances in the scene.
+        instances: usize,
+    },
 }
 
 /// A complete scene: meshes, their instances and a default walkthrough.
@@ -108,6 +117,12 @@ pub struct Scene {
     pub material_count: u32,
     /// The scene's default walkthrough.
     pub path: CameraPath,
+    /// Triangles each instance stands for in statistics and cost
+    /// estimates, where that is not its mesh's count: a scene of boxes
+    /// standing for a renderer's own geometry
+    /// ([`Scene::with_triangle_counts`]). Empty: every instance counts its
+    /// mesh's triangles ([`Scene::instance_triangles`]).
+    pub triangle_counts: Vec<u32>,
 }
 
 impl Scene {
@@ -121,6 +136,7 @@ impl Scene {
             instances: Vec::new(),
             material_count: 0,
             path: Default::default(),
+            triangle_counts: Vec::new(),
         }
     }
 
@@ -129,8 +145,9 @@ impl Scene {
     /// and the software backends) as that box's 12 triangles, material 0. Culling
     /// needs no more than the boxes: queries and the hierarchy read
     /// [`Instance::bounds`], kept exactly as given. Each instance counts 12
-    /// triangles in statistics and cost estimates. An empty list or a bad
-    /// box is an error.
+    /// triangles in statistics and cost estimates, unless
+    /// [`Scene::with_triangle_counts`] gives its real count. An empty list
+    /// or a bad box is an error.
     pub fn from_bounds(name: impl Into<String>, bounds: &[Aabb]) -> Result<Self, SceneError> {
         let mut scene = Scene::new(name);
         let corners = Aabb::new(Vec3::ZERO, Vec3::ONE).corners().to_vec();
@@ -181,10 +198,36 @@ impl Scene {
         self.instances.push(Instance { mesh, transform, material, bounds });
     }
 
+    /// The scene with instance `i` counting `counts[i]` triangles in
+    /// statistics and cost estimates instead of its mesh's (see
+    /// [`Scene::triangle_counts`]): what a renderer gives for a scene of
+    /// boxes ([`Scene::from_bounds`]) standing for its own meshes, so that
+    /// frame statistics and the methods' cost decisions (CHC++'s tight
+    /// bounds, NOHC's query costs) see its real geometry. The scene's
+    /// triangles as drawn (by the software backends) do not change. A
+    /// list of the wrong length is an error.
+    pub fn with_triangle_counts(mut self, counts: &[u32]) -> Result<Self, SceneError> {
+        if counts.len() != self.instances.len() {
+            return Err(SceneError::TriangleCounts { given: counts.len(), instances: self.instances.len() });
+        }
+        self.triangle_counts = counts.to_vec();
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// Triangles instance `i` counts in statistics and cost estimates:
+    /// [`Scene::triangle_counts`]' entry where given, else its mesh's.
+    pub fn instance_triangles(&self, i: usize) -> u64 {
+        match self.triangle_counts.get(i) {
+            Some(&n) => u64::from(n),
+            None => self.meshes[self.instances[i].mesh as usize].triangle_count() as u64,
+        }
+    }
+
     /// Triangles over all instances (what view-frustum culling would draw with
-    /// everything in view).
+    /// everything in view), as [`Scene::instance_triangles`] counts them.
     pub fn triangle_count(&self) -> usize {
-        self.instances.iter().map(|i| self.meshes[i.mesh as usize].triangle_count()).sum()
+        (0..self.instances.len()).map(|i| self.instance_triangles(i) as usize).sum()
     }
 
     /// Triangles stored once per mesh (memory footprint).
@@ -219,6 +262,10 @@ impl Scene {
                 return Err(SceneError::NonFiniteTransform(i));
             }
         }
+        if !self.triangle_counts.is_empty() && self.triangle_counts.len() != self.instances.len() {
+            let (given, instances) = (self.triangle_counts.len(), self.instances.len());
+            return Err(SceneError::TriangleCounts { given, instances });
+        }
         if self.triangle_count() == 0 {
             return Err(SceneError::Empty(self.name.clone()));
         }
@@ -237,6 +284,7 @@ mod tests {
             instances: vec![],
             material_count: 0,
             path: CameraPath::default(),
+            triangle_counts: Vec::new(),
         };
         let m = s.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, p], indices));
         s.add_instance(m, Mat4::IDENTITY, 0);
@@ -274,5 +322,13 @@ mod tests {
         let infinite = Aabb::new(Vec3::ZERO, Vec3::splat(f32::INFINITY));
         assert_eq!(Scene::from_bounds("b", &[infinite]).unwrap_err(), SceneError::BadBounds(0));
         assert_eq!(Scene::from_bounds("b", &[]).unwrap_err(), SceneError::Empty("b".into()));
+        let counted = Scene::from_bounds("b", &boxes).unwrap().with_triangle_counts(&[100, 7]).unwrap();
+        assert_eq!((counted.instance_triangles(0), counted.instance_triangles(1)), (100, 7));
+        assert_eq!(counted.triangle_count(), 107);
+        assert_eq!(counted.meshes[0].triangle_count(), 12, "the boxes drawn stay boxes");
+        let short = Scene::from_bounds("b", &boxes).unwrap().with_triangle_counts(&[3]);
+        assert_eq!(short.unwrap_err(), SceneError::TriangleCounts { given: 1, instances: 2 });
+        let none = Scene::from_bounds("b", &boxes).unwrap().with_triangle_counts(&[0, 0]);
+        assert_eq!(none.unwrap_err(), SceneError::Empty("b".into()));
     }
 }

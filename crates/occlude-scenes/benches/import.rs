@@ -23,6 +23,7 @@ fn million_triangles() -> Scene {
         instances: vec![],
         material_count: 8,
         path: CameraPath::default(),
+        triangle_counts: Vec::new(),
     };
     let mut rng = Rng::new(1, 0);
     for k in 0..MESHES {

@@ -16,7 +16,7 @@ pub(crate) const CLEARANCE: f32 = 0.6;
 
 /// An empty scene called `name`.
 pub(crate) fn empty_scene(name: &str) -> Scene {
-    Scene { name: name.to_string(), meshes: vec![], instances: vec![], material_count: 0, path: CameraPath::default() }
+    Scene::new(name)
 }
 
 /// Builds a walkthrough key by key, each key a given number of seconds after

@@ -22,6 +22,7 @@ fn empty_scene() -> Scene {
         instances: Vec::new(),
         material_count: 0,
         path: CameraPath::default(),
+        triangle_counts: Vec::new(),
     }
 }
 

@@ -566,7 +566,7 @@ impl Backend for WgpuBackend<'_> {
         for &i in instances {
             let inst = &self.scene.instances[i as usize];
             self.count.set_state(RenderState::Material(inst.material));
-            self.count.draw(i, self.scene.meshes[inst.mesh as usize].triangle_count() as u64);
+            self.count.draw(i, self.scene.instance_triangles(i as usize));
             self.ops.push(Op::Draw(i));
         }
     }

@@ -126,9 +126,10 @@ impl CullingScene {
         let draws: Vec<[u32; 4]> = scene
             .instances
             .iter()
-            .map(|i| {
+            .enumerate()
+            .map(|(k, i)| {
                 let m = gpu.meshes[i.mesh as usize];
-                let triangles = scene.meshes[i.mesh as usize].triangle_count() as u32;
+                let triangles = scene.instance_triangles(k) as u32;
                 [m.index_count, m.first_index, m.base_vertex as u32, triangles]
             })
             .collect();

@@ -11,7 +11,7 @@ use occlude::glam::{Mat4, Vec3};
 use occlude::wgpu::embed::{
     Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
-use occlude::{Aabb, Camera};
+use occlude::{Aabb, Camera, Scene};
 use own_renderer::{open_device, Options, Renderer};
 
 /// Frames along the camera's walk.
@@ -143,6 +143,26 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let result = culler.render(&reverse.unwrap(), target, |_, instances| drawn.extend_from_slice(instances));
     assert!(matches!(result, Err(EmbedError::Device(_))), "{result:?}");
     assert_eq!(drawn, [0]);
+}
+
+#[test]
+fn the_embedding_counts_the_triangles_it_is_given() {
+    let Some((device, queue)) = device("the_embedding_counts_the_triangles_it_is_given") else { return };
+    let (attachments, bounds) = one_box();
+    let depth = texture_view(&device, attachments.depth, 8, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let camera = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    for (counts, triangles) in [(None, 12), (Some([5000]), 5000)] {
+        let mut scene = Scene::from_bounds("one box", &bounds).unwrap();
+        if let Some(counts) = counts {
+            scene = scene.with_triangle_counts(&counts).unwrap();
+        }
+        let mut culler = Culler::for_scene(&device, &queue, attachments, scene, "vfc").unwrap();
+        let stats = culler.render(&camera, target, |_, _| {}).unwrap();
+        assert_eq!((stats.draw_calls, stats.triangles), (1, triangles), "counts {counts:?}");
+    }
+    let wrong = Scene::from_bounds("one box", &bounds).unwrap().with_triangle_counts(&[1, 2]);
+    assert!(matches!(wrong, Err(occlude::SceneError::TriangleCounts { given: 2, instances: 1 })));
 }
 
 /// The refusal tests' culling input: depth-only `Depth32Float` attachments

@@ -217,6 +217,7 @@ mod tests {
             instances: vec![],
             material_count: 0,
             path: Default::default(),
+            triangle_counts: Vec::new(),
         };
         let m =
             s.add_mesh(crate::scene::Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![0, 1, 2, 1, 3, 2]));

@@ -169,10 +169,7 @@ pub fn subtree_triangles(scene: &Scene, h: &Hierarchy) -> Vec<u64> {
     let mut tris = vec![0u64; h.node_count()];
     for n in (0..h.node_count() as NodeId).rev() {
         tris[n as usize] = if h.is_leaf(n) {
-            h.instances(n)
-                .iter()
-                .map(|&i| scene.meshes[scene.instances[i as usize].mesh as usize].triangle_count() as u64)
-                .sum()
+            h.instances(n).iter().map(|&i| scene.instance_triangles(i as usize)).sum()
         } else {
             h.children(n).iter().map(|&c| tris[c as usize]).sum()
         };

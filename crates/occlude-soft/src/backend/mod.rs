@@ -248,7 +248,7 @@ impl<'s> SoftBackend<'s> {
         if self.triangles.len() >= FLUSH_TRIANGLES && !self.batch_open {
             self.flush();
         }
-        let triangles = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].triangle_count() as u64;
+        let triangles = self.scene.instance_triangles(i as usize);
         self.count.draw(i, triangles);
         let first = self.triangles.len();
         self.push_instance_triangles(i);

@@ -42,6 +42,7 @@ fn scene() -> Scene {
         instances: vec![],
         material_count: 0,
         path: Default::default(),
+        triangle_counts: Vec::new(),
     };
     // A quad first, so that the cube lies past the pools' start.
     let quad = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)], vec![0, 1, 2, 1, 3, 2]);

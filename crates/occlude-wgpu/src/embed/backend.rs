@@ -189,7 +189,6 @@ impl QueryBackend {
         let camera_buffer = camera_buffer(device);
         let boxes = BoxRows::new(device);
         let group = query_group(device, &pipeline, &camera_buffer, &boxes.buffer);
-        let mesh_triangles = |i: &occlude_core::Instance| scene.meshes[i.mesh as usize].triangle_count() as u64;
         Ok(Self {
             attachments,
             pipeline,
@@ -198,7 +197,7 @@ impl QueryBackend {
             boxes,
             group,
             book: QueryBook::default(),
-            triangles: scene.instances.iter().map(mesh_triangles).collect(),
+            triangles: (0..scene.instances.len()).map(|i| scene.instance_triangles(i)).collect(),
             materials: scene.instances.iter().map(|i| i.material).collect(),
             ops: Vec::new(),
             listed: Vec::new(),

@@ -32,7 +32,9 @@ impl Culler {
     /// called `method` (one of [`QUERY_METHODS`], default parameters) on
     /// the renderer's `device` and `queue`, whose passes draw into
     /// `attachments`. Builds a BVH over the boxes once. A method that does
-    /// not run embedded, bad boxes or attachments are an error.
+    /// not run embedded, bad boxes or attachments are an error. Each
+    /// instance counts 12 triangles; [`Culler::for_scene`] takes their real
+    /// counts.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -40,11 +42,28 @@ impl Culler {
         bounds: &[Aabb],
         method: &str,
     ) -> Result<Self, EmbedError> {
+        Self::for_scene(device, queue, attachments, Scene::from_bounds("embedded", bounds)?, method)
+    }
+
+    /// [`Culler::new`] over `scene`'s instances (their
+    /// [`Instance::bounds`](occlude_core::Instance::bounds), triangle counts
+    /// and materials; the renderer still draws its own geometry): for a
+    /// renderer that gives each instance's real triangle count, made with
+    /// [`Scene::from_bounds`] and [`Scene::with_triangle_counts`], so that
+    /// frame statistics and the methods' cost decisions (`chcpp`'s tight
+    /// bounds) see its geometry rather than 12 triangles a box.
+    pub fn for_scene(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        attachments: Attachments,
+        scene: Scene,
+        method: &str,
+    ) -> Result<Self, EmbedError> {
         if !QUERY_METHODS.contains(&method) {
             return Err(EmbedError::Unsupported(method.to_string()));
         }
         let method = create(method, &MethodOptions::default())?.method;
-        let scene = Scene::from_bounds("embedded", bounds)?;
+        scene.validate()?;
         let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
         let backend = QueryBackend::new(device, queue, attachments, &scene)?;
         Ok(Self { backend, scene, hierarchy, method, drawn: DrawnSet::default() })
@@ -72,7 +91,8 @@ impl Culler {
         }
     }
 
-    /// The scene of boxes the method culls ([`Scene::from_bounds`]).
+    /// The scene the method culls ([`Scene::from_bounds`] for
+    /// [`Culler::new`]).
     pub fn scene(&self) -> &Scene {
         &self.scene
     }

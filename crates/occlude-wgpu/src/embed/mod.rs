@@ -52,7 +52,9 @@
 //! - One colour attachment at most, one sample (no MSAA), no viewport or
 //!   scissor other than the whole target.
 //! - Each instance counts 12 triangles in [`FrameStats`] and in `chcpp`'s
-//!   cost estimates, whatever it draws.
+//!   cost estimates, unless you give the real counts
+//!   ([`Culler::for_scene`] with
+//!   [`Scene::with_triangle_counts`](occlude_core::Scene::with_triangle_counts)).
 //! - Errors of your device (loss, validation) go to your handlers, not to
 //!   [`Backend::failure`](occlude_core::Backend::failure), which reports
 //!   only what occlude found itself (a failed read-back, a camera of the
