@@ -40,7 +40,9 @@
 //! ## Requirements
 //!
 //! - Every draw of instance `i` stays inside `bounds[i]`; instances that
-//!   move need new bounds (and a new [`Culler`]).
+//!   move need new bounds (and a new [`Culler`]). A mesh's local box and
+//!   its instance's transform give the world box with
+//!   [`Aabb::transformed`](occlude_core::Aabb::transformed).
 //! - The camera is [`occlude_core::Camera::from_matrices`] of the view and
 //!   projection you draw with, `reverse_z` matching the depth test.
 //! - Your draw callback sets its own pipeline, bind groups and buffers on
