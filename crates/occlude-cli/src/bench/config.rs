@@ -100,6 +100,12 @@ pub struct BenchConfig {
     /// Frame (0-based) whose decisions the methods that can record them keep
     /// for [`super::dump`] (`--dump-frame K`).
     pub dump_frame: Option<usize>,
+    /// Whether the lanes of a frame (the `vfc` reference, each method and
+    /// variant, each on its backend of its own) render side by side on the
+    /// thread pool. Only the soft backend does: its figures are simulated,
+    /// so they are the same either way (only `wall_ms` differs); the wgpu
+    /// backend's lanes take turns, as they measure time on one GPU.
+    pub parallel_lanes: bool,
 }
 
 impl Default for BenchConfig {
@@ -121,6 +127,7 @@ impl Default for BenchConfig {
             import: ImportOptions::default(),
             camera_path: None,
             dump_frame: None,
+            parallel_lanes: true,
         }
     }
 }

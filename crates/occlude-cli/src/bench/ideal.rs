@@ -15,8 +15,7 @@ use occlude_core::{
     Aabb, Backend, Camera, CostModel, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling,
     GpuCullingUnsupported, Instruments, QueryHandle,
 };
-use std::cell::RefCell;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// The method's name, as `--methods` lists it.
 pub const IDEAL: &str = "ideal";
@@ -25,30 +24,39 @@ pub const IDEAL: &str = "ideal";
 pub const SOURCE: &str = "sw";
 
 /// The draw calls of one frame, shared by the [`DrawLog`] that records them
-/// and the [`Ideal`] that replays them.
-pub type DrawCalls = Rc<RefCell<Vec<Vec<u32>>>>;
+/// and the [`Ideal`] that replays them (the runner renders both lanes on
+/// one thread, the log's first, but possibly another thread than the other
+/// lanes').
+pub type DrawCalls = Arc<Mutex<Vec<Vec<u32>>>>;
+
+/// The calls recorded in `calls` (a panic while they were held leaves them
+/// usable: each is a whole draw call).
+fn lock(calls: &DrawCalls) -> std::sync::MutexGuard<'_, Vec<Vec<u32>>> {
+    calls.lock().unwrap_or_else(PoisonError::into_inner)
+}
 
 /// A backend that forwards every call to `inner` and keeps the frame's draw
-/// calls in `calls` (cleared when a frame begins).
-pub struct DrawLog<'s> {
-    inner: Box<dyn Backend + 's>,
+/// calls in `calls` (cleared when a frame begins). `B` is the wrapped
+/// backend's type, a trait object in the runner.
+pub struct DrawLog<B: ?Sized> {
+    inner: Box<B>,
     calls: DrawCalls,
 }
 
-impl<'s> DrawLog<'s> {
+impl<B: Backend + ?Sized> DrawLog<B> {
     /// Records the draws made on `inner` into `calls`.
-    pub fn new(inner: Box<dyn Backend + 's>, calls: DrawCalls) -> Self {
+    pub fn new(inner: Box<B>, calls: DrawCalls) -> Self {
         Self { inner, calls }
     }
 }
 
-impl Backend for DrawLog<'_> {
+impl<B: Backend + ?Sized> Backend for DrawLog<B> {
     fn begin_frame(&mut self, camera: &Camera) {
-        self.calls.borrow_mut().clear();
+        lock(&self.calls).clear();
         self.inner.begin_frame(camera);
     }
     fn draw(&mut self, instances: &[u32]) {
-        self.calls.borrow_mut().push(instances.to_vec());
+        lock(&self.calls).push(instances.to_vec());
         self.inner.draw(instances);
     }
     fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
@@ -104,7 +112,7 @@ impl CullingMethod for Ideal {
     }
 
     fn render(&mut self, _ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        for instances in self.calls.borrow().iter() {
+        for instances in lock(&self.calls).iter() {
             backend.draw(instances);
         }
     }

@@ -1,5 +1,10 @@
 //! Runs the methods frame by frame and checks each against view-frustum
 //! culling's depth image (the correctness rule of `docs/design.md`).
+//!
+//! Each method is a lane with a backend of its own; on the soft backend the
+//! lanes of a frame render side by side on the thread pool
+//! ([`BenchConfig::parallel_lanes`]), and are then checked and recorded in
+//! report order, so the results are those of rendering them one by one.
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
@@ -12,8 +17,8 @@ use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, Method
 use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
-use std::rc::Rc;
 use std::sync::Arc;
 
 /// Everything a run measured, before summarising.
@@ -64,7 +69,7 @@ impl Renderer {
         })
     }
 
-    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Result<Box<dyn Backend + 's>> {
+    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Result<Box<dyn Backend + Send + 's>> {
         let (w, h) = config.resolution;
         Ok(match self {
             Self::Soft => {
@@ -85,6 +90,13 @@ impl Renderer {
             Self::Soft => None,
             Self::Wgpu(gpu) => Some(gpu.context().adapter_name()),
         }
+    }
+
+    /// Whether lanes may render side by side: on the soft backend, whose
+    /// figures are simulated, when `config` asks; never on a GPU, whose
+    /// times the lanes would disturb.
+    fn parallel_lanes(&self, config: &BenchConfig) -> bool {
+        matches!(self, Self::Soft) && config.parallel_lanes
     }
 }
 
@@ -127,15 +139,29 @@ impl Variant {
 /// One method with its own backend and state across frames.
 struct Lane<'s> {
     built: BuiltMethod,
-    backend: Box<dyn Backend + 's>,
+    backend: Box<dyn Backend + Send + 's>,
     drawn: DrawnSet,
     frames: Vec<FrameStats>,
     counters: BTreeMap<String, Vec<f64>>,
+    /// The statistics of the frame last rendered, until the runner checks
+    /// and records them.
+    stats: FrameStats,
+    /// The depth image of the frame last rendered, in memory reused frame
+    /// after frame.
+    image: Vec<f32>,
 }
 
 impl<'s> Lane<'s> {
-    fn new(built: BuiltMethod, backend: Box<dyn Backend + 's>) -> Self {
-        Self { built, backend, drawn: DrawnSet::default(), frames: Vec::new(), counters: BTreeMap::new() }
+    fn new(built: BuiltMethod, backend: Box<dyn Backend + Send + 's>) -> Self {
+        Self {
+            built,
+            backend,
+            drawn: DrawnSet::default(),
+            frames: Vec::new(),
+            counters: BTreeMap::new(),
+            stats: FrameStats::default(),
+            image: Vec::new(),
+        }
     }
 
     /// The lane's measurements.
@@ -148,14 +174,79 @@ impl<'s> Lane<'s> {
         }
     }
 
-    /// Renders one frame; returns its statistics.
-    fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> FrameStats {
+    /// Renders one frame into [`Self::stats`] and [`Self::image`].
+    fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> Result<()> {
         let method = self.built.method.as_mut();
-        let stats = render_frame(method, self.backend.as_mut(), scene, hierarchy, camera, &mut self.drawn);
+        self.stats = render_frame(method, self.backend.as_mut(), scene, hierarchy, camera, &mut self.drawn);
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
-        stats
+        depth_image(self.backend.as_mut(), &mut self.image)
+    }
+}
+
+/// A run's lanes in chains: the lanes of a chain render a frame one after
+/// another (`ideal` after the `sw` whose draws it replays), the chains side
+/// by side when [`Self::parallel`]. Nothing else is shared between lanes,
+/// so the order they render in changes no figure.
+struct Lanes<'s> {
+    chains: Vec<Vec<Lane<'s>>>,
+    /// Per lane in report order (the `vfc` reference first), its chain and
+    /// place in it.
+    order: Vec<(usize, usize)>,
+    parallel: bool,
+}
+
+impl<'s> Lanes<'s> {
+    /// `reference` alone, its lanes to render side by side when `parallel`.
+    fn new(reference: Lane<'s>, parallel: bool) -> Self {
+        Self { chains: vec![vec![reference]], order: vec![(0, 0)], parallel }
+    }
+
+    /// Appends `lane` in report order, in a chain of its own or, with
+    /// `after`, after the lane of that index in its chain.
+    fn push(&mut self, lane: Lane<'s>, after: Option<usize>) {
+        let chain = match after {
+            Some(i) => self.order[i].0,
+            None => {
+                self.chains.push(Vec::new());
+                self.chains.len() - 1
+            }
+        };
+        self.order.push((chain, self.chains[chain].len()));
+        self.chains[chain].push(lane);
+    }
+
+    fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The lane of index `i` in report order (0: the reference).
+    fn get_mut(&mut self, i: usize) -> &mut Lane<'s> {
+        let (chain, at) = self.order[i];
+        &mut self.chains[chain][at]
+    }
+
+    /// Every lane in report order.
+    fn iter(&self) -> impl Iterator<Item = &Lane<'s>> {
+        self.order.iter().map(|&(chain, at)| &self.chains[chain][at])
+    }
+
+    /// Renders one frame on every lane.
+    fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> Result<()> {
+        let chain = |lanes: &mut Vec<Lane<'s>>| lanes.iter_mut().try_for_each(|l| l.frame(scene, hierarchy, camera));
+        if self.parallel {
+            self.chains.par_iter_mut().try_for_each(chain)
+        } else {
+            self.chains.iter_mut().try_for_each(chain)
+        }
+    }
+
+    /// The lanes in report order.
+    fn into_vec(self) -> Vec<Lane<'s>> {
+        let mut chains: Vec<Vec<Option<Lane<'s>>>> =
+            self.chains.into_iter().map(|c| c.into_iter().map(Some).collect()).collect();
+        self.order.iter().map(|&(chain, at)| chains[chain][at].take().expect("each lane once")).collect()
     }
 }
 
@@ -240,64 +331,31 @@ fn run_scene_here(
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
     let renderer = stage(progress, "uploading the scene", || Renderer::new(config, scene))?;
-    let mut reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config)?);
-    // `ideal` replays the draw calls `sw` (listed before it) made in the frame.
-    let replayed = config.methods.iter().any(|m| m == IDEAL);
-    let calls = DrawCalls::default();
-    let mut lanes = config
-        .methods
-        .iter()
-        .filter(|m| m.as_str() != "vfc")
-        .map(|m| {
-            let backend = renderer.backend(scene, config)?;
-            Ok(match m.as_str() {
-                IDEAL => {
-                    let built = BuiltMethod { method: Box::new(Ideal::new(Rc::clone(&calls))), params: Vec::new() };
-                    Lane::new(built, backend)
-                }
-                ideal::SOURCE if replayed => {
-                    Lane::new(create(m, &config.options)?, Box::new(DrawLog::new(backend, Rc::clone(&calls))))
-                }
-                _ => Lane::new(create(m, &config.options)?, backend),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    for built in variant_methods {
-        lanes.push(Lane::new(built, renderer.backend(scene, config)?));
-    }
-    for lane in &mut lanes {
-        let method = lane.built.method.as_ref();
-        if let Err(e) = check_support(method, lane.backend.as_mut()) {
-            return Err(anyhow::Error::new(e).context(format!("method {} cannot run", method.name())));
-        }
-    }
+    let mut lanes = build_lanes(scene, config, variant_methods, &renderer)?;
     let mut warnings = Vec::new();
 
     progress.set_length(cameras.len() as u64);
     progress.set_position(0);
     let mut dumps = Vec::new();
     let mut aborted = None;
-    // The frame's depth images, VFC's and a method's, in memory reused frame
-    // after frame.
-    let (mut expected, mut image) = (Vec::new(), Vec::new());
-    'frames: for (k, camera) in cameras.iter().enumerate() {
-        let stats = reference.frame(scene, &hierarchy, camera);
-        reference.frames.push(stats);
-        depth_image(reference.backend.as_mut(), &mut expected)?;
-        if let Some(e) = reference.backend.failure() {
-            aborted = Some(format!("frame {k}, method vfc: {e}"));
+    for (k, camera) in cameras.iter().enumerate() {
+        let dump = config.dump_frame == Some(k);
+        for i in 1..lanes.len() {
+            lanes.get_mut(i).built.method.set_debug(dump);
+        }
+        lanes.frame(scene, &hierarchy, camera)?;
+        if let Some(e) = lanes.iter().find_map(|l| l.backend.failure().map(|e| (l.built.method.name(), e))) {
+            aborted = Some(format!("frame {k}, method {}: {}", e.0, e.1));
             break;
         }
-        let dump = config.dump_frame == Some(k);
-        for lane in &mut lanes {
-            lane.built.method.set_debug(dump);
-            let mut stats = lane.frame(scene, &hierarchy, camera);
-            depth_image(lane.backend.as_mut(), &mut image)?;
-            if let Some(e) = lane.backend.failure() {
-                aborted = Some(format!("frame {k}, method {}: {e}", lane.built.method.name()));
-                break 'frames;
+        // VFC's depth image, the one every other lane's must equal.
+        let expected = std::mem::take(&mut lanes.get_mut(0).image);
+        for i in 0..lanes.len() {
+            let lane = lanes.get_mut(i);
+            let mut stats = lane.stats;
+            if i > 0 {
+                stats.missing_pixels = differing_pixels(&expected, &lane.image);
             }
-            stats.missing_pixels = differing_pixels(&expected, &image);
             lane.frames.push(stats);
             for w in lane.built.method.take_warnings() {
                 let w = format!("{}: {w}", lane.built.method.name());
@@ -306,23 +364,23 @@ fn run_scene_here(
             }
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
                 let name = lane.built.method.name().to_string();
-                let depth = image.clone();
+                let depth = lane.image.clone();
                 dumps.push(FrameDump { method: name, frame: k, resolution: config.resolution, depth, view });
             }
         }
+        lanes.get_mut(0).image = expected;
         progress.inc(1);
     }
-    // Keep only the frames every method finished.
-    let finished = lanes.iter().map(|l| l.frames.len()).chain([reference.frames.len()]).min().unwrap_or(0);
-    if aborted.is_some() {
-        reference.frames.truncate(finished);
-        lanes.iter_mut().for_each(|l| l.frames.truncate(finished));
-        lanes.iter_mut().flat_map(|l| l.counters.values_mut()).for_each(|c| c.truncate(finished));
-        reference.counters.values_mut().for_each(|c| c.truncate(finished));
+    let mut lanes = lanes.into_vec();
+    // Keep only the frames every lane finished (all of them unless aborted).
+    let finished = lanes.iter().map(|l| l.frames.len()).min().unwrap_or(0);
+    for lane in &mut lanes {
+        lane.frames.truncate(finished);
+        lane.counters.values_mut().for_each(|c| c.truncate(finished));
     }
 
-    let reference = reference.into_run();
     let mut lanes = lanes.into_iter().map(Lane::into_run);
+    let reference = lanes.next().expect("the reference lane");
     let methods = config
         .methods
         .iter()
@@ -338,6 +396,50 @@ fn run_scene_here(
         aborted,
         warnings,
     })
+}
+
+/// The run's lanes on `renderer`'s backends: the `vfc` reference, each
+/// configured method but `vfc`, then `variants`; a method the backend
+/// cannot run is refused.
+fn build_lanes<'s>(
+    scene: &'s Scene,
+    config: &BenchConfig,
+    variants: Vec<BuiltMethod>,
+    renderer: &Renderer,
+) -> Result<Lanes<'s>> {
+    let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config)?);
+    let mut lanes = Lanes::new(reference, renderer.parallel_lanes(config));
+    // `ideal` replays the draw calls `sw` (listed before it) made in the
+    // frame, after it in its chain.
+    let replayed = config.methods.iter().any(|m| m == IDEAL);
+    let calls = DrawCalls::default();
+    let mut source = None;
+    for m in config.methods.iter().filter(|m| m.as_str() != "vfc") {
+        let backend = renderer.backend(scene, config)?;
+        match m.as_str() {
+            IDEAL => {
+                let built = BuiltMethod { method: Box::new(Ideal::new(Arc::clone(&calls))), params: Vec::new() };
+                lanes.push(Lane::new(built, backend), source);
+            }
+            ideal::SOURCE if replayed => {
+                source = Some(lanes.len());
+                let log = Box::new(DrawLog::new(backend, Arc::clone(&calls)));
+                lanes.push(Lane::new(create(m, &config.options)?, log), None);
+            }
+            _ => lanes.push(Lane::new(create(m, &config.options)?, backend), None),
+        }
+    }
+    for built in variants {
+        lanes.push(Lane::new(built, renderer.backend(scene, config)?), None);
+    }
+    for i in 1..lanes.len() {
+        let lane = lanes.get_mut(i);
+        let method = lane.built.method.as_ref();
+        if let Err(e) = check_support(method, lane.backend.as_mut()) {
+            return Err(anyhow::Error::new(e).context(format!("method {} cannot run", method.name())));
+        }
+    }
+    Ok(lanes)
 }
 
 /// The depth image of `backend`'s last frame, for the correctness rule;
@@ -358,6 +460,112 @@ impl BenchRun {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A small scene's walkthrough with the Table 1 lanes, `ideal` chained
+    /// after `sw`, methods that use the thread pool themselves (`moc`) or
+    /// keep state across frames (`chc`, `chcpp`), one that records its
+    /// decisions (`om`, the dumped frame), and a variant.
+    fn lanes_config() -> (BenchConfig, Vec<Variant>) {
+        let methods = ["vfc", "sw", "chc", "ideal", "chcpp", "om", "moc", "opt"];
+        let config = BenchConfig {
+            methods: methods.map(String::from).to_vec(),
+            frames: 8,
+            resolution: (160, 112),
+            hierarchy: occlude_core::HierarchyKind::KdTree,
+            gpu_model: occlude_soft::GpuModel::gpu_2004(),
+            dump_frame: Some(5),
+            ..BenchConfig::default()
+        };
+        let variants = vec![Variant {
+            method: "chc".into(),
+            options: MethodOptions::parse(&["chc.tav=2", "chc.nvp=25"]).unwrap(),
+        }];
+        (config, variants)
+    }
+
+    /// `stats` without its wall-clock time, the one figure that depends on
+    /// the machine.
+    fn simulated(mut stats: FrameStats) -> FrameStats {
+        stats.wall_ms = 0.0;
+        stats
+    }
+
+    /// Lanes rendered side by side give, frame by frame, each lane's
+    /// simulated statistics and depth image bit for bit as lanes rendered
+    /// one after another.
+    #[test]
+    fn lanes_side_by_side_render_the_images_and_figures_of_lanes_one_by_one() {
+        let (config, variants) = lanes_config();
+        let scene = occlude_scenes::load("city", config.size, config.seed, &config.import).unwrap();
+        let hierarchy = Hierarchy::build(&scene, config.hierarchy, config.build);
+        let build = |parallel_lanes: bool| {
+            let config = BenchConfig { parallel_lanes, ..config.clone() };
+            let variants = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>().unwrap();
+            build_lanes(&scene, &config, variants, &Renderer::Soft).unwrap()
+        };
+        let (mut side_by_side, mut one_by_one) = (build(true), build(false));
+        assert!(side_by_side.parallel && !one_by_one.parallel);
+        assert_eq!(side_by_side.chains.len(), 8, "ideal shares sw's chain: {:?}", side_by_side.order);
+        // Three threads, so that lanes overlap even on a one-core machine.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let mut drawn = 0;
+        for camera in cameras(&scene, &config) {
+            pool.install(|| side_by_side.frame(&scene, &hierarchy, &camera)).unwrap();
+            one_by_one.frame(&scene, &hierarchy, &camera).unwrap();
+            for (a, b) in side_by_side.iter().zip(one_by_one.iter()) {
+                let name = a.built.method.name();
+                assert_eq!(simulated(a.stats), simulated(b.stats), "{name}");
+                let bits = |image: &[f32]| image.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a.image), bits(&b.image), "{name}");
+                assert_eq!(a.image.len(), 160 * 112, "{name}");
+            }
+            drawn += side_by_side.iter().next().unwrap().image.iter().filter(|&&d| d < 1.0).count();
+        }
+        assert!(drawn > 0, "the walkthrough sees geometry");
+    }
+
+    /// Everything a run records but wall-clock time: per method and
+    /// variant its name, parameters, simulated statistics and counters;
+    /// the reference; the dumped frame's images and decisions; warnings.
+    fn figures(run: &BenchRun) -> String {
+        let lane = |m: &MethodRun| {
+            let frames: Vec<FrameStats> = m.frames.iter().copied().map(simulated).collect();
+            format!("{} {:?} {frames:?} {:?}", m.name, m.params, m.counters)
+        };
+        let runs: Vec<String> = run.methods.iter().chain(&run.variants).map(lane).collect();
+        let reference: Vec<FrameStats> = run.reference.iter().copied().map(simulated).collect();
+        let dumps: Vec<String> = run
+            .dumps
+            .iter()
+            .map(|d| {
+                let bits: Vec<u32> = d.depth.iter().map(|x| x.to_bits()).collect();
+                format!("{} {} {bits:?} {:?}", d.method, d.frame, d.view)
+            })
+            .collect();
+        format!("{runs:#?}\n{reference:?}\n{dumps:?}\n{:?} {:?}", run.warnings, run.aborted)
+    }
+
+    /// A run with its lanes side by side records every figure of a run
+    /// with its lanes one by one, and two such runs agree (determinism).
+    #[test]
+    fn a_run_with_lanes_side_by_side_gives_the_figures_of_one_with_lanes_in_turn() {
+        let (config, variants) = lanes_config();
+        let scene = load_scene(&config).unwrap();
+        let run = |parallel_lanes: bool| {
+            let config = BenchConfig { parallel_lanes, ..config.clone() };
+            run_scene_with_variants(&scene, &config, &variants, &ProgressBar::hidden()).unwrap()
+        };
+        let one_by_one = run(false);
+        // Every method is conservative; the variant (`nvp=25`) need not be.
+        for m in &one_by_one.methods {
+            assert!(m.frames.len() == 8 && m.frames.iter().all(|f| f.missing_pixels == 0), "{}", m.name);
+        }
+        assert_eq!((one_by_one.methods.len(), one_by_one.variants.len()), (8, 1));
+        assert_eq!(one_by_one.dumps.iter().map(|d| (d.method.as_str(), d.frame)).collect::<Vec<_>>(), [("om", 5)]);
+        let one_by_one = figures(&one_by_one);
+        assert_eq!(figures(&run(true)), one_by_one);
+        assert_eq!(figures(&run(true)), one_by_one);
+    }
 
     #[test]
     fn a_variant_with_options_its_method_lacks_is_refused_with_the_option_named() {

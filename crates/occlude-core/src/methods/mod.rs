@@ -55,8 +55,9 @@ pub enum MethodError {
 /// A method ready to run, with the parameter values it uses (defaults
 /// included) for the report.
 pub struct BuiltMethod {
-    /// The method.
-    pub method: Box<dyn CullingMethod>,
+    /// The method; `Send`, so that a runner can render several methods'
+    /// frames on threads of their own (every method is).
+    pub method: Box<dyn CullingMethod + Send>,
     /// `(parameter, value)` pairs in the order the method reads them.
     pub params: Vec<(String, String)>,
 }
@@ -83,7 +84,7 @@ pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> R
 /// frames), with its parameters read from `options`.
 pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, MethodError> {
     let mut reader = options.for_method(name);
-    let method: Box<dyn CullingMethod> = match name {
+    let method: Box<dyn CullingMethod + Send> = match name {
         "vfc" => Box::new(vfc::ViewFrustumCulling),
         "sw" => Box::new(sw::StopAndWait),
         "opt" => Box::new(opt::Optimal::default()),

@@ -165,6 +165,35 @@ impl<'s> SoftBackend<'s> {
         }
     }
 
+    /// The oracle pass ([`Instruments::oracle`]): every candidate drawn,
+    /// then an equal-depth query of each counting its pixels in the image.
+    /// Each pass runs in rasterizer calls of about `part` triangles (at
+    /// least one candidate each), in order, so that a view of tens of
+    /// millions of triangles holds a bounded number of them at once, as
+    /// draws are flushed; images and counts are the same whatever `part`.
+    fn oracle_in_parts(&mut self, camera: &Camera, candidates: &[u32], part: usize) -> OracleView {
+        self.view_projection = camera.view_projection();
+        self.depth.clear();
+        let mut pixels = Vec::with_capacity(candidates.len());
+        for kind in [CommandKind::Draw, CommandKind::Query(DepthTest::Equal)] {
+            let mut commands = Vec::new();
+            for (k, &i) in candidates.iter().enumerate() {
+                let first = self.triangles.len() as u32;
+                self.push_instance_triangles(i);
+                commands.push(Command { kind, triangles: first..self.triangles.len() as u32, cull_back: false });
+                if self.triangles.len() >= part || k + 1 == candidates.len() {
+                    let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
+                    if kind != CommandKind::Draw {
+                        pixels.extend(results.iter().map(|r| r.passed));
+                    }
+                    self.triangles.clear();
+                    commands.clear();
+                }
+            }
+        }
+        OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
+    }
+
     /// Charges a render-state change's costs when `changed` (what
     /// [`FrameCounter`] answered).
     fn charge_state_change(&mut self, changed: bool) {
@@ -391,26 +420,60 @@ impl Instruments for SoftBackend<'_> {
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.view_projection = camera.view_projection();
-        self.depth.clear();
-        let mut ranges = Vec::with_capacity(candidates.len());
-        for &i in candidates {
-            let first = self.triangles.len() as u32;
-            self.push_instance_triangles(i);
-            ranges.push(first..self.triangles.len() as u32);
+        self.oracle_in_parts(camera, candidates, FLUSH_TRIANGLES)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use occlude_core::{Keyframe, Mesh};
+
+    /// Twelve overlapping quads one behind the other, and a smaller one
+    /// hidden behind the first.
+    fn quads() -> Scene {
+        let mut scene = Scene::new("quads");
+        let quad = Mesh::new(
+            vec![
+                Vec3::new(-0.5, -0.5, 0.0),
+                Vec3::new(0.5, -0.5, 0.0),
+                Vec3::new(0.5, 0.5, 0.0),
+                Vec3::new(-0.5, 0.5, 0.0),
+            ],
+            vec![0, 1, 2, 0, 2, 3],
+        );
+        let mesh = scene.add_mesh(quad);
+        for k in 0..12 {
+            let at = Vec3::new(0.04 * k as f32, 0.03 * k as f32, -2.0 - 0.1 * k as f32);
+            scene.add_instance(mesh, Mat4::from_translation(at), k % 3);
         }
-        let mut commands: Vec<Command> = ranges
-            .iter()
-            .map(|r| Command { kind: CommandKind::Draw, triangles: r.clone(), cull_back: false })
-            .collect();
-        commands.extend(ranges.into_iter().map(|r| Command {
-            kind: CommandKind::Query(DepthTest::Equal),
-            triangles: r,
-            cull_back: false,
-        }));
-        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
-        self.triangles.clear();
-        let pixels = results[candidates.len()..].iter().map(|r| r.passed).collect();
-        OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
+        scene.add_instance(
+            mesh,
+            Mat4::from_translation(Vec3::new(0.0, 0.0, -2.05)) * Mat4::from_scale(Vec3::splat(0.5)),
+            0,
+        );
+        scene
+    }
+
+    /// The oracle in calls of one candidate each, or of a few, gives the
+    /// image and every count of the oracle in one call per pass.
+    #[test]
+    fn the_oracle_in_parts_gives_the_image_and_counts_of_one_call() {
+        let scene = quads();
+        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
+        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
+        let candidates: Vec<u32> = (0..scene.instances.len() as u32).rev().collect();
+        let view = |part: usize| {
+            let mut backend = SoftBackend::new(&scene, 97, 71, GpuModel::modern());
+            let v = backend.oracle_in_parts(&camera, &candidates, part);
+            (v.pixels, v.visible, v.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
+        };
+        let whole = view(usize::MAX);
+        // Some seen, some hidden (the small quad behind the first among them).
+        assert!(whole.1.len() >= 5 && whole.1.len() < candidates.len() && whole.0[0] == 0, "{:?}", whole.0);
+        for part in [1, 5, 13] {
+            assert_eq!(view(part), whole, "parts of {part} triangles");
+        }
     }
 }
