@@ -166,6 +166,12 @@ struct BenchArgs {
     /// Worker threads for the rasterizer (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Render a frame's methods one after another on the soft backend
+    /// instead of side by side on the thread pool: each method's wall ms is
+    /// then its own, not shared with the others running beside it (the
+    /// simulated figures are the same either way).
+    #[arg(long)]
+    serial_lanes: bool,
     /// Write PNGs of what frame K (0-based) decided, for each method that
     /// records it (om): its occupancy map and its nodes' screen rectangles.
     #[arg(long, value_name = "K")]
@@ -300,6 +306,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         queries: args.queries,
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
+        parallel_lanes: !args.serial_lanes,
         ..args.scene.config()?
     };
     let config = match (&args.paper, &args.scene.size) {
