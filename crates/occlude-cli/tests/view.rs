@@ -148,6 +148,38 @@ fn figure4_shows_visible_and_occluded_query_boxes() {
     }
 }
 
+/// `hiz`'s box tests coloured by the pyramid level each was tested at
+/// (`--pyramid-levels`, key Z): outlines in the colours of several levels.
+#[test]
+fn pyramid_levels_colour_hiz_boxes_by_level() {
+    let Some(x) = window_setup("pyramid_levels_colour_hiz_boxes_by_level") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("hiz-levels.png");
+    let out = x.view(&[
+        "--scene",
+        "city",
+        "--method",
+        "hiz",
+        "--frames",
+        "5",
+        "--play",
+        "--pyramid-levels",
+        "--resolution",
+        "640x480",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let px = pixels(&shot, 640, 480);
+    // Levels 0 to 6 but 4 (orange, not exact): blue, cyan, green, yellow,
+    // red, magenta (`view::boxes::LEVEL_COLOURS`; white, 7 and coarser, is
+    // also the text's colour).
+    let palette = [[0, 0, 255], [0, 255, 255], [0, 255, 0], [255, 255, 0], [255, 0, 0], [255, 0, 255]];
+    let levels = palette.map(|c| count(&px, c));
+    let shown = levels.iter().filter(|&&n| n > 100).count();
+    assert!(shown >= 2, "outline pixels of levels 0-3, 5 and 6: {levels:?}");
+}
+
 #[test]
 fn without_an_adapter_view_says_so_with_exit_code_2() {
     let Some(x) = Xvfb::start("without_an_adapter_view_says_so_with_exit_code_2") else { return };
