@@ -200,6 +200,10 @@ struct ViewArgs {
     /// frame (key V).
     #[arg(long)]
     figure4: bool,
+    /// Show the box tests' boxes coloured by the depth-pyramid level each
+    /// was tested at (hiz; hidden ones filled), from the first frame (key Z).
+    #[arg(long)]
+    pyramid_levels: bool,
     /// Render --frames frames (along the walkthrough with --play, else of the
     /// first view), save the last as this PNG and exit.
     #[arg(long, value_name = "FILE.png", value_parser = parse_output_path)]
@@ -450,6 +454,7 @@ fn view(args: &ViewArgs) -> Result<(), Failure> {
         method: args.method.trim().to_string(),
         play: args.play,
         figure4: args.figure4,
+        pyramid_levels: args.pyramid_levels,
         screenshot: args.screenshot.clone(),
         record: args.record.clone(),
     };

@@ -4,7 +4,9 @@
 //! self-contained HTML page, and optionally the same content as Markdown.
 //!
 //! Each report gets a heading with its setup, the scene statistics, the
-//! comparison table of `occlude bench` and two plots over the walkthrough:
+//! comparison table of `occlude bench`, for the GPU-driven methods (`roc`,
+//! `ioc`, `hiz`: compute dispatches) their culling passes, and two plots
+//! over the walkthrough:
 //! frame times, and queries and state changes (the CHC++ paper's Figure 10).
 //! The HTML page needs nothing beside it (inline CSS, inline SVG), so it can be
 //! mailed or attached to an issue as one file. Both renderings are made from
@@ -157,11 +159,53 @@ fn section(report: &BenchReport) -> Vec<Block> {
         Block::Table(headers.to_vec(), rows.into_iter().map(Vec::from).collect()),
         Block::Note(table::note(report)),
     ];
+    if let Some((headers, rows)) = gpu_driven_table(report) {
+        blocks.push(Block::Heading(3, "GPU-driven culling passes".into()));
+        blocks.push(Block::Table(headers, rows));
+        blocks.push(Block::Note(
+            "per frame means, GPU ms; cull = occlusion tests and their compute passes, render = drawing; for a \
+             depth pyramid (hiz), early = before its build, pyramid = the build, late = after it (box tests, \
+             the late draw)"
+                .into(),
+        ));
+    }
     for kind in [PlotKind::FrameTime, PlotKind::QueriesAndStateChanges] {
         blocks.push(Block::Heading(3, plot_names(kind).0.into()));
         blocks.push(Block::Plot(kind));
     }
     blocks
+}
+
+/// The culling passes of the methods that dispatch compute work (the
+/// GPU-driven ones), or `None` when no method does.
+fn gpu_driven_table(report: &BenchReport) -> Option<(Vec<String>, Vec<Vec<String>>)> {
+    let sim = if report.backend == "soft" { "sim " } else { "" };
+    let headers = ["method", "dispatches", "indirect draws", "cull", "render", "early", "pyramid", "late"]
+        .iter()
+        .enumerate()
+        .map(|(i, h)| if i < 3 { h.to_string() } else { format!("{sim}{h} ms") })
+        .collect();
+    let ms = |v: f64| format!("{v:.3}");
+    let rows: Vec<Vec<String>> = report
+        .methods
+        .iter()
+        .filter(|m| m.dispatches_per_frame > 0.0)
+        .map(|m| {
+            let pyramid = m.pyramid_ms_per_frame > 0.0 || m.late_ms_per_frame > 0.0;
+            let phase = |v: f64| if pyramid { ms(v) } else { "-".into() };
+            vec![
+                m.name.clone(),
+                format!("{:.1}", m.dispatches_per_frame),
+                format!("{:.1}", m.indirect_draws_per_frame),
+                ms(m.cull_ms_per_frame),
+                ms(m.render_ms_per_frame),
+                phase(m.gpu_ms_per_frame - m.pyramid_ms_per_frame - m.late_ms_per_frame),
+                phase(m.pyramid_ms_per_frame),
+                phase(m.late_ms_per_frame),
+            ]
+        })
+        .collect();
+    (!rows.is_empty()).then_some((headers, rows))
 }
 
 /// `s` with the characters HTML gives a meaning escaped.
@@ -389,6 +433,28 @@ mod tests {
         // The simulated times are labelled so, as in the text table.
         assert!(page.contains("<th>sim ms</th>") && page.contains("sim = simulated GPU clock"));
         assert!(page.contains("<td>3.33</td>"), "chcpp's speedup over vfc (20 / 6) is missing");
+    }
+
+    /// A GPU-driven method's passes get their own table (early = GPU
+    /// time before the pyramid build), and a report without one has none.
+    #[test]
+    fn gpu_driven_methods_get_a_table_of_their_passes() {
+        let mut r = report("city");
+        assert!(!html(std::slice::from_ref(&r)).unwrap().contains("GPU-driven culling passes"));
+        r.methods.push(MethodSummary {
+            dispatches_per_frame: 17.0,
+            indirect_draws_per_frame: 2.0,
+            cull_ms_per_frame: 0.07,
+            render_ms_per_frame: 0.2,
+            pyramid_ms_per_frame: 0.04,
+            late_ms_per_frame: 0.125,
+            ..method("hiz", 0.25)
+        });
+        let page = html(&[r]).unwrap();
+        assert!(page.contains("<h3>GPU-driven culling passes</h3>"));
+        assert!(page.contains("<th>sim early ms</th>"));
+        let row = "<tr><td>hiz</td><td>17.0</td><td>2.0</td><td>0.070</td><td>0.200</td><td>0.085</td><td>0.040</td><td>0.125</td></tr>";
+        assert!(page.contains(row), "{page}");
     }
 
     #[test]

@@ -81,3 +81,51 @@ fn records_ioc_box_tests_level_by_level_and_changes_no_image() {
     assert!(fewer_than_vfc, "ioc through the recorder never culled more than vfc");
     assert!(visible > 0 && occluded > 0, "visible {visible}, occluded {occluded}");
 }
+
+/// `hiz` on the soft backend through the recorder, at an odd size: every
+/// box of its pyramid tests carries the level the test read, which is
+/// `depth_pyramid`'s selection for the padded box's footprint in that
+/// frame's camera, at the backend's size and the method's `hiz.texels`;
+/// the boxes the recorder gives a level or a level-less footprint are
+/// exactly those the backend counted as tested.
+#[test]
+fn records_the_pyramid_level_of_each_hiz_box_test() {
+    use occlude_core::depth_pyramid::{box_footprint, level_sizes, select_level, Footprint};
+    use occlude_core::query_box::padded;
+    let scene = occlude_scenes::generate("city", occlude_scenes::Size::Small, 1).unwrap();
+    let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, Default::default());
+    let (width, height, reach) = (161, 121, 3);
+    let cameras = scene.path.sample(6, width as f32 / height as f32, NEAR_PLANE, 2000.0);
+    let options = MethodOptions::parse(&[&format!("hiz.texels={reach}")]).unwrap();
+    let mut hiz = create("hiz", &options).unwrap();
+    let mut backend = RecordingBackend::new(SoftBackend::new(&scene, width, height, GpuModel::modern()));
+    let mut drawn = DrawnSet::default();
+    backend.set_recording(true);
+    let coarsest = level_sizes(width, height).len() as u32 - 1;
+    let mut levels_seen = std::collections::BTreeSet::new();
+    for (k, camera) in cameras.iter().enumerate() {
+        let stats = render_frame(hiz.method.as_mut(), &mut backend, &scene, &hierarchy, camera, &mut drawn);
+        let tests = backend.box_tests();
+        assert_eq!(tests.len(), 1, "frame {k}: hiz tests every instance in one pyramid test");
+        let (frustum, view_projection) = (camera.frustum(), camera.view_projection());
+        let mut tested = 0;
+        for (i, (b, &level)) in tests[0].boxes.iter().zip(&tests[0].levels).enumerate() {
+            let p = padded(b);
+            let expected = if b.is_empty() || camera.box_touches_near_region(&p) || !frustum.intersects(&p) {
+                None
+            } else {
+                tested += 1;
+                match box_footprint(&view_projection, width, height, &p) {
+                    Footprint::Rect(rect) => Some(select_level(&rect, reach)),
+                    Footprint::Near | Footprint::Empty => None,
+                }
+            };
+            assert_eq!(level, expected, "frame {k}, box {i}");
+            assert!(level.is_none_or(|l| l <= coarsest), "frame {k}, box {i}: level {level:?}");
+            levels_seen.extend(level);
+        }
+        assert_eq!(tests[0].levels.len(), tests[0].boxes.len(), "frame {k}");
+        assert_eq!(tested, stats.query_boxes, "frame {k}: the boxes the backend tested");
+    }
+    assert!(levels_seen.len() >= 3, "boxes at several pyramid levels: {levels_seen:?}");
+}

@@ -91,23 +91,22 @@ fn count(pixels: &[[u8; 3]], colour: [u8; 3]) -> usize {
     pixels.iter().filter(|&&p| p == colour).count()
 }
 
+/// The pixels of a 640x480 screenshot of the city after 5 frames, with
+/// `args` besides, written to `name` in `dir`; the viewer must succeed.
+fn city_screenshot(x: &Xvfb, dir: &Path, name: &str, args: &[&str]) -> Vec<[u8; 3]> {
+    let shot = dir.join(name);
+    let common =
+        ["--scene", "city", "--frames", "5", "--resolution", "640x480", "--screenshot", shot.to_str().unwrap()];
+    let out = x.view(&[&common[..], args].concat());
+    assert_success(&out);
+    pixels(&shot, 640, 480)
+}
+
 #[test]
 fn a_screenshot_of_the_city_shows_the_scene() {
     let Some(x) = window_setup("a_screenshot_of_the_city_shows_the_scene") else { return };
     let dir = tempfile::tempdir().unwrap();
-    let shot = dir.path().join("out.png");
-    let out = x.view(&[
-        "--scene",
-        "city",
-        "--frames",
-        "5",
-        "--resolution",
-        "640x480",
-        "--screenshot",
-        shot.to_str().unwrap(),
-    ]);
-    assert_success(&out);
-    let px = pixels(&shot, 640, 480);
+    let px = city_screenshot(&x, dir.path(), "out.png", &[]);
     let mut distinct = px.clone();
     distinct.sort_unstable();
     distinct.dedup();
@@ -125,27 +124,28 @@ fn figure4_shows_visible_and_occluded_query_boxes() {
     let Some(x) = window_setup("figure4_shows_visible_and_occluded_query_boxes") else { return };
     let dir = tempfile::tempdir().unwrap();
     for method in ["chc", "chcpp", "ioc"] {
-        let shot = dir.path().join(format!("{method}.png"));
-        let out = x.view(&[
-            "--scene",
-            "city",
-            "--method",
-            method,
-            "--frames",
-            "5",
-            "--play",
-            "--figure4",
-            "--resolution",
-            "640x480",
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ]);
-        assert_success(&out);
-        let px = pixels(&shot, 640, 480);
+        let px =
+            city_screenshot(&x, dir.path(), &format!("{method}.png"), &["--method", method, "--play", "--figure4"]);
         let (green, red) = (count(&px, VISIBLE_GREEN), count(&px, OCCLUDED_RED));
         assert!(green > 100, "{method}: {green} pixels of visible (green) box outlines");
         assert!(red > 100, "{method}: {red} pixels of occluded (red) box outlines");
     }
+}
+
+/// `hiz`'s box tests coloured by the pyramid level each was tested at
+/// (`--pyramid-levels`, key Z): outlines in the colours of several levels.
+#[test]
+fn pyramid_levels_colour_hiz_boxes_by_level() {
+    let Some(x) = window_setup("pyramid_levels_colour_hiz_boxes_by_level") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let px = city_screenshot(&x, dir.path(), "hiz-levels.png", &["--method", "hiz", "--play", "--pyramid-levels"]);
+    // Levels 0 to 6 but 4 (orange, not exact): blue, cyan, green, yellow,
+    // red, magenta (`view::boxes::LEVEL_COLOURS`; white, 7 and coarser, is
+    // also the text's colour).
+    let palette = [[0, 0, 255], [0, 255, 255], [0, 255, 0], [255, 255, 0], [255, 0, 0], [255, 0, 255]];
+    let levels = palette.map(|c| count(&px, c));
+    let shown = levels.iter().filter(|&&n| n > 100).count();
+    assert!(shown >= 2, "outline pixels of levels 0-3, 5 and 6: {levels:?}");
 }
 
 #[test]

@@ -52,9 +52,14 @@
 //! while the box's depth there is at least the nearest depth: the pyramid
 //! test says visible. `occlude-soft`'s property tests check this against its
 //! exact rasterizer on random depth images at odd sizes.
+//!
+//! [`tested_levels`] names the level each box of a pyramid test reads, by
+//! the same footprint and selection, for views of the test (`occlude
+//! view`'s pyramid-level colours, through `recording::RecordingBackend`).
 
+use crate::camera::Camera;
 use crate::geometry::Aabb;
-use crate::query_box::QUERY_DEPTH_BIAS;
+use crate::query_box::{padded, QUERY_DEPTH_BIAS};
 use glam::{DVec2, Mat4, Vec3};
 
 /// How far beyond its projected corners a box's pixel range reaches, in
@@ -156,6 +161,39 @@ pub fn select_level(rect: &ScreenRect, reach: u32) -> u32 {
     k
 }
 
+impl Footprint {
+    /// The pyramid level a test of this footprint reads at most `reach` x
+    /// `reach` texels of ([`select_level`]); `None` for `Near` and `Empty`,
+    /// which the test answers without reading any.
+    pub fn level(&self, reach: u32) -> Option<u32> {
+        match self {
+            Footprint::Rect(rect) => Some(select_level(rect, reach)),
+            Footprint::Near | Footprint::Empty => None,
+        }
+    }
+}
+
+/// Per box of `boxes` (unpadded, as a method gives them to
+/// `GpuCulling::create_boxes`), the level a pyramid box test
+/// (`GpuCulling::test_boxes_pyramid`, reading at most `reach` x `reach`
+/// texels) of `camera`'s view on a `width` x `height` image reads: the
+/// level of [`DepthPyramid::test`] for the padded box's [`box_footprint`].
+/// `None` where the test reads no level: an empty box, and a padded box
+/// (the test's rules, as the backends apply them) touching the near region
+/// (visible untested), outside the frustum (not tested), with a corner at
+/// the near plane or covering no pixel centre.
+pub fn tested_levels(camera: &Camera, width: u32, height: u32, boxes: &[Aabb], reach: u32) -> Vec<Option<u32>> {
+    let (frustum, view_projection) = (camera.frustum(), camera.view_projection());
+    let level = |b: &Aabb| {
+        let b = (!b.is_empty()).then(|| padded(b))?;
+        if camera.box_touches_near_region(&b) || !frustum.intersects(&b) {
+            return None;
+        }
+        box_footprint(&view_projection, width, height, &b).level(reach)
+    };
+    boxes.iter().map(level).collect()
+}
+
 /// The outcome of one pyramid test.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PyramidTest {
@@ -224,12 +262,11 @@ impl DepthPyramid {
     /// x `reach` texels (module documentation). An `Empty` footprint is
     /// hidden and a `Near` one visible, untested.
     pub fn test(&self, footprint: &Footprint, reach: u32) -> PyramidTest {
-        let rect = match footprint {
-            Footprint::Near => return PyramidTest { visible: true, fetched: 0 },
-            Footprint::Empty => return PyramidTest { visible: false, fetched: 0 },
-            Footprint::Rect(r) => r,
+        let (rect, k) = match (footprint, footprint.level(reach)) {
+            (Footprint::Rect(r), Some(k)) => (r, k),
+            (Footprint::Near, _) => return PyramidTest { visible: true, fetched: 0 },
+            _ => return PyramidTest { visible: false, fetched: 0 },
         };
-        let k = select_level(rect, reach);
         let (w, texels) = (self.sizes[k as usize].0, &self.levels[k as usize]);
         let (mut farthest, mut fetched) = (0.0f32, 0);
         for y in rect.y0 >> k..=rect.y1 >> k {

@@ -1,11 +1,13 @@
 //! [`RecordingBackend`]: a [`Backend`] (and [`GpuCulling`], where the
 //! wrapped backend has it) that forwards every call to another and, while
 //! recording, keeps each occlusion query's boxes and the result the method
-//! read, and each batched box test's boxes and outcomes, so that a viewer
-//! can draw them (the CHC paper's Figure 4; the IOC poster's levels) without
-//! any method knowing. `occlude view` draws them; a renderer embedding
+//! read, and each batched box test's boxes and outcomes (and, for a test
+//! against a depth pyramid, the pyramid level each box was tested at), so
+//! that a viewer can draw them (the CHC paper's Figure 4; the IOC poster's
+//! levels; `hiz`'s pyramid levels) without any method knowing. `occlude view` draws them; a renderer embedding
 //! occlude can wrap its own backend the same way to debug its culling.
 
+use crate::depth_pyramid::tested_levels;
 use crate::{
     Aabb, Backend, BoxSet, Camera, CostModel, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling,
     GpuCullingUnsupported, IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
@@ -53,6 +55,13 @@ pub struct RecordedBoxTest {
     /// Per box, whether its flag was set after the test (by this test, or
     /// by an earlier one of the frame into the same flags).
     pub visible: Vec<bool>,
+    /// Per box, for a test against a depth pyramid
+    /// ([`GpuCulling::test_boxes_pyramid`]), the pyramid level it was
+    /// tested at ([`tested_levels`]: the footprint and level selection of
+    /// the test itself); `None` for a box the test read no level for (at
+    /// the eye, outside the view, covering no pixel centre) and for every
+    /// box of a full-resolution test ([`GpuCulling::test_boxes`]).
+    pub levels: Vec<Option<u32>>,
 }
 
 impl RecordedBoxTest {
@@ -73,6 +82,9 @@ pub struct RecordingBackend<B> {
     tests: Vec<RecordedBoxTest>,
     /// The boxes of every box set created through the recorder, by set.
     box_sets: HashMap<BoxSet, Vec<Aabb>>,
+    /// The camera of the frame begun last, which pyramid tests project
+    /// boxes with.
+    camera: Option<Camera>,
 }
 
 impl<B: Backend> RecordingBackend<B> {
@@ -85,6 +97,7 @@ impl<B: Backend> RecordingBackend<B> {
             index: HashMap::new(),
             tests: Vec::new(),
             box_sets: HashMap::new(),
+            camera: None,
         }
     }
 
@@ -124,17 +137,27 @@ impl<B: Backend> RecordingBackend<B> {
     }
 
     /// While recording, the ids a box test of `boxes` just tested and the
-    /// outcome each left in `flags`, read back.
-    fn record_test(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
+    /// outcome each left in `flags`, read back; for a pyramid test (`Some`
+    /// reach), the level each box was tested at.
+    fn record_test(&mut self, boxes: BoxSet, ids: IdList, flags: Flags, pyramid_reach: Option<u32>) {
         if !self.recording {
             return;
         }
         let tested = self.culling().read_list(ids);
         let set = self.culling().read_flags(flags);
         let all = &self.box_sets[&boxes];
+        let boxes: Vec<Aabb> = tested.iter().map(|&id| all[id as usize]).collect();
+        let levels = match (pyramid_reach, &self.camera) {
+            (Some(reach), Some(camera)) => {
+                let (width, height) = self.inner.resolution();
+                tested_levels(camera, width, height, &boxes, reach)
+            }
+            _ => vec![None; boxes.len()],
+        };
         self.tests.push(RecordedBoxTest {
-            boxes: tested.iter().map(|&id| all[id as usize]).collect(),
+            boxes,
             visible: tested.iter().map(|&id| set[id as usize]).collect(),
+            levels,
         });
     }
 
@@ -150,6 +173,7 @@ impl<B: Backend> Backend for RecordingBackend<B> {
         self.queries.clear();
         self.index.clear();
         self.tests.clear();
+        self.camera = Some(*camera);
         self.inner.begin_frame(camera);
     }
 
@@ -235,7 +259,7 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
 
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.culling().test_boxes(boxes, ids, flags);
-        self.record_test(boxes, ids, flags);
+        self.record_test(boxes, ids, flags, None);
     }
 
     fn pyramid_support(&mut self) -> Result<(), GpuCullingUnsupported> {
@@ -252,7 +276,7 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
 
     fn test_boxes_pyramid(&mut self, boxes: BoxSet, ids: IdList, pyramid: Pyramid, reach: u32, flags: Flags) {
         self.culling().test_boxes_pyramid(boxes, ids, pyramid, reach, flags);
-        self.record_test(boxes, ids, flags);
+        self.record_test(boxes, ids, flags, Some(reach));
     }
 
     fn expand(&mut self, src: IdList, filter: Flags, table: RangeTable, into: ExpandInto) {

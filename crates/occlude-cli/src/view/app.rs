@@ -2,7 +2,7 @@
 //! can draw to it, running one method frame per redraw exactly as `bench`
 //! does, and reacting to keys and the mouse.
 
-use super::boxes::{geometry, of_box_tests, of_queries, BoxRenderer};
+use super::boxes::{geometry, of_box_tests, of_queries, BoxRenderer, Colouring, LEVEL_COLOURS};
 use super::camera_control::{FlyCamera, Playback, DEFAULT_FOV_Y_DEG};
 use super::input::{action, Action, HeldKeys};
 use super::overlay::{Overlay, ShownStats, StatsAverage, REFRESH_SECONDS};
@@ -155,9 +155,9 @@ impl<'s> Gpu<'s> {
     }
 
     /// Draws the recorded boxes (when asked: `Some` of which box test,
-    /// `None` inside for all) and the overlay over the frame just rendered,
-    /// and shows it in the window.
-    fn compose(&mut self, camera: &Camera, boxes: Option<Option<usize>>) {
+    /// `None` inside for all), coloured as `colouring` says, and the overlay
+    /// over the frame just rendered, and shows it in the window.
+    fn compose(&mut self, camera: &Camera, boxes: Option<Option<usize>>, colouring: Colouring) {
         let ctx = Arc::clone(self.scene.context());
         let target = self.backend.inner().color_view();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -167,7 +167,7 @@ impl<'s> Gpu<'s> {
                 Some(k) => tests.get(k..=k).unwrap_or_default(),
                 None => tests,
             };
-            let geometry = geometry(of_queries(self.backend.queries()).chain(of_box_tests(tests)));
+            let geometry = geometry(of_queries(self.backend.queries()).chain(of_box_tests(tests)), colouring);
             self.boxes.draw(&ctx.device, &ctx.queue, &mut encoder, target, camera, &geometry);
         }
         self.overlay.draw(&mut encoder, target);
@@ -202,6 +202,8 @@ struct Viewer<'s> {
     playing: bool,
     recording: Option<PathRecorder>,
     show_boxes: bool,
+    /// What the boxes' colours show (key Z).
+    colouring: Colouring,
     /// The one box test shown (key L), or all of them.
     shown_test: Option<usize>,
     held: HeldKeys,
@@ -236,7 +238,8 @@ impl<'s> Viewer<'s> {
             playback: Playback::default(),
             playing: config.play,
             recording: None,
-            show_boxes: config.figure4,
+            show_boxes: config.figure4 || config.pyramid_levels,
+            colouring: if config.pyramid_levels { Colouring::PyramidLevel } else { Colouring::Outcome },
             shown_test: None,
             held: HeldKeys::default(),
             looking: false,
@@ -308,6 +311,13 @@ impl<'s> Viewer<'s> {
                 self.set_method(self.method_index);
             }
             Action::ToggleBoxes => self.show_boxes = !self.show_boxes,
+            Action::TogglePyramidLevels => {
+                self.colouring = match self.colouring {
+                    Colouring::Outcome => Colouring::PyramidLevel,
+                    Colouring::PyramidLevel => Colouring::Outcome,
+                };
+                self.show_boxes = true;
+            }
             Action::NextBoxTest => {
                 let tests = self.gpu.as_ref().map_or(0, |g| g.backend.box_tests().len());
                 self.shown_test = match self.shown_test {
@@ -382,7 +392,7 @@ impl<'s> Viewer<'s> {
             gpu.overlay.update(&ctx.device, &ctx.queue, &gpu.blit, &lines, (w, h))?;
         }
         let gpu = self.gpu.as_mut().expect("checked above");
-        gpu.compose(&camera, self.show_boxes.then_some(self.shown_test));
+        gpu.compose(&camera, self.show_boxes.then_some(self.shown_test), self.colouring);
         if let (true, Some(path)) = (last, &self.config.screenshot) {
             gpu.screenshot(path)?;
             eprintln!("wrote {} ({w}x{h}, frame {} of {})", path.display(), self.frames, self.config.scene.frames);
@@ -407,12 +417,17 @@ impl<'s> Viewer<'s> {
         }
         lines.push(mode);
         if self.show_boxes {
-            lines.push("query boxes: green visible, red occluded, yellow never read".into());
-            if let Some(line) = self.gpu.as_ref().and_then(|g| box_test_line(g.backend.box_tests(), self.shown_test)) {
-                lines.push(line);
+            let tests = self.gpu.as_ref().map_or(&[][..], |g| g.backend.box_tests());
+            match self.colouring {
+                Colouring::Outcome => lines.push("query boxes: green visible, red occluded, yellow never read".into()),
+                Colouring::PyramidLevel => lines.extend(level_lines(tests, self.shown_test)),
             }
+            lines.extend(box_test_line(tests, self.shown_test));
         }
-        lines.push(format!("1-{}/M method  H hierarchy  V boxes  L box test  P play  R record", METHOD_NAMES.len()));
+        lines.push(format!(
+            "1-{}/M method  H hierarchy  V boxes  L box test  Z levels  P play  R record",
+            METHOD_NAMES.len()
+        ));
         lines.push("WASD QE: fly  Shift: fast  wheel: speed  drag: look".into());
         lines
     }
@@ -499,8 +514,38 @@ impl ApplicationHandler for Viewer<'_> {
     }
 }
 
-/// A view of the whole scene from above one side, for a scene without a
-/// walkthrough.
+/// The overlay lines of the pyramid-level colouring: the legend, then how
+/// many of the shown box tests' boxes were tested at each level.
+fn level_lines(tests: &[RecordedBoxTest], shown: Option<usize>) -> [String; 3] {
+    let last = LEVEL_COLOURS.len() - 1;
+    let legend: Vec<String> = LEVEL_COLOURS
+        .iter()
+        .enumerate()
+        .map(|(k, (name, _))| if k == last { format!("{k}+ {name}") } else { format!("{k} {name}") })
+        .collect();
+    let (finer, coarser) = legend.split_at(LEVEL_COLOURS.len() / 2);
+    let tests = match shown {
+        Some(k) => tests.get(k..=k).unwrap_or_default(),
+        None => tests,
+    };
+    let mut per_level = std::collections::BTreeMap::<Option<u32>, usize>::new();
+    for level in tests.iter().flat_map(|t| &t.levels) {
+        *per_level.entry(*level).or_default() += 1;
+    }
+    let counts: Vec<String> = per_level
+        .iter()
+        .map(|(level, n)| match level {
+            Some(k) => format!("{k}:{n}"),
+            None => format!("none:{n}"),
+        })
+        .collect();
+    [
+        format!("pyramid level tested: {}", finer.join("  ")),
+        format!("{}  grey none, filled hidden", coarser.join("  ")),
+        format!("boxes per level: {}", if counts.is_empty() { "no box test".into() } else { counts.join(" ") }),
+    ]
+}
+
 /// The overlay line of the frame's box tests (`ioc`: one per level): each
 /// batch's visible and tested boxes, the shown one in brackets; `None`
 /// without box tests.
@@ -520,6 +565,8 @@ fn box_test_line(tests: &[RecordedBoxTest], shown: Option<usize>) -> Option<Stri
     (!batches.is_empty()).then(|| format!("box tests, visible/tested: {}", batches.join(" ")))
 }
 
+/// A view of the whole scene from above one side, for a scene without a
+/// walkthrough.
 fn overview(scene: &Scene) -> Keyframe {
     let bounds = scene.bounds();
     let target = bounds.center();

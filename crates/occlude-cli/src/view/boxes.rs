@@ -8,6 +8,13 @@
 //! image.) The GPU-driven methods' batched box tests are drawn the same
 //! way, green or red: all of them, or one batch at a time (key L), which for
 //! `ioc` is one level of the hierarchy (the IOC poster's Figure 4).
+//!
+//! Coloured by pyramid level (key Z), the boxes of tests against a depth
+//! pyramid (`hiz`'s late pass) take the colour of the level each was tested
+//! at ([`LEVEL_COLOURS`], the level `RecordedBoxTest::levels` records from
+//! `depth_pyramid`'s own selection); hidden ones are still filled, and
+//! boxes tested at no level (at the eye, off screen, or by a
+//! full-resolution test or query) are grey.
 
 use super::present::draw_over;
 use occlude_core::query_box::BOX_TRIANGLES;
@@ -21,6 +28,44 @@ pub const VISIBLE: [f32; 3] = [0.0, 1.0, 0.0];
 pub const OCCLUDED: [f32; 3] = [1.0, 0.0, 0.0];
 /// Outline colour of a box whose result the method never read.
 pub const UNREAD: [f32; 3] = [1.0, 1.0, 0.0];
+
+/// The colours of pyramid levels 0, 1, ...; the last one also for every
+/// coarser level. Named for the overlay's legend.
+pub const LEVEL_COLOURS: [(&str, [f32; 3]); 8] = [
+    ("blue", [0.0, 0.0, 1.0]),
+    ("cyan", [0.0, 1.0, 1.0]),
+    ("green", [0.0, 1.0, 0.0]),
+    ("yellow", [1.0, 1.0, 0.0]),
+    ("orange", [1.0, 0.5, 0.0]),
+    ("red", [1.0, 0.0, 0.0]),
+    ("magenta", [1.0, 0.0, 1.0]),
+    ("white", [1.0, 1.0, 1.0]),
+];
+
+/// Colour of a box tested at no pyramid level, when colouring by level.
+pub const NO_LEVEL: [f32; 3] = [0.5, 0.5, 0.5];
+
+/// What the boxes' colours show.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Colouring {
+    /// The outcome: [`VISIBLE`], [`OCCLUDED`] or [`UNREAD`].
+    #[default]
+    Outcome,
+    /// The pyramid level the box was tested at ([`level_colour`]).
+    PyramidLevel,
+}
+
+/// A box to draw: its outcome and, for a pyramid test, the level it was
+/// tested at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShownBox<'a> {
+    /// The box, as the method gave it.
+    pub aabb: &'a Aabb,
+    /// What its query or test found.
+    pub outcome: QueryOutcome,
+    /// The pyramid level it was tested at, if any.
+    pub level: Option<u32>,
+}
 
 /// Opacity of the faces of occluded and unread boxes (outlines are opaque).
 const FACE_ALPHA: f32 = 0.08;
@@ -53,27 +98,40 @@ pub fn outcome_color(outcome: QueryOutcome) -> [f32; 3] {
     }
 }
 
-/// Each box of `queries` with its query's outcome.
-pub fn of_queries(queries: &[RecordedQuery]) -> impl Iterator<Item = (&Aabb, QueryOutcome)> {
-    queries.iter().flat_map(|q| q.boxes.iter().map(move |b| (b, q.outcome())))
+/// The colour of pyramid level `level` ([`LEVEL_COLOURS`]).
+pub fn level_colour(level: u32) -> [f32; 3] {
+    LEVEL_COLOURS[(level as usize).min(LEVEL_COLOURS.len() - 1)].1
 }
 
-/// Each box of `tests` with its outcome: visible where its flag was set,
-/// else occluded (a box test's result is always read, on the device).
-pub fn of_box_tests<'a>(
-    tests: impl IntoIterator<Item = &'a RecordedBoxTest>,
-) -> impl Iterator<Item = (&'a Aabb, QueryOutcome)> {
+/// Each box of `queries` with its query's outcome.
+pub fn of_queries(queries: &[RecordedQuery]) -> impl Iterator<Item = ShownBox<'_>> {
+    queries.iter().flat_map(|q| q.boxes.iter().map(move |aabb| ShownBox { aabb, outcome: q.outcome(), level: None }))
+}
+
+/// Each box of `tests` with its outcome (visible where its flag was set,
+/// else occluded: a box test's result is always read, on the device) and
+/// its pyramid level.
+pub fn of_box_tests<'a>(tests: impl IntoIterator<Item = &'a RecordedBoxTest>) -> impl Iterator<Item = ShownBox<'a>> {
     tests.into_iter().flat_map(|t| {
-        let outcome = |&v: &bool| if v { QueryOutcome::Visible } else { QueryOutcome::Occluded };
-        t.boxes.iter().zip(t.visible.iter().map(outcome))
+        let outcome = |v: bool| if v { QueryOutcome::Visible } else { QueryOutcome::Occluded };
+        let levels = t.levels.iter().copied().chain(std::iter::repeat(None));
+        t.boxes.iter().zip(&t.visible).zip(levels).map(move |((aabb, &v), level)| ShownBox {
+            aabb,
+            outcome: outcome(v),
+            level,
+        })
     })
 }
 
-/// The geometry of `boxes`, each coloured by its outcome.
-pub fn geometry<'a>(boxes: impl IntoIterator<Item = (&'a Aabb, QueryOutcome)>) -> BoxGeometry {
+/// The geometry of `boxes`, each coloured as `colouring` says; occluded and
+/// unread boxes also get faces.
+pub fn geometry<'a>(boxes: impl IntoIterator<Item = ShownBox<'a>>, colouring: Colouring) -> BoxGeometry {
     let mut out = BoxGeometry::default();
-    for (aabb, outcome) in boxes {
-        let [r, g, b] = outcome_color(outcome);
+    for ShownBox { aabb, outcome, level } in boxes {
+        let [r, g, b] = match colouring {
+            Colouring::Outcome => outcome_color(outcome),
+            Colouring::PyramidLevel => level.map_or(NO_LEVEL, level_colour),
+        };
         let corners = aabb.corners();
         let vertex = |c: u8, a: f32| BoxVertex { position: corners[c as usize].to_array(), color: [r, g, b, a] };
         if outcome != QueryOutcome::Visible {
@@ -220,7 +278,7 @@ mod tests {
             RecordedQuery { boxes: vec![unit], result: Some(0) },
             RecordedQuery { boxes: vec![unit], result: None },
         ];
-        let g = geometry(of_queries(&queries));
+        let g = geometry(of_queries(&queries), Colouring::Outcome);
         assert_eq!((g.faces.len(), g.edges.len()), (2 * 36, 4 * 24), "faces of the occluded and unread boxes");
         let rgb = |v: &BoxVertex| [v.color[0], v.color[1], v.color[2]];
         assert!(g.edges[..48].iter().all(|v| rgb(v) == VISIBLE && v.color[3] == 1.0));
@@ -239,13 +297,32 @@ mod tests {
     fn box_tests_are_visible_or_occluded_box_by_box() {
         let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
         let tests = [
-            RecordedBoxTest { boxes: vec![unit, unit], visible: vec![true, false] },
-            RecordedBoxTest { boxes: vec![unit], visible: vec![false] },
+            RecordedBoxTest { boxes: vec![unit, unit], visible: vec![true, false], levels: vec![None; 2] },
+            RecordedBoxTest { boxes: vec![unit], visible: vec![false], levels: vec![None] },
         ];
-        let outcomes: Vec<_> = of_box_tests(&tests).map(|(_, o)| o).collect();
+        let outcomes: Vec<_> = of_box_tests(&tests).map(|b| b.outcome).collect();
         use QueryOutcome::{Occluded, Visible};
         assert_eq!(outcomes, [Visible, Occluded, Occluded]);
-        let g = geometry(of_box_tests(&tests[1..]));
+        let g = geometry(of_box_tests(&tests[1..]), Colouring::Outcome);
         assert_eq!((g.faces.len(), g.edges.len()), (36, 24));
+    }
+
+    /// Coloured by level, each box of a pyramid test takes its level's
+    /// colour (levels past the palette the last one, none grey) and the
+    /// hidden ones keep their faces.
+    #[test]
+    fn pyramid_boxes_take_the_colour_of_their_level() {
+        let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let levels = vec![Some(0), Some(3), Some(9), None];
+        let tests = [RecordedBoxTest { boxes: vec![unit; 4], visible: vec![true, false, true, true], levels }];
+        let g = geometry(of_box_tests(&tests), Colouring::PyramidLevel);
+        let colours: Vec<[f32; 3]> =
+            g.edges.chunks_exact(24).map(|e| [e[0].color[0], e[0].color[1], e[0].color[2]]).collect();
+        assert_eq!(colours, [LEVEL_COLOURS[0].1, LEVEL_COLOURS[3].1, LEVEL_COLOURS[7].1, NO_LEVEL]);
+        assert_eq!(g.faces.len(), 36, "the hidden box's faces");
+        assert!(g.faces.iter().all(|v| v.color[..3] == LEVEL_COLOURS[3].1));
+        // The outcome colours ignore the levels.
+        let g = geometry(of_box_tests(&tests), Colouring::Outcome);
+        assert!(g.edges[..24].iter().all(|v| v.color[..3] == VISIBLE));
     }
 }

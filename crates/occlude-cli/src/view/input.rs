@@ -21,6 +21,9 @@ pub enum Action {
     /// L: of the GPU-driven methods' box tests, the next one alone (for
     /// `ioc`, the next level), then all again.
     NextBoxTest,
+    /// Z: boxes coloured by the depth-pyramid level they were tested at
+    /// (`hiz`), or by outcome again; turns the boxes on.
+    TogglePyramidLevels,
     /// P: play or stop the scene's walkthrough.
     TogglePlayback,
     /// R: start recording a camera path, or stop and write it.
@@ -51,6 +54,7 @@ pub fn action(key: KeyCode) -> Option<Action> {
         KeyCode::KeyH => Action::ToggleHierarchy,
         KeyCode::KeyV => Action::ToggleBoxes,
         KeyCode::KeyL => Action::NextBoxTest,
+        KeyCode::KeyZ => Action::TogglePyramidLevels,
         KeyCode::KeyP => Action::TogglePlayback,
         KeyCode::KeyR => Action::ToggleRecording,
         KeyCode::Escape => Action::Quit,
@@ -107,6 +111,7 @@ mod tests {
         assert_eq!(action(KeyCode::Digit0), Some(Action::Method(9)));
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
         assert_eq!(action(KeyCode::KeyL), Some(Action::NextBoxTest));
+        assert_eq!(action(KeyCode::KeyZ), Some(Action::TogglePyramidLevels));
         assert_eq!(action(KeyCode::KeyW), None);
         let mut held = HeldKeys::default();
         held.set(KeyCode::KeyW, true);

@@ -1,7 +1,8 @@
 //! `occlude view`: a window that flies through a scene with any culling method
 //! on the GPU (the wgpu backend), shows the frame's statistics, and can show
 //! what the method asked the GPU: each query's boxes coloured by its answer
-//! (the CHC paper's Figure 4).
+//! (the CHC paper's Figure 4), or the depth-pyramid level each of `hiz`'s
+//! box tests read.
 //!
 //! The method renders into the backend's off-screen target exactly as in
 //! `occlude bench` (`occlude_core::render_frame`); after the frame the
@@ -60,6 +61,9 @@ pub struct ViewConfig {
     pub play: bool,
     /// Show the query boxes from the first frame on (`--figure4`; key V).
     pub figure4: bool,
+    /// Show the box tests' boxes coloured by the depth-pyramid level each
+    /// was tested at from the first frame on (`--pyramid-levels`; key Z).
+    pub pyramid_levels: bool,
     /// Render `scene.frames` frames, save the last as this PNG and exit.
     pub screenshot: Option<PathBuf>,
     /// Where key R writes the recorded camera path.
@@ -104,6 +108,7 @@ mod tests {
             method: DEFAULT_METHOD.into(),
             play: false,
             figure4: false,
+            pyramid_levels: false,
             screenshot: None,
             record: DEFAULT_RECORD_FILE.into(),
         }

@@ -12,9 +12,11 @@
 //! 2. build a depth pyramid from that depth ([`crate::depth_pyramid`]);
 //! 3. late pass: test every instance's box against the pyramid, reading
 //!    at most `hiz.texels` x `hiz.texels` texels of the finest level that
-//!    fits (default 2, the field's 2x2; boxes outside the frustum set
-//!    nothing, boxes at the eye are visible untested), setting this frame's
-//!    visibility (`hiz.granularity=instance`, the default); or, with
+//!    fits (default 8; 2 is the field's 2x2, which draws 1.2-1.9x the
+//!    triangles of 8 and is slower in the simulated clock, as measured in
+//!    `docs/benchmarks.md`, "The default `hiz.texels`"; boxes outside the
+//!    frustum set nothing, boxes at the eye are visible untested), setting
+//!    this frame's visibility (`hiz.granularity=instance`, the default); or, with
 //!    `hiz.granularity=node`, walk the hierarchy from the root down
 //!    (`methods/node_walk.rs`), testing the node boxes of each level against
 //!    the pyramid the same way and descending only into visible nodes, and
@@ -88,7 +90,8 @@ impl FromStr for Granularity {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HizParams {
     /// `hiz.texels`: most texels per axis a box test reads, 1 to 16
-    /// (default 2).
+    /// (default 8: fewer triangles than the field's 2x2 and, in the
+    /// simulated clock, faster on every measured scene).
     pub texels: u32,
     /// `hiz.granularity`: `instance` (default) or `node`.
     pub granularity: Granularity,
@@ -98,7 +101,7 @@ impl HizParams {
     /// Reads `hiz.texels` and `hiz.granularity`.
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
         Ok(Self {
-            texels: r.get("texels", 2, "an integer from 1 to 16", |t| (1..=16).contains(&t))?,
+            texels: r.get("texels", 8, "an integer from 1 to 16", |t| (1..=16).contains(&t))?,
             granularity: r.get("granularity", Granularity::Instance, "instance or node", |_| true)?,
         })
     }
@@ -217,11 +220,12 @@ mod tests {
     use crate::methods::MethodOptions;
 
     #[test]
-    fn texels_default_to_two_and_stay_in_range() {
+    fn texels_default_to_eight_and_stay_in_range() {
         let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
         let instance = Granularity::Instance;
-        assert_eq!(read(&[]), Ok(HizParams { texels: 2, granularity: instance }));
-        assert_eq!(read(&["hiz.texels=8"]), Ok(HizParams { texels: 8, granularity: instance }));
+        assert_eq!(read(&[]), Ok(HizParams { texels: 8, granularity: instance }));
+        assert_eq!(read(&["hiz.texels=2"]), Ok(HizParams { texels: 2, granularity: instance }));
+        assert_eq!(read(&["hiz.texels=16"]), Ok(HizParams { texels: 16, granularity: instance }));
         let err = read(&["hiz.texels=0"]).unwrap_err();
         assert!(err.to_string().contains("hiz.texels = 0: expected an integer from 1 to 16"), "{err}");
     }

@@ -117,7 +117,7 @@
 //! 3. a compute pass builds a depth pyramid from your depth texture
 //!    ([`occlude_core::depth_pyramid`]: level 0 your depth, each level the
 //!    2x2 maximum of the one before) and tests every instance's box
-//!    against it (at most 2 x 2 texels of the finest level that fits, as
+//!    against it (at most 8 x 8 texels of the finest level that fits, as
 //!    `hiz` does by default), setting this frame's visibility; `roc`
 //!    instead rasterizes every instance's box against your depth texture
 //!    (a pass of occlude's holding your depth view alone, read-only,
