@@ -15,7 +15,6 @@
 
 use crate::rng::Rng;
 use crate::shapes::{cuboid, cylinder, frustum, sphere, MeshBuilder};
-use crate::walk::empty_scene;
 use glam::{Mat4, Quat, Vec3};
 use occlude_core::{Mesh, Scene};
 
@@ -189,7 +188,7 @@ pub(crate) const DOOR_HEIGHT: f32 = DOOR.1;
 pub(crate) fn with_doors(floors: u32, rooms: u32, seed: u64) -> (Scene, Doors) {
     let walls = ((rooms + 1) * rooms) as usize;
     let mut doors = Doors { rooms, along_x: vec![f32::NAN; walls], along_z: vec![f32::NAN; walls] };
-    let mut scene = empty_scene("building");
+    let mut scene = Scene::new("building");
     scene.material_count = MATERIALS;
     let mut rng = Rng::new(seed, 0x0062_7569_6c64);
     let meshes = Meshes {

@@ -12,7 +12,7 @@
 
 use crate::rng::Rng;
 use crate::shapes::{block, cone, cuboid, cylinder, prism, MeshBuilder};
-use crate::walk::{empty_scene, PathBuilder, PathClearance, EYE};
+use crate::walk::{PathBuilder, PathClearance, EYE};
 use crate::Size;
 use glam::{Mat4, Vec2, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
@@ -193,7 +193,7 @@ pub(crate) fn downtown(size: Size, seed: u64) -> Scene {
 /// building meshes.
 fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
     let span = blocks as f32 * PITCH;
-    let mut scene = empty_scene(name);
+    let mut scene = Scene::new(name);
     let mut rng = Rng::new(seed, 0xC17E);
 
     let ground = scene.add_mesh(cuboid(Vec3::new(-100.0, -0.3, -100.0), Vec3::new(span + 100.0, 0.0, span + 100.0)));

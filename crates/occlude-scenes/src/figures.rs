@@ -9,7 +9,7 @@
 
 use crate::rng::Rng;
 use crate::shapes::{cone, cuboid, cylinder, sphere, torus, MeshBuilder};
-use crate::walk::{empty_scene, PathBuilder, PathClearance};
+use crate::walk::{PathBuilder, PathClearance};
 use crate::Size;
 use glam::{Mat4, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
@@ -70,7 +70,7 @@ fn walkthrough(side: f32, height: f32) -> CameraPath {
 pub(crate) fn generate(size: Size, seed: u64) -> Scene {
     let (count, height, t) = layout(size);
     let side = (count as f32 / DENSITY / height).sqrt();
-    let mut scene = empty_scene("figures");
+    let mut scene = Scene::new("figures");
     scene.path = walkthrough(side, height);
     let clearance = PathClearance::new(&scene.path);
 

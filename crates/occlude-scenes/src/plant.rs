@@ -14,7 +14,7 @@
 
 use crate::rng::Rng;
 use crate::shapes::{block, cuboid, cylinder, round_corners, sphere, stairs, torus, tube, MeshBuilder};
-use crate::walk::{empty_scene, PathBuilder, EYE};
+use crate::walk::{PathBuilder, EYE};
 use crate::Size;
 use glam::{Mat4, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
@@ -266,7 +266,7 @@ pub(crate) fn generate(size: Size, seed: u64) -> Scene {
     let Layout { bays: [nx, nz], levels, sides } = layout(size);
     let (row, shaft) = (nz / 2, nx / 2);
     let (wx, wz, height) = (nx as f32 * BAY, nz as f32 * BAY, levels as f32 * LEVEL);
-    let mut scene = empty_scene("plant");
+    let mut scene = Scene::new("plant");
     scene.path = walkthrough(nx, levels, row, shaft);
     let mut rng = Rng::new(seed, 0x9A27);
 

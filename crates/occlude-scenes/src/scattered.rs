@@ -11,7 +11,7 @@
 
 use crate::rng::Rng;
 use crate::shapes::torus;
-use crate::walk::{empty_scene, PathBuilder};
+use crate::walk::PathBuilder;
 use glam::{Mat4, Vec3};
 use occlude_core::{CameraPath, Scene};
 
@@ -42,7 +42,7 @@ fn orbit() -> CameraPath {
 
 /// `objects` objects placed from `seed` (module documentation).
 pub fn scattered(objects: u32, seed: u64) -> Scene {
-    let mut scene = empty_scene(&format!("scattered-{objects}"));
+    let mut scene = Scene::new(format!("scattered-{objects}"));
     scene.path = orbit();
     let mesh = scene.add_mesh(torus(0.8, 0.3, 101, 3));
     let mut rng = Rng::new(seed, 0x5CA7_7E4D);

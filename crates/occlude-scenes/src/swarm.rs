@@ -22,7 +22,7 @@
 
 use crate::rng::Rng;
 use crate::shapes::{cone, cuboid, cylinder, sphere};
-use crate::walk::{empty_scene, PathBuilder, PathClearance};
+use crate::walk::{PathBuilder, PathClearance};
 use crate::Size;
 use glam::{Mat4, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
@@ -82,7 +82,7 @@ fn on_block(x: f32, z: f32) -> bool {
 pub(crate) fn generate(size: Size, seed: u64) -> Scene {
     let (count, cells) = layout(size);
     let side = cells as f32 * CELL;
-    let mut scene = empty_scene("swarm");
+    let mut scene = Scene::new("swarm");
     scene.path = walkthrough(cells);
     let clearance = PathClearance::new(&scene.path);
     scene.instances.reserve_exact(count as usize + (cells * cells) as usize + 1);

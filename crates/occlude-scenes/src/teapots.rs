@@ -10,7 +10,7 @@
 
 use crate::newell;
 use crate::rng::Rng;
-use crate::walk::{empty_scene, PathBuilder, PathClearance};
+use crate::walk::{PathBuilder, PathClearance};
 use crate::Size;
 use glam::{Mat4, Vec3};
 use occlude_core::Scene;
@@ -75,7 +75,7 @@ pub(crate) fn generate(size: Size, seed: u64) -> Scene {
     let layout = layout(size);
     let [nx, nz, ny] = layout.cells;
     let (length, width, height) = (nx as f32 * CELL, nz as f32 * CELL, BASE + ny as f32 * LAYER);
-    let mut scene = empty_scene("teapots");
+    let mut scene = Scene::new("teapots");
     scene.path = walkthrough(length, height, width);
     let clearance = PathClearance::new(&scene.path);
 

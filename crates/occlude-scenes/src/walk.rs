@@ -2,7 +2,7 @@
 //! scattered objects clear of them.
 
 use glam::Vec3;
-use occlude_core::{Aabb, CameraPath, Keyframe, Scene};
+use occlude_core::{Aabb, CameraPath, Keyframe};
 
 /// Vertical field of view of every default walkthrough, in degrees.
 pub(crate) const FOV_Y_DEG: f32 = 60.0;
@@ -13,11 +13,6 @@ pub(crate) const EYE: f32 = 1.7;
 /// Distance every walkthrough keeps from every object (the tests check 0.5 m;
 /// generation keeps a little more so that sampling never decides it).
 pub(crate) const CLEARANCE: f32 = 0.6;
-
-/// An empty scene called `name`.
-pub(crate) fn empty_scene(name: &str) -> Scene {
-    Scene::new(name)
-}
 
 /// Builds a walkthrough key by key, each key a given number of seconds after
 /// the previous one, so that a path can walk slowly in a street and fly fast

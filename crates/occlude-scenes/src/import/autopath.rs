@@ -223,12 +223,11 @@ pub(crate) fn walk(scene: &Scene) -> Result<CameraPath, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::walk::empty_scene;
     use glam::Mat4;
 
     /// A scene of unit-cube instances scaled and moved to `boxes`.
     fn boxes(boxes: &[Aabb]) -> Scene {
-        let mut scene = empty_scene("boxes");
+        let mut scene = Scene::new("boxes");
         let cube = scene.add_mesh(crate::shapes::cuboid(Vec3::ZERO, Vec3::ONE));
         for b in boxes {
             scene.add_instance(cube, Mat4::from_scale_rotation_translation(b.extent(), Default::default(), b.min), 0);

@@ -21,8 +21,6 @@ mod autopath;
 mod gltf;
 mod obj;
 mod split;
-
-use crate::walk::empty_scene;
 use crate::{generate, GenerateError, Size, SCENE_NAMES};
 use glam::{Mat4, Vec3};
 use occlude_core::{Mesh, Scene, SceneError};
@@ -260,7 +258,7 @@ pub fn import_bytes(
 ) -> Result<Imported, LoadError> {
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let mut builder =
-        Builder { path: path.to_path_buf(), scene: empty_scene(&name), options: *options, warnings: vec![] };
+        Builder { path: path.to_path_buf(), scene: Scene::new(name.as_str()), options: *options, warnings: vec![] };
     match format {
         ModelFormat::Gltf | ModelFormat::Glb => gltf::import(&mut builder, bytes, format == ModelFormat::Glb)?,
         ModelFormat::Obj => obj::import(&mut builder, bytes)?,
