@@ -353,7 +353,9 @@ impl Band<'_> {
             let Some((left, right)) = lanes.reach(&spans) else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
-            for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
+            // Spans lie within the window, so `0 <= left < right`: the groups
+            // by shifts of unsigned values.
+            for g in left as u32 / 64..=(right - 1) as u32 / 64 {
                 let sx = g * LANES as u32;
                 let padded = bottom || (sx + LANES as u32) * 8 > self.width;
                 let outside = padded.then_some((self.width, self.height));

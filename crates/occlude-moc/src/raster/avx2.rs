@@ -99,15 +99,12 @@ unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
     band.draw_with(tri, avx2);
 }
 
-/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi` of the
-/// non-empty rows, by two shuffles each.
+/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi`, by two
+/// shuffles each.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
     let (lo, hi) = (_mm_loadu_si128(spans.lo.as_ptr().cast()), _mm_loadu_si128(spans.hi.as_ptr().cast()));
-    let filled = _mm_cmpgt_epi32(hi, lo);
-    let lo = _mm_blendv_epi8(_mm_set1_epi32(i32::MAX), lo, filled);
-    let hi = _mm_blendv_epi8(_mm_set1_epi32(i32::MIN), hi, filled);
     let lo = _mm_min_epi32(lo, _mm_shuffle_epi32::<0b01_00_11_10>(lo));
     let hi = _mm_max_epi32(hi, _mm_shuffle_epi32::<0b01_00_11_10>(hi));
     let left = _mm_cvtsi128_si32(_mm_min_epi32(lo, _mm_shuffle_epi32::<0b10_11_00_01>(lo)));

@@ -43,15 +43,14 @@ pub(crate) struct Spans {
 }
 
 impl Spans {
-    /// The pixels `left..right` the non-empty rows reach, `None` when all are
-    /// empty.
+    /// Pixels `left..right` that hold every row's covered pixels, `None` where
+    /// that is empty (then so is every row): the smallest `lo` to the largest
+    /// `hi`. An empty row may widen it (its `lo` and `hi` are ends of the
+    /// triangle's window or edge bounds, within `0..=width`); the groups it
+    /// adds have no cover and are left as they are.
     pub(crate) fn reach(&self) -> Option<(i32, i32)> {
-        let (mut left, mut right) = (i32::MAX, i32::MIN);
-        for (&lo, &hi) in self.lo.iter().zip(&self.hi) {
-            if lo < hi {
-                (left, right) = (left.min(lo), right.max(hi));
-            }
-        }
+        let left = self.lo.iter().fold(i32::MAX, |m, &v| m.min(v));
+        let right = self.hi.iter().fold(i32::MIN, |m, &v| m.max(v));
         (left < right).then_some((left, right))
     }
 }
