@@ -199,22 +199,66 @@ impl DepthPlane {
         DepthPlane { zx, zy, z0, zmax: t[0].z.max(t[1].z).max(t[2].z) }
     }
 
-    /// The plane at (`x`, `y`), rounded as every bound is.
+    /// The row term `zy y + z0` of the subtile row whose top is `by`, at the
+    /// row its corners' bound is taken on: the bottom one where the plane rises
+    /// downward (a rounded product and sum are monotone in each coordinate, so
+    /// that is where the rounded plane is largest too).
     #[inline]
-    pub(crate) fn at(&self, x: f64, y: f64) -> f64 {
-        self.zx * x + self.zy * y + self.z0
+    pub(crate) fn row_term(&self, by: f64) -> f64 {
+        let y = if self.zy > 0.0 { by + 4.0 } else { by };
+        self.zy * y + self.z0
     }
 
-    /// An `f32` bound on the triangle's depth over the 8x4 subtile whose top-left
-    /// corner is (`bx`, `by`): the plane's largest value at the subtile's corners
-    /// (a rounded product and sum are monotone in each coordinate, so that is the
-    /// corner the plane's slopes point to), capped by the farthest vertex, nudged
-    /// farther and rounded to `f32` ([`round_far`]).
+    /// The plane at column `x` of the row of `row` ([`Self::row_term`]),
+    /// nudged farther and rounded to `f32` ([`round_far`]): never nearer than
+    /// the plane there.
     #[inline]
-    pub(crate) fn subtile_bound(&self, bx: f64, by: f64) -> f32 {
-        let x = if self.zx > 0.0 { bx + 8.0 } else { bx };
-        let y = if self.zy > 0.0 { by + 4.0 } else { by };
-        round_far(self.at(x, y).min(self.zmax))
+    pub(crate) fn far_at(&self, x: f64, row: f64) -> f32 {
+        round_far(self.zx * x + row)
+    }
+
+    /// The column of the corner whose bound a subtile from column `bx` takes:
+    /// its right edge where the plane rises to the right.
+    #[inline]
+    pub(crate) fn corner_x(&self, bx: f64) -> f64 {
+        if self.zx > 0.0 {
+            bx + 8.0
+        } else {
+            bx
+        }
+    }
+
+    /// An `f32` step from one subtile's corner to the next one's to the right,
+    /// never less than the plane's rise `8 zx` and with at most 21 significant
+    /// bits, so that its multiples by `0..8` are exact in `f32`: `8 zx`
+    /// rounded far ([`round_far`]), then its significand rounded up (positive)
+    /// or cut (negative) to 21 bits.
+    #[inline]
+    pub(crate) fn lane_step(&self) -> f32 {
+        let v = round_far(self.zx * 8.0);
+        let bits = v.to_bits();
+        f32::from_bits(if v >= 0.0 { (bits + 7) & !7 } else { bits & !7 })
+    }
+
+    /// The farthest vertex depth rounded far ([`round_far`]): the cap of every
+    /// bound.
+    #[inline]
+    pub(crate) fn far_max(&self) -> f32 {
+        round_far(self.zmax)
+    }
+
+    /// An `f32` bound on the triangle's depth over subtile `l` of the group of
+    /// eight whose first subtile's top-left corner is (`gx`, `by`): the plane at
+    /// the first subtile's corner ([`Self::corner_x`], [`Self::row_term`]) in
+    /// `f64`, rounded far ([`Self::far_at`]), plus `l` exact [`Self::lane_step`]s
+    /// in `f32` ([`far_sum`]), capped by [`Self::far_max`]. Lane `l`'s corner
+    /// lies `8 l` to the right of the first one's, so this is never nearer than
+    /// the plane's largest value at its corners, nor than the farthest vertex
+    /// where that is nearer (the crate doc, "Depth per subtile").
+    #[inline]
+    pub(crate) fn subtile_bound(&self, gx: f64, by: f64, l: usize) -> f32 {
+        let base = self.far_at(self.corner_x(gx), self.row_term(by));
+        far_sum(base, self.lane_step() * l as f32).min(self.far_max())
     }
 }
 
@@ -230,6 +274,22 @@ pub(crate) const FAR_NUDGE: f64 = 1.0 / (1u32 << 22) as f64;
 #[inline]
 pub(crate) fn round_far(depth: f64) -> f32 {
     (depth + depth.abs() * FAR_NUDGE + 1e-12) as f32
+}
+
+/// [`FAR_NUDGE`] in `f32`.
+pub(crate) const FAR_NUDGE_F32: f32 = 1.0 / (1u32 << 22) as f32;
+
+/// `a + b` in `f32`, never less than the exact sum: the rounded sum `s`,
+/// then `s + |s| 2^-22` rounded. Each rounding to nearest errs by at most
+/// `2^-24` of its result (none where the sum is below the normal range, where
+/// a sum of two `f32` is exact), so the second sum exceeds `s` by more than
+/// `2^-23 |s|`, more than `s` can lie below `a + b`; where `|s| 2^-22` is
+/// below the normal range its own rounding (`2^-150`) is less than the margin
+/// for every normal `s`.
+#[inline]
+pub(crate) fn far_sum(a: f32, b: f32) -> f32 {
+    let s = a + b;
+    s + s.abs() * FAR_NUDGE_F32
 }
 
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
@@ -562,7 +622,8 @@ mod tests {
     use crate::buffer::{outside_mask, Subtile};
 
     /// The masks by definition: every pixel centre of the subtile tested against
-    /// every edge.
+    /// every edge; the depth bounds by [`DepthPlane::subtile_bound`] (whose own
+    /// test checks them against the plane).
     fn reference_draw(buffer: &mut MaskedBuffer, tri: &ScreenTriangle) {
         let mode = buffer.merge;
         for sy in 0..buffer.rows {
@@ -576,13 +637,12 @@ mod tests {
                     }
                 }
                 if cover != 0 {
-                    let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
-                    let (bx, by) = (f64::from(sx * 8), f64::from(sy * 4));
-                    let far = corners.iter().map(|&(dx, dy)| tri.plane.at(bx + dx, by + dy)).fold(f64::MIN, f64::max);
+                    let (gx, by) = (f64::from(sx / 8 * 64), f64::from(sy * 4));
+                    let far = tri.plane.subtile_bound(gx, by, (sx % 8) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
                     let mut s = group.get((sx % 8) as usize);
-                    s.merge(cover | outside, round_far(far.min(tri.plane.zmax)), mode);
+                    s.merge(cover | outside, far, mode);
                     group.set((sx % 8) as usize, s);
                 }
             }
@@ -647,6 +707,39 @@ mod tests {
             assert_same(&fast, &slow, &format!("round {round}"));
         }
         assert!(covered > 2000, "{covered}");
+    }
+
+    #[test]
+    fn subtile_bounds_are_never_nearer_than_the_plane_and_close_to_it() {
+        let mut rng = Lcg(17);
+        let mut capped = 0;
+        for i in 0..200_000 {
+            // Planes from flat to steep, depths around 0..1, some far out.
+            let scale = [1e-9, 1e-5, 1e-3, 0.1, 1.0][i % 5];
+            let plane = DepthPlane {
+                zx: (rng.unit() - 0.5) * scale,
+                zy: (rng.unit() - 0.5) * scale,
+                z0: rng.unit() * [1.0, 1e-6, 10.0][i % 3],
+                zmax: rng.unit() * 2.0,
+            };
+            let (g, sy, l) = ((rng.unit() * 40.0) as u32, (rng.unit() * 300.0) as u32, i % LANES);
+            let (bx, by) = (f64::from(g * 64 + 8 * l as u32), f64::from(sy * 4));
+            let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
+            let exact = corners
+                .iter()
+                .map(|&(dx, dy)| plane.zx * (bx + dx) + plane.zy * (by + dy) + plane.z0)
+                .fold(f64::MIN, f64::max)
+                .min(plane.zmax);
+            let bound = f64::from(plane.subtile_bound(f64::from(g * 64), by, l));
+            assert!(bound >= exact, "{plane:?} lane {l}: {bound} < {exact}");
+            // Looser than the plane by a few f32 units of its terms at most: the
+            // base's and the sum's nudges (`2^-22` each), the step's 21 bits
+            // (`2^-20` of up to seven steps, less than the x term).
+            let terms = (plane.zx * (bx + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
+            assert!(bound - exact <= terms * 2e-6 + 1e-11, "{plane:?} lane {l}: {bound} vs {exact}");
+            capped += usize::from(exact == plane.zmax);
+        }
+        assert!(capped > 1000, "{capped}");
     }
 
     #[test]
