@@ -363,9 +363,11 @@ impl ScreenTriangle {
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
     fn tiles(&self) -> u64 {
-        // A tile is 4 x 2 subtiles.
-        let (tx, ty) = (4 * SUBTILE_W as i32, 2 * SUBTILE_H as i32);
-        ((self.x1 - 1) / tx - self.x0 / tx + 1) as u64 * ((self.y1 - 1) / ty - self.y0 / ty + 1) as u64
+        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= x0 < x1`,
+        // `0 <= y0 < y1`), so unsigned division is shifts.
+        let (tx, ty) = (4 * SUBTILE_W, 2 * SUBTILE_H);
+        let (x0, x1, y0, y1) = (self.x0 as u32, self.x1 as u32, self.y0 as u32, self.y1 as u32);
+        u64::from((x1 - 1) / tx - x0 / tx + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
     }
 
     /// The first and one past the last subtile row the triangle touches.
@@ -379,6 +381,8 @@ impl ScreenTriangle {
 struct Band<'a> {
     groups: &'a mut [Group],
     first: u32,
+    /// One past the band's last subtile row.
+    end: u32,
     cols: u32,
     width: u32,
     height: u32,
@@ -403,8 +407,7 @@ impl Band<'_> {
     #[inline(always)]
     fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
-        let last = self.first + (self.groups.len() * LANES) as u32 / self.cols;
-        for sy in r0.max(self.first)..r1.min(last) {
+        for sy in r0.max(self.first)..r1.min(self.end) {
             let y = (sy * 4) as i32;
             let mut spans = lanes.edge_spans(tri, y);
             if spans.exact != 0 {
@@ -587,7 +590,9 @@ impl MaskedBuffer {
         chunks.iter().for_each(|(_, w)| work += *w);
         let (cols, merge) = (self.cols, self.merge);
         self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
-            let mut band = Band { groups, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
+            let first = (b * BAND_ROWS) as u32;
+            let end = first + (groups.len() * LANES) as u32 / cols;
+            let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
                 for &i in chunk.in_band(b) {
                     band.draw(&chunk.tris[i as usize]);
@@ -607,6 +612,7 @@ impl MaskedBuffer {
         Band {
             groups: &mut self.groups,
             first: 0,
+            end: self.rows,
             cols: self.cols,
             width: self.width,
             height: self.height,
