@@ -204,7 +204,8 @@ unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -
 #[target_feature(enable = "avx2")]
 unsafe fn depth_bounds(plane: &DepthPlane, sx: u32, sy: u32) -> __m256 {
     let base = plane.far_at(plane.corner_x(f64::from(sx * 8)), plane.row_term(f64::from(sy * 4)));
-    let steps = _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    let steps =
+        _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     // `far_sum` on eight lanes.
     let sum = _mm256_add_ps(_mm256_set1_ps(base), steps);
     let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
