@@ -52,10 +52,16 @@
 //!   buffer's triangle are `p`'s in its own (a convex combination of the vertex
 //!   displacements away from `p`, so within `s` in x and in y): at most the
 //!   raised plane at `p`. Over a subtile that is bounded by the raised plane's
-//!   largest value at the subtile's four corners (computed in `f64`, nudged
-//!   farther by `2^-22` of itself, more than its rounding to the nearest `f32`
-//!   can take back), capped by the farthest vertex (the depth is a convex
-//!   combination of the vertices').
+//!   largest value at the subtile's four corners, capped by the farthest vertex
+//!   (the depth is a convex combination of the vertices'). The buffer takes
+//!   that bound for eight neighbouring subtiles at once: the plane at the first
+//!   one's corner in `f64`, nudged farther by `2^-22` of itself (more than its
+//!   rounding to the nearest `f32` can take back), plus, for the subtile `l`
+//!   places to the right, `l` steps of an `f32` step never less than the
+//!   plane's rise `8 dz/dx` from one corner to the next, with 21 significant
+//!   bits so that `l` steps are exact; that sum is rounded to `f32` and nudged
+//!   farther by `2^-22` of itself, more than the sum's rounding took, and
+//!   capped by the farthest vertex, itself rounded far.
 //! - Layer merge: a merge of a triangle (mask `C`, depth `t`) into the working
 //!   layer (mask `M`, depth `w`) gives `M | C` the depth `max(w, t)`, which bounds
 //!   both; the working layer is only discarded (its pixels falling back to the
@@ -75,7 +81,8 @@
 //! # Rasterization
 //! Per subtile row of a triangle, each edge's x-intercepts on the four pixel
 //! rows are computed at once, then the masks and depth bounds of eight
-//! neighbouring subtiles at once by shifts and one plane evaluation per subtile
+//! neighbouring subtiles at once by shifts and one plane evaluation per eight
+//! subtiles (in `f64`, then a step per subtile in `f32`)
 //! (the `raster::lanes` module: only rows whose intercept lies within its proven
 //! rounding band of a pixel boundary are decided pixel by pixel, so masks are
 //! exactly the per-pixel definition above), and merged into them in lanes: the

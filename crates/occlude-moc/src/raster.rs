@@ -199,22 +199,66 @@ impl DepthPlane {
         DepthPlane { zx, zy, z0, zmax: t[0].z.max(t[1].z).max(t[2].z) }
     }
 
-    /// The plane at (`x`, `y`), rounded as every bound is.
+    /// The row term `zy y + z0` of the subtile row whose top is `by`, at the
+    /// row its corners' bound is taken on: the bottom one where the plane rises
+    /// downward (a rounded product and sum are monotone in each coordinate, so
+    /// that is where the rounded plane is largest too).
     #[inline]
-    pub(crate) fn at(&self, x: f64, y: f64) -> f64 {
-        self.zx * x + self.zy * y + self.z0
+    pub(crate) fn row_term(&self, by: f64) -> f64 {
+        let y = if self.zy > 0.0 { by + 4.0 } else { by };
+        self.zy * y + self.z0
     }
 
-    /// An `f32` bound on the triangle's depth over the 8x4 subtile whose top-left
-    /// corner is (`bx`, `by`): the plane's largest value at the subtile's corners
-    /// (a rounded product and sum are monotone in each coordinate, so that is the
-    /// corner the plane's slopes point to), capped by the farthest vertex, nudged
-    /// farther and rounded to `f32` ([`round_far`]).
+    /// The plane at column `x` of the row of `row` ([`Self::row_term`]),
+    /// nudged farther and rounded to `f32` ([`round_far`]): never nearer than
+    /// the plane there.
     #[inline]
-    pub(crate) fn subtile_bound(&self, bx: f64, by: f64) -> f32 {
-        let x = if self.zx > 0.0 { bx + 8.0 } else { bx };
-        let y = if self.zy > 0.0 { by + 4.0 } else { by };
-        round_far(self.at(x, y).min(self.zmax))
+    pub(crate) fn far_at(&self, x: f64, row: f64) -> f32 {
+        round_far(self.zx * x + row)
+    }
+
+    /// The column of the corner whose bound a subtile from column `bx` takes:
+    /// its right edge where the plane rises to the right.
+    #[inline]
+    pub(crate) fn corner_x(&self, bx: f64) -> f64 {
+        if self.zx > 0.0 {
+            bx + 8.0
+        } else {
+            bx
+        }
+    }
+
+    /// An `f32` step from one subtile's corner to the next one's to the right,
+    /// never less than the plane's rise `8 zx` and with at most 21 significant
+    /// bits, so that its multiples by `0..8` are exact in `f32`: `8 zx`
+    /// rounded far ([`round_far`]), then its significand rounded up (positive)
+    /// or cut (negative) to 21 bits.
+    #[inline]
+    pub(crate) fn lane_step(&self) -> f32 {
+        let v = round_far(self.zx * 8.0);
+        let bits = v.to_bits();
+        f32::from_bits(if v >= 0.0 { (bits + 7) & !7 } else { bits & !7 })
+    }
+
+    /// The farthest vertex depth rounded far ([`round_far`]): the cap of every
+    /// bound.
+    #[inline]
+    pub(crate) fn far_max(&self) -> f32 {
+        round_far(self.zmax)
+    }
+
+    /// An `f32` bound on the triangle's depth over subtile `l` of the group of
+    /// eight whose first subtile's top-left corner is (`gx`, `by`): the plane at
+    /// the first subtile's corner ([`Self::corner_x`], [`Self::row_term`]) in
+    /// `f64`, rounded far ([`Self::far_at`]), plus `l` exact [`Self::lane_step`]s
+    /// in `f32` ([`far_sum`]), capped by [`Self::far_max`]. Lane `l`'s corner
+    /// lies `8 l` to the right of the first one's, so this is never nearer than
+    /// the plane's largest value at its corners, nor than the farthest vertex
+    /// where that is nearer (the crate doc, "Depth per subtile").
+    #[inline]
+    pub(crate) fn subtile_bound(&self, gx: f64, by: f64, l: usize) -> f32 {
+        let base = self.far_at(self.corner_x(gx), self.row_term(by));
+        far_sum(base, self.lane_step() * l as f32).min(self.far_max())
     }
 }
 
@@ -230,6 +274,22 @@ pub(crate) const FAR_NUDGE: f64 = 1.0 / (1u32 << 22) as f64;
 #[inline]
 pub(crate) fn round_far(depth: f64) -> f32 {
     (depth + depth.abs() * FAR_NUDGE + 1e-12) as f32
+}
+
+/// [`FAR_NUDGE`] in `f32`.
+pub(crate) const FAR_NUDGE_F32: f32 = 1.0 / (1u32 << 22) as f32;
+
+/// `a + b` in `f32`, never less than the exact sum: the rounded sum `s`,
+/// then `s + |s| 2^-22` rounded. Each rounding to nearest errs by at most
+/// `2^-24` of its result (none where the sum is below the normal range, where
+/// a sum of two `f32` is exact), so the second sum exceeds `s` by more than
+/// `2^-23 |s|`, more than `s` can lie below `a + b`; where `|s| 2^-22` is
+/// below the normal range its own rounding (`2^-150`) is less than the margin
+/// for every normal `s`.
+#[inline]
+pub(crate) fn far_sum(a: f32, b: f32) -> f32 {
+    let s = a + b;
+    s + s.abs() * FAR_NUDGE_F32
 }
 
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
@@ -303,9 +363,11 @@ impl ScreenTriangle {
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
     fn tiles(&self) -> u64 {
-        // A tile is 4 x 2 subtiles.
-        let (tx, ty) = (4 * SUBTILE_W as i32, 2 * SUBTILE_H as i32);
-        ((self.x1 - 1) / tx - self.x0 / tx + 1) as u64 * ((self.y1 - 1) / ty - self.y0 / ty + 1) as u64
+        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= x0 < x1`,
+        // `0 <= y0 < y1`), so unsigned division is shifts.
+        let (tx, ty) = (4 * SUBTILE_W, 2 * SUBTILE_H);
+        let (x0, x1, y0, y1) = (self.x0 as u32, self.x1 as u32, self.y0 as u32, self.y1 as u32);
+        u64::from((x1 - 1) / tx - x0 / tx + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
     }
 
     /// The first and one past the last subtile row the triangle touches.
@@ -319,6 +381,8 @@ impl ScreenTriangle {
 struct Band<'a> {
     groups: &'a mut [Group],
     first: u32,
+    /// One past the band's last subtile row.
+    end: u32,
     cols: u32,
     width: u32,
     height: u32,
@@ -343,8 +407,7 @@ impl Band<'_> {
     #[inline(always)]
     fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
-        let last = self.first + (self.groups.len() * LANES) as u32 / self.cols;
-        for sy in r0.max(self.first)..r1.min(last) {
+        for sy in r0.max(self.first)..r1.min(self.end) {
             let y = (sy * 4) as i32;
             let mut spans = lanes.edge_spans(tri, y);
             if spans.exact != 0 {
@@ -353,7 +416,9 @@ impl Band<'_> {
             let Some((left, right)) = lanes.reach(&spans) else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
             let bottom = sy * 4 + 4 > self.height;
-            for g in (left / 64) as u32..=((right - 1) / 64) as u32 {
+            // Spans lie within the window, so `0 <= left < right`: the groups
+            // by shifts of unsigned values.
+            for g in left as u32 / 64..=(right - 1) as u32 / 64 {
                 let sx = g * LANES as u32;
                 let padded = bottom || (sx + LANES as u32) * 8 > self.width;
                 let outside = padded.then_some((self.width, self.height));
@@ -525,7 +590,9 @@ impl MaskedBuffer {
         chunks.iter().for_each(|(_, w)| work += *w);
         let (cols, merge) = (self.cols, self.merge);
         self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
-            let mut band = Band { groups, first: (b * BAND_ROWS) as u32, cols, width, height, merge, avx2 };
+            let first = (b * BAND_ROWS) as u32;
+            let end = first + (groups.len() * LANES) as u32 / cols;
+            let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
                 for &i in chunk.in_band(b) {
                     band.draw(&chunk.tris[i as usize]);
@@ -545,6 +612,7 @@ impl MaskedBuffer {
         Band {
             groups: &mut self.groups,
             first: 0,
+            end: self.rows,
             cols: self.cols,
             width: self.width,
             height: self.height,
@@ -560,7 +628,8 @@ mod tests {
     use crate::buffer::{outside_mask, Subtile};
 
     /// The masks by definition: every pixel centre of the subtile tested against
-    /// every edge.
+    /// every edge; the depth bounds by [`DepthPlane::subtile_bound`] (whose own
+    /// test checks them against the plane).
     fn reference_draw(buffer: &mut MaskedBuffer, tri: &ScreenTriangle) {
         let mode = buffer.merge;
         for sy in 0..buffer.rows {
@@ -574,13 +643,12 @@ mod tests {
                     }
                 }
                 if cover != 0 {
-                    let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
-                    let (bx, by) = (f64::from(sx * 8), f64::from(sy * 4));
-                    let far = corners.iter().map(|&(dx, dy)| tri.plane.at(bx + dx, by + dy)).fold(f64::MIN, f64::max);
+                    let (gx, by) = (f64::from(sx / 8 * 64), f64::from(sy * 4));
+                    let far = tri.plane.subtile_bound(gx, by, (sx % 8) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
                     let mut s = group.get((sx % 8) as usize);
-                    s.merge(cover | outside, round_far(far.min(tri.plane.zmax)), mode);
+                    s.merge(cover | outside, far, mode);
                     group.set((sx % 8) as usize, s);
                 }
             }
@@ -645,6 +713,39 @@ mod tests {
             assert_same(&fast, &slow, &format!("round {round}"));
         }
         assert!(covered > 2000, "{covered}");
+    }
+
+    #[test]
+    fn subtile_bounds_are_never_nearer_than_the_plane_and_close_to_it() {
+        let mut rng = Lcg(17);
+        let mut capped = 0;
+        for i in 0..200_000 {
+            // Planes from flat to steep, depths around 0..1, some far out.
+            let scale = [1e-9, 1e-5, 1e-3, 0.1, 1.0][i % 5];
+            let plane = DepthPlane {
+                zx: (rng.unit() - 0.5) * scale,
+                zy: (rng.unit() - 0.5) * scale,
+                z0: rng.unit() * [1.0, 1e-6, 10.0][i % 3],
+                zmax: rng.unit() * 2.0,
+            };
+            let (g, sy, l) = ((rng.unit() * 40.0) as u32, (rng.unit() * 300.0) as u32, i % LANES);
+            let (bx, by) = (f64::from(g * 64 + 8 * l as u32), f64::from(sy * 4));
+            let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
+            let exact = corners
+                .iter()
+                .map(|&(dx, dy)| plane.zx * (bx + dx) + plane.zy * (by + dy) + plane.z0)
+                .fold(f64::MIN, f64::max)
+                .min(plane.zmax);
+            let bound = f64::from(plane.subtile_bound(f64::from(g * 64), by, l));
+            assert!(bound >= exact, "{plane:?} lane {l}: {bound} < {exact}");
+            // Looser than the plane by a few f32 units of its terms at most: the
+            // base's and the sum's nudges (`2^-22` each), the step's 21 bits
+            // (`2^-20` of up to seven steps, less than the x term).
+            let terms = (plane.zx * (bx + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
+            assert!(bound - exact <= terms * 2e-6 + 1e-11, "{plane:?} lane {l}: {bound} vs {exact}");
+            capped += usize::from(exact == plane.zmax);
+        }
+        assert!(capped > 1000, "{capped}");
     }
 
     #[test]

@@ -1,12 +1,12 @@
 //! The AVX2 versions of [`super::lanes`]' two steps and of the group merge
 //! ([`Group::merge`]): the four rows' intercepts of an edge in one `f64 x 4`
-//! register, eight subtiles' masks (`i32 x 8`) and depth bounds (two
-//! `f64 x 4`) at once, and a group's eight subtiles merged by compares and
-//! blends. Same operations in the same order as the portable versions
-//! (products and sums rounded separately, never fused; `min` taking the second
-//! operand on NaN as `f64::min` takes the non-NaN one; `max` of the working
-//! depth and the new one in the portable merge's order), so the results are
-//! bit-identical.
+//! register, eight subtiles' masks (`i32 x 8`) and depth bounds (`f32 x 8`
+//! from one `f64` base) at once, and a group's eight subtiles merged by
+//! compares and blends. Same operations in the same order as the portable
+//! versions (products and sums rounded separately, never fused; `min` taking
+//! the second operand on NaN as `f64::min` and `f32::min` take the non-NaN
+//! one; `max` of the working depth and the new one in the portable merge's
+//! order), so the results are bit-identical.
 
 use std::arch::x86_64::*;
 
@@ -99,15 +99,12 @@ unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
     band.draw_with(tri, avx2);
 }
 
-/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi` of the
-/// non-empty rows, by two shuffles each.
+/// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi`, by two
+/// shuffles each.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
     let (lo, hi) = (_mm_loadu_si128(spans.lo.as_ptr().cast()), _mm_loadu_si128(spans.hi.as_ptr().cast()));
-    let filled = _mm_cmpgt_epi32(hi, lo);
-    let lo = _mm_blendv_epi8(_mm_set1_epi32(i32::MAX), lo, filled);
-    let hi = _mm_blendv_epi8(_mm_set1_epi32(i32::MIN), hi, filled);
     let lo = _mm_min_epi32(lo, _mm_shuffle_epi32::<0b01_00_11_10>(lo));
     let hi = _mm_max_epi32(hi, _mm_shuffle_epi32::<0b01_00_11_10>(hi));
     let left = _mm_cvtsi128_si32(_mm_min_epi32(lo, _mm_shuffle_epi32::<0b10_11_00_01>(lo)));
@@ -192,20 +189,27 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
-    let bx = _mm256_mullo_epi32(
-        _mm256_add_epi32(_mm256_set1_epi32(sx as i32), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)),
-        _mm256_set1_epi32(8),
-    );
     let cover = group_cover(spans, sx);
-    let plane = &tri.plane;
-    let corner_x = _mm256_add_epi32(bx, _mm256_set1_epi32(if plane.zx > 0.0 { 8 } else { 0 }));
-    let by = f64::from(sy * 4);
-    let y_term = _mm256_set1_pd(plane.zy * if plane.zy > 0.0 { by + 4.0 } else { by });
     let mut out = ([0u32; LANES], [0f32; LANES]);
     _mm256_storeu_si256(out.0.as_mut_ptr().cast(), cover);
-    _mm_storeu_ps(out.1.as_mut_ptr(), depth_bounds(plane, _mm256_castsi256_si128(corner_x), y_term));
-    _mm_storeu_ps(out.1.as_mut_ptr().add(4), depth_bounds(plane, _mm256_extracti128_si256::<1>(corner_x), y_term));
+    _mm256_storeu_ps(out.1.as_mut_ptr(), depth_bounds(&tri.plane, sx, sy));
     out
+}
+
+/// [`DepthPlane::subtile_bound`](super::DepthPlane) of the eight subtiles of
+/// the group from subtile column `sx` of row `sy`: the group's base in `f64`
+/// (scalar), then its lanes' steps added and the cap taken in `f32` lanes,
+/// with the portable version's operations in its order.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn depth_bounds(plane: &DepthPlane, sx: u32, sy: u32) -> __m256 {
+    let base = plane.far_at(plane.corner_x(f64::from(sx * 8)), plane.row_term(f64::from(sy * 4)));
+    let steps =
+        _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
+    // `far_sum` on eight lanes.
+    let sum = _mm256_add_ps(_mm256_set1_ps(base), steps);
+    let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
+    _mm256_min_ps(_mm256_add_ps(sum, nudge), _mm256_set1_ps(plane.far_max()))
 }
 
 /// The coverage masks of the eight subtiles of the group from subtile column
@@ -240,29 +244,6 @@ unsafe fn group_cover(spans: &Spans, sx: u32) -> __m256i {
             0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15, 0, 1, 8, 9, 2, 3, 10, 11, 4, 5, 12, 13, 6, 7, 14, 15,
         ),
     )
-}
-
-/// [`DepthPlane::subtile_bound`](super::DepthPlane) on four lanes: the plane
-/// at the corner columns `x` and the row term `y_term` (`zy` times the corner
-/// row), capped by the farthest vertex, rounded far.
-#[inline]
-#[target_feature(enable = "avx2")]
-unsafe fn depth_bounds(plane: &DepthPlane, x: __m128i, y_term: __m256d) -> __m128 {
-    let at = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(plane.zx), _mm256_cvtepi32_pd(x)), y_term),
-        _mm256_set1_pd(plane.z0),
-    );
-    round_far(_mm256_min_pd(at, _mm256_set1_pd(plane.zmax)))
-}
-
-/// [`super::round_far`] on four lanes: nudged farther, rounded to the nearest
-/// `f32`.
-#[inline]
-#[target_feature(enable = "avx2")]
-unsafe fn round_far(depth: __m256d) -> __m128 {
-    let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), depth);
-    let nudge = _mm256_mul_pd(abs, _mm256_set1_pd(super::FAR_NUDGE));
-    _mm256_cvtpd_ps(_mm256_add_pd(_mm256_add_pd(depth, nudge), _mm256_set1_pd(1e-12)))
 }
 
 /// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each

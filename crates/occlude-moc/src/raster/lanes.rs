@@ -43,15 +43,14 @@ pub(crate) struct Spans {
 }
 
 impl Spans {
-    /// The pixels `left..right` the non-empty rows reach, `None` when all are
-    /// empty.
+    /// Pixels `left..right` that hold every row's covered pixels, `None` where
+    /// that is empty (then so is every row): the smallest `lo` to the largest
+    /// `hi`. An empty row may widen it (its `lo` and `hi` are ends of the
+    /// triangle's window or edge bounds, within `0..=width`); the groups it
+    /// adds have no cover and are left as they are.
     pub(crate) fn reach(&self) -> Option<(i32, i32)> {
-        let (mut left, mut right) = (i32::MAX, i32::MIN);
-        for (&lo, &hi) in self.lo.iter().zip(&self.hi) {
-            if lo < hi {
-                (left, right) = (left.min(lo), right.max(hi));
-            }
-        }
+        let left = self.lo.iter().fold(i32::MAX, |m, &v| m.min(v));
+        let right = self.hi.iter().fold(i32::MIN, |m, &v| m.max(v));
         (left < right).then_some((left, right))
     }
 }
@@ -93,17 +92,19 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
 /// Portable coverage masks and depth bounds of the [`LANES`] subtiles from
 /// column `sx` of subtile row `sy`: lane `l` is subtile `sx + l`, its mask bit
 /// `x + 8 y` set for the pixels of row `y` inside `spans` (a row's bits by
-/// shifts of its span's ends), its depth [`DepthPlane::subtile_bound`](super::DepthPlane).
+/// shifts of its span's ends), its depth [`DepthPlane::subtile_bound`](super::DepthPlane)
+/// (the group's first subtile at column `sx`, which the AVX2 version's lanes
+/// share).
 pub(crate) fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
     let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
-    let by = f64::from(sy * 4);
+    let (gx, by) = (f64::from(sx * 8), f64::from(sy * 4));
     for l in 0..LANES {
         let bx = (sx as i32 + l as i32) * 8;
         for r in 0..4 {
             let (lo, hi) = ((spans.lo[r] - bx).clamp(0, 8), (spans.hi[r] - bx).clamp(0, 8));
             cover[l] |= ((1u32 << hi.max(lo)) - (1u32 << lo)) << (8 * r);
         }
-        depth[l] = tri.plane.subtile_bound(f64::from(bx), by);
+        depth[l] = tri.plane.subtile_bound(gx, by, l);
     }
     (cover, depth)
 }

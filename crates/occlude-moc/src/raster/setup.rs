@@ -36,9 +36,10 @@ pub(crate) struct Batch {
     edges: [[[f64; SETUP_LANES]; 6]; 3],
     /// Per edge, bit `l`: [`Edge`]'s `on` of lane `l`.
     on: [i32; 3],
-    /// `x0`, `x1`, `y0`, `y1` (whole numbers), then the plane's `zx`, `zy`,
-    /// `z0`, `zmax`.
-    window_plane: [[f64; SETUP_LANES]; 8],
+    /// `x0`, `x1`, `y0`, `y1`, converted in lanes.
+    window: [[i32; SETUP_LANES]; 4],
+    /// The plane's `zx`, `zy`, `z0`, `zmax`.
+    plane: [[f64; SETUP_LANES]; 4],
 }
 
 /// What became of a lane's triangle in [`setup4`].
@@ -73,18 +74,18 @@ impl Batch {
             let e = &self.edges[i];
             Edge { a: e[0][l], b: e[1][l], c: e[2][l], on: self.on[i] >> l & 1 == 1, slope: e[3][l], offset: e[4][l] }
         };
-        let v = &self.window_plane;
+        let (v, p) = (&self.window, &self.plane);
         let (x0, x1) = (v[0][l], v[1][l]);
         ScreenTriangle {
             edges: [edge(0), edge(1), edge(2)],
-            plane: DepthPlane { zx: v[4][l], zy: v[5][l], z0: v[6][l], zmax: v[7][l] },
-            x0: x0 as i32,
-            x1: x1 as i32,
-            y0: v[2][l] as i32,
-            y1: v[3][l] as i32,
+            plane: DepthPlane { zx: p[0][l], zy: p[1][l], z0: p[2][l], zmax: p[3][l] },
+            x0,
+            x1,
+            y0: v[2][l],
+            y1: v[3][l],
             bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
-            t_min: x0 - 2.5,
-            t_max: x1 + 2.5,
+            t_min: f64::from(x0) - 2.5,
+            t_max: f64::from(x1) + 2.5,
         }
     }
 }
@@ -163,7 +164,8 @@ pub(crate) unsafe fn setup4(
         rejected: 0,
         edges: [[[0.0; SETUP_LANES]; 6]; 3],
         on: [0; 3],
-        window_plane: [[0.0; SETUP_LANES]; 8],
+        window: [[0; SETUP_LANES]; 4],
+        plane: [[0.0; SETUP_LANES]; 4],
     };
     if common == 0 {
         return batch;
@@ -247,7 +249,11 @@ pub(crate) unsafe fn setup4(
         _mm256_mul_pd(_mm256_add_pd(abs(zx), abs(zy)), step),
     );
     let zmax = _mm256_max_pd(_mm256_max_pd(vz[0], vz[1]), vz[2]);
-    for (out, v) in batch.window_plane.iter_mut().zip([x0, x1, y0, y1, zx, zy, z0, zmax]) {
+    // Whole numbers within the screen in drawn lanes, so converted exactly.
+    for (out, v) in batch.window.iter_mut().zip([x0, x1, y0, y1]) {
+        _mm_storeu_si128(out.as_mut_ptr().cast(), _mm256_cvttpd_epi32(v));
+    }
+    for (out, v) in batch.plane.iter_mut().zip([zx, zy, z0, zmax]) {
         _mm256_storeu_pd(out.as_mut_ptr(), v);
     }
     batch
