@@ -11,12 +11,19 @@ use serde::{Deserialize, Serialize};
 pub struct FrameStats {
     /// Frame time: max(CPU end, GPU end).
     pub frame_ms: f64,
-    /// Time the CPU was busy issuing commands and traversing (wait excluded).
+    /// Time the CPU was busy issuing commands and traversing (waits for
+    /// results and blocked submissions excluded).
     pub cpu_ms: f64,
     /// Time the GPU was busy.
     pub gpu_ms: f64,
     /// Time the CPU was blocked on query results.
     pub wait_ms: f64,
+    /// Time the CPU was blocked in submitting calls because the driver's
+    /// command queue was full (the soft backend's bounded queue,
+    /// `GpuModel::driver_queue_us`; 0 on wgpu, where such time is in
+    /// `cpu_ms`). Neither `cpu_ms` nor `wait_ms` includes it.
+    #[serde(default)]
+    pub submit_wait_ms: f64,
     /// Occlusion queries issued (a multi-query counts once).
     pub queries: u64,
     /// Boxes rasterized by those queries.

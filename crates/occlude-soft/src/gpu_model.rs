@@ -40,6 +40,13 @@ pub struct GpuModel {
     /// Time from the GPU finishing a query until the CPU can read its
     /// result, µs.
     pub query_latency_us: f64,
+    /// GPU work the driver buffers ahead of the GPU, µs: a submitting call
+    /// (draw, query, state change) that finds more than this queued blocks
+    /// until the GPU has worked it down, as an OpenGL driver blocks when its
+    /// command buffer is full; that time is `FrameStats::submit_wait_ms`,
+    /// not query wait. `inf`: the CPU may run any distance ahead of the GPU
+    /// within a frame.
+    pub driver_queue_us: f64,
     /// CPU time to record one compute dispatch or indirect multi-draw
     /// (GPU-driven culling), µs.
     pub cpu_dispatch_us: f64,
@@ -138,7 +145,9 @@ impl GpuModel {
     pub const PRESETS: [&'static str; 2] = ["gpu-2004", "modern"];
 
     /// Close to the CHC paper's GeForce FX 5950 / Pentium 4 (2004): slow draw
-    /// calls and long query round trips. Derived from the paper's Table 1.
+    /// calls, long query round trips and a driver that lets the CPU run no
+    /// further ahead than the command the GPU is running. Derived from the
+    /// paper's Table 1 and the chip's published rates (`docs/gpu-models.md`).
     pub fn gpu_2004() -> Self {
         Self {
             name: "gpu-2004".into(),
@@ -154,6 +163,7 @@ impl GpuModel {
             gpu_query_box_us: 2.0,
             gpu_query_fragment_ns: 0.3,
             query_latency_us: 12.0,
+            driver_queue_us: 0.0,
             cpu_dispatch_us: 4.0,
             gpu_dispatch_us: 10.0,
             gpu_compute_item_ns: 2.0,
@@ -171,7 +181,8 @@ impl GpuModel {
     }
 
     /// A current desktop GPU driven by a modern API: cheap draw calls and
-    /// triangles, but a deep pipeline whose query results come back late.
+    /// triangles, but a deep pipeline whose query results come back late;
+    /// command buffers never block a submission within a frame.
     pub fn modern() -> Self {
         Self {
             name: "modern".into(),
@@ -187,6 +198,7 @@ impl GpuModel {
             gpu_query_box_us: 0.3,
             gpu_query_fragment_ns: 0.005,
             query_latency_us: 30.0,
+            driver_queue_us: f64::INFINITY,
             cpu_dispatch_us: 1.0,
             gpu_dispatch_us: 3.0,
             gpu_compute_item_ns: 0.05,
@@ -277,7 +289,8 @@ impl GpuModel {
         Ok(model)
     }
 
-    /// Every cost must be a finite, non-negative number.
+    /// Every cost must be a finite, non-negative number; the driver's queue
+    /// a non-negative one or `inf`.
     pub fn validate(&self) -> Result<(), String> {
         let costs = [
             ("cpu_draw_call_us", self.cpu_draw_call_us),
@@ -306,10 +319,13 @@ impl GpuModel {
             ("cpu_moc_tile_ns", self.cpu_moc_tile_ns),
             ("cpu_moc_box_ns", self.cpu_moc_box_ns),
         ];
-        match costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
-            Some((name, v)) => Err(format!("{name} = {v}: costs must be finite and >= 0")),
-            None => Ok(()),
+        if let Some((name, v)) = costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
+            return Err(format!("{name} = {v}: costs must be finite and >= 0"));
         }
+        if self.driver_queue_us.is_nan() || self.driver_queue_us < 0.0 {
+            return Err(format!("driver_queue_us = {}: must be >= 0 (inf: unbounded)", self.driver_queue_us));
+        }
+        Ok(())
     }
 }
 
@@ -342,11 +358,27 @@ mod tests {
         assert_eq!(m.cpu_draw_call_us, GpuModel::gpu_2004().cpu_draw_call_us);
     }
 
+    /// The driver's queue is a bound, not a cost: any depth, or none.
+    #[test]
+    fn the_driver_queue_is_a_bound_or_unbounded() {
+        let m = GpuModel::from_toml("preset = \"gpu-2004\"\ndriver_queue_us = 500.0").unwrap();
+        assert_eq!(m.driver_queue_us, 500.0);
+        let m = GpuModel::from_toml("driver_queue_us = inf").unwrap();
+        assert_eq!(m.driver_queue_us, f64::INFINITY);
+        // A written model reads back the same, bounded or not.
+        let bounded = GpuModel { driver_queue_us: 250.0, ..GpuModel::gpu_2004() };
+        for m in [bounded, GpuModel::gpu_2004(), GpuModel::modern()] {
+            assert_eq!(GpuModel::from_toml(&toml::to_string(&m).unwrap()).unwrap(), m);
+        }
+    }
+
     #[test]
     fn toml_errors_name_the_problem() {
         assert!(GpuModel::from_toml("no_such_cost = 1.0").unwrap_err().contains("no_such_cost"));
         assert!(GpuModel::from_toml("preset = \"gpu-1999\"").unwrap_err().contains("gpu-1999"));
         assert!(GpuModel::from_toml("query_latency_us = -1.0").unwrap_err().contains("query_latency_us"));
         assert!(matches!(GpuModel::load("nonexistent-model"), Err(GpuModelError::Unknown(_))));
+        assert!(GpuModel::from_toml("driver_queue_us = -1.0").unwrap_err().contains("driver_queue_us"));
+        assert!(GpuModel::from_toml("driver_queue_us = nan").unwrap_err().contains("driver_queue_us"));
     }
 }

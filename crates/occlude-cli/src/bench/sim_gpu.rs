@@ -18,7 +18,7 @@ pub struct SimFrame<'m> {
 impl<'m> SimFrame<'m> {
     /// An empty frame charged with `model`'s costs.
     pub fn new(model: &'m GpuModel) -> Self {
-        Self { model, clock: SimClock::default() }
+        Self { model, clock: SimClock::new(model.driver_queue_us) }
     }
 
     /// `us` of CPU work.

@@ -61,6 +61,10 @@ pub struct MethodSummary {
     pub queries_per_frame: f64,
     /// CPU time blocked on query results per frame, ms.
     pub wait_ms_per_frame: f64,
+    /// CPU time blocked in submitting calls per frame (a full driver
+    /// queue; see `FrameStats::submit_wait_ms`), ms.
+    #[serde(default)]
+    pub submit_wait_ms_per_frame: f64,
     /// Draw calls per frame.
     pub draw_calls_per_frame: f64,
     /// Render-state changes per frame.
@@ -210,6 +214,7 @@ impl BenchReport {
                     p95_frame_ms: p95(frames),
                     queries_per_frame: mean(frames, |f| f.queries as f64),
                     wait_ms_per_frame: mean(frames, |f| f.wait_ms),
+                    submit_wait_ms_per_frame: mean(frames, |f| f.submit_wait_ms),
                     draw_calls_per_frame: mean(frames, |f| f.draw_calls as f64),
                     state_changes_per_frame: mean(frames, |f| f.state_changes as f64),
                     triangles_per_frame: mean(frames, |f| f.triangles as f64),

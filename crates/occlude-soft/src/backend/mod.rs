@@ -237,9 +237,15 @@ impl<'s> SoftBackend<'s> {
         }
         let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &self.commands);
         let (mut batch, mut batch_end) = (Vec::new(), 0.0);
+        // CPU time the replayed submissions blocked (a bounded driver
+        // queue): every command recorded after a blocked one was issued
+        // that much later.
+        let mut blocked = 0.0;
         for (op, r) in self.ops.iter().zip(&results) {
             let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
-            let end = self.clock.gpu_command(op.issued_us, cost_us);
+            let submitted = self.clock.gpu_command(op.issued_us + blocked, cost_us);
+            blocked += submitted.blocked;
+            let end = submitted.end;
             charge_gpu_time(&mut self.count.stats, op.cull, cost_us);
             match op.query {
                 Some(handle) => {
@@ -296,7 +302,14 @@ impl<'s> SoftBackend<'s> {
         if self.queries[query.0 as usize].pending {
             self.flush();
         }
-        self.queries[query.0 as usize]
+        let q = self.queries[query.0 as usize];
+        // Submissions recorded after the query may yet block the CPU (a
+        // bounded driver queue) past the time its result is readable: replay
+        // them before the CPU clock is compared with it.
+        if q.available_at_us > self.clock.cpu && self.clock.queue_is_bounded() {
+            self.flush();
+        }
+        q
     }
 }
 
@@ -305,7 +318,7 @@ impl Backend for SoftBackend<'_> {
         self.camera = Some(*camera);
         self.view_projection = camera.view_projection();
         self.depth.clear();
-        self.clock = SimClock::default();
+        self.clock = SimClock::new(self.model.driver_queue_us);
         self.count.begin_frame();
         self.pending_state_us = 0.0;
         self.queries.clear();
@@ -391,9 +404,10 @@ impl Backend for SoftBackend<'_> {
         let c = &self.clock;
         let mut s = self.count.stats;
         s.frame_ms = c.frame_end() * 1e-3;
-        s.cpu_ms = (c.cpu - c.wait) * 1e-3;
+        s.cpu_ms = c.cpu_busy() * 1e-3;
         s.gpu_ms = c.gpu_busy * 1e-3;
         s.wait_ms = c.wait * 1e-3;
+        s.submit_wait_ms = c.submit_wait * 1e-3;
         s.late_ms = self.late_from_us.map_or(0.0, |from| (c.gpu_busy - from) * 1e-3);
         s.wall_ms = self.frame_start.elapsed().as_secs_f64() * 1e3;
         self.camera = None;
@@ -454,6 +468,74 @@ mod tests {
             0,
         );
         scene
+    }
+
+    /// A frame of GPU-bound draws, then one query read at once: with an
+    /// unbounded driver queue the read waits for every draw; with a queue
+    /// of zero the draws' submissions block instead, and the read waits for
+    /// the query alone. The GPU's time line, the frame time, the image and
+    /// the count are the same either way.
+    #[test]
+    fn a_bounded_driver_queue_moves_the_wait_into_submission() {
+        let scene = quads();
+        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
+        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
+        let hidden = Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9));
+        let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
+        let frame = |driver_queue_us: f64| {
+            let model = GpuModel {
+                gpu_draw_call_us: 100.0,
+                gpu_state_change_us: 0.0,
+                gpu_query_fragment_ns: 0.0,
+                driver_queue_us,
+                ..GpuModel::modern()
+            };
+            let mut backend = SoftBackend::new(&scene, 97, 71, model);
+            backend.begin_frame(&camera);
+            backend.draw(&all);
+            let query = backend.issue_query(&[hidden]);
+            let pixels = backend.result(query);
+            let mut depth = Vec::new();
+            backend.depth_image(&mut depth);
+            (backend.end_frame(), pixels, depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
+        };
+        let (free, free_pixels, free_depth) = frame(f64::INFINITY);
+        let (bounded, bounded_pixels, bounded_depth) = frame(0.0);
+        assert_eq!((bounded_pixels, &bounded_depth), (free_pixels, &free_depth));
+        assert_eq!(free.submit_wait_ms, 0.0);
+        assert!(free.wait_ms > 1.0, "the read waits for 13 draws of 100 µs: {free:?}");
+        let m = GpuModel::modern();
+        let query_round_trip_ms = (m.gpu_query_box_us + m.query_latency_us) * 1e-3;
+        assert!((bounded.wait_ms - query_round_trip_ms).abs() < 1e-9, "{bounded:?}");
+        assert!((bounded.wait_ms + bounded.submit_wait_ms - free.wait_ms).abs() < 1e-9);
+        assert_eq!((bounded.frame_ms, bounded.gpu_ms, bounded.cpu_ms), (free.frame_ms, free.gpu_ms, free.cpu_ms));
+    }
+
+    /// A query's result is readable 30 µs after it runs; two draws of
+    /// 100 µs recorded after it, with a queue of zero, block the CPU past
+    /// that before it checks again: the check sees the result, as it would
+    /// not if the draws could queue.
+    #[test]
+    fn a_check_counts_the_blocks_of_submissions_recorded_before_it() {
+        let scene = quads();
+        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
+        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
+        let hidden = Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9));
+        let second_check = |driver_queue_us: f64| {
+            let model = GpuModel { gpu_draw_call_us: 100.0, driver_queue_us, ..GpuModel::modern() };
+            let mut backend = SoftBackend::new(&scene, 97, 71, model);
+            backend.begin_frame(&camera);
+            let query = backend.issue_query(&[hidden]);
+            assert!(!backend.is_available(query), "30 µs of latency");
+            backend.draw(&[0, 1]);
+            let available = backend.is_available(query);
+            let stats = backend.end_frame();
+            (available, stats.submit_wait_ms)
+        };
+        let (queued, queued_blocked) = second_check(f64::INFINITY);
+        let (blocked, blocked_ms) = second_check(0.0);
+        assert!(!queued && queued_blocked == 0.0);
+        assert!(blocked && blocked_ms > 0.09, "the second draw waits for the first: {blocked_ms} ms");
     }
 
     /// The oracle in calls of one candidate each, or of a few, gives the
