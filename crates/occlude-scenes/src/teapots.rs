@@ -45,28 +45,31 @@ fn layout(size: Size) -> Layout {
 /// The walkthrough for a field of `length` x `height` x `width` metres.
 fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath {
     let (l, h, w) = (length, height, width);
+    // `p` is in the field's fractions along x and z; `out` at metres beyond
+    // its near end (x < 0) or far end (x > l) and its near side (z < 0) or
+    // far side (z > w).
     let p = |x: f32, y: f32, z: f32| Vec3::new(x * l, y, z * w);
-    let mid = 0.5 * h;
     let mut b = PathBuilder::new();
-    // Outside the short end, looking along the whole field.
-    b.key(0.0, Vec3::new(-6.0, h + 1.5, 0.5 * w), p(0.5, 0.3 * h, 0.5))
-        .key(2.0, Vec3::new(-3.0, h + 0.5, -0.3 * w), p(0.4, 0.3 * h, 0.5))
-        // Along the long side: about half the field in view.
-        .key(3.0, p(0.1, h + 1.0, -1.5), p(0.45, 0.3 * h, 0.5))
-        .key(3.0, p(0.3, 0.8 * h, -1.2), p(0.55, 0.3 * h, 0.6))
-        .key(2.0, p(0.42, mid, -0.5), p(0.45, mid, 0.6))
-        // Into the field, weaving along it: restricted visibility.
-        .key(2.0, p(0.45, mid, 0.35), p(0.55, mid, 0.5))
-        .key(2.0, p(0.5, mid, 0.55), p(0.6, mid, 0.4))
-        .key(2.0, p(0.56, mid, 0.4), p(0.56, mid, 1.0))
-        .key(2.0, p(0.62, mid, 0.6), p(0.72, 0.4 * h, 0.5))
-        .key(2.0, p(0.68, 0.4 * h, 0.45), p(0.62, mid, 0.0))
-        .key(2.0, p(0.74, mid, 0.55), p(0.84, mid, 0.5))
-        // Up out of the field, looking back along it from above.
-        .key(2.0, p(0.8, h + 1.0, 0.5), p(0.4, 0.0, 0.5))
-        .key(3.0, p(0.65, h + 3.0, 0.5), p(0.2, 0.0, 0.5))
-        .key(3.0, p(0.4, h + 2.0, 1.0 + 4.0 / w), p(0.4, 0.0, 0.3))
-        .key(3.0, p(0.2, 0.6 * h, 1.0 + 3.0 / w), p(0.3, mid, 0.0));
+    // Beyond the near end, low, looking into the field end on: restricted.
+    b.key(0.0, Vec3::new(-0.8 * w, 0.5 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
+        .key(1.0, Vec3::new(-1.0 * w, 0.9 * h, 0.1 * w), p(0.5, 0.3 * h, 0.5))
+        // Up and to the side: along the long side from above, the tops of
+        // the whole field and its long side in view (the paper's frames
+        // 25-90): unrestricted.
+        .key(2.0, Vec3::new(-1.2 * w, h + 0.5 * w, -0.6 * w), p(0.45, 0.0, 0.5))
+        .key(2.0, Vec3::new(-1.5 * w, h + 0.8 * w, -1.0 * w), p(0.5, 0.0, 0.5))
+        // Down, grazing along the long side: restricted.
+        .key(3.0, Vec3::new(-1.2 * w, 0.5 * h, -0.3 * w), p(0.6, 0.4 * h, 0.2))
+        // Out and round, the whole long side from afar: unrestricted.
+        .key(3.0, Vec3::new(0.5 * l, 0.3 * l, -0.7 * l), p(0.5, 0.0, 0.5))
+        // Beyond the far end, grazing along the other long side, then end on.
+        .key(3.0, Vec3::new(l + 1.2 * w, 0.5 * h, 1.3 * w), p(0.4, 0.4 * h, 0.8))
+        .key(3.0, Vec3::new(l + 0.8 * w, 0.45 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
+        // Up above the far end, looking down along the field.
+        .key(3.0, Vec3::new(l + 1.0 * w, h + 1.0 * w, 0.5 * w), p(0.4, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 2.0 * w), p(0.5, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 1.5 * w, 0.8 * h, 1.6 * w), p(0.4, 0.4 * h, 0.6))
+        .key(3.0, Vec3::new(l + 0.9 * w, 0.6 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5));
     b.build()
 }
 
