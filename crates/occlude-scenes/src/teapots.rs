@@ -4,9 +4,22 @@
 //!
 //! Teapots are made of small triangles, so only many of them together occlude;
 //! there are thin gaps to see far through; and along the long side about half
-//! of the field is in view. The walkthrough looks along the field from outside
-//! (much visible), then weaves through its inside (much occluded), then flies
-//! above it.
+//! of the field is in view.
+//!
+//! The walkthrough views the field from outside with the whole of it in the
+//! view frustum nearly all the time, as the paper's does: in its Table 1,
+//! view-frustum culling draws 11,139,928 of the scene's 11,520,000 triangles
+//! a frame on average (96.7 %). That share is an input of the experiment
+//! (where the camera is and looks), matched here from the published VFC row,
+//! not a cost fitted to an outcome; the scene tests check that at least 92 %
+//! of the triangles are in the frustum on average and that the eye never
+//! enters the field. As the paper's walkthrough ("sections with both
+//! restricted and unrestricted visibility"; "we viewed the arrangement of
+//! teapots along the longer side", its frames 25-90), it alternates low
+//! views into the field, end on or grazing along a long side, where the
+//! nearest teapots hide most of the rest, with views from above along the
+//! long side and from afar, which see the tops and a long side of the whole
+//! field.
 
 use crate::newell;
 use crate::rng::Rng;
@@ -45,10 +58,13 @@ fn layout(size: Size) -> Layout {
 /// The walkthrough for a field of `length` x `height` x `width` metres.
 fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath {
     let (l, h, w) = (length, height, width);
-    // `p` is in the field's fractions along x and z; `out` at metres beyond
-    // its near end (x < 0) or far end (x > l) and its near side (z < 0) or
-    // far side (z > w).
+    // `p` is in fractions of the field along x and z, metres along y. The
+    // eye stays outside the field, beyond its ends (x < 0, x > l) or its
+    // long sides (z < 0, z > w) or above it, far enough back that the whole
+    // field stays in the frustum (60 degrees high, 4:3).
     let p = |x: f32, y: f32, z: f32| Vec3::new(x * l, y, z * w);
+    // A low key lies between keys of equal height or next to an end of the
+    // path, so that the spline does not dip below it towards the ground.
     let mut b = PathBuilder::new();
     // Beyond the near end, low, looking into the field end on: restricted.
     b.key(0.0, Vec3::new(-0.8 * w, 0.5 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
@@ -61,12 +77,14 @@ fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath
         // Down, grazing along the long side: restricted.
         .key(3.0, Vec3::new(-1.2 * w, 0.5 * h, -0.3 * w), p(0.6, 0.4 * h, 0.2))
         // Out and round, the whole long side from afar: unrestricted.
-        .key(3.0, Vec3::new(0.5 * l, 0.3 * l, -0.7 * l), p(0.5, 0.0, 0.5))
-        // Beyond the far end, grazing along the other long side, then end on.
-        .key(3.0, Vec3::new(l + 1.2 * w, 0.5 * h, 1.3 * w), p(0.4, 0.4 * h, 0.8))
+        .key(3.0, Vec3::new(0.5 * l, h + 0.8 * w, -0.7 * l), p(0.5, 0.0, 0.5))
+        // Beyond the far end: along the other long side from above, down
+        // to look into the field end on, up above the end looking down along
+        // the field, round the corner, and low again, grazing along the
+        // other long side and end on.
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 1.6 * w), p(0.5, 0.0, 0.5))
         .key(3.0, Vec3::new(l + 0.8 * w, 0.45 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
-        // Up above the far end, looking down along the field.
-        .key(3.0, Vec3::new(l + 1.0 * w, h + 1.0 * w, 0.5 * w), p(0.4, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 0.5 * w), p(0.4, 0.0, 0.5))
         .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 2.0 * w), p(0.5, 0.0, 0.5))
         .key(3.0, Vec3::new(l + 1.5 * w, 0.8 * h, 1.6 * w), p(0.4, 0.4 * h, 0.6))
         .key(3.0, Vec3::new(l + 0.9 * w, 0.6 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5));
