@@ -68,12 +68,12 @@ fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath
     let mut b = PathBuilder::new();
     // Beyond the near end, low, looking into the field end on: restricted.
     b.key(0.0, Vec3::new(-0.8 * w, 0.5 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
-        .key(1.0, Vec3::new(-1.0 * w, 0.9 * h, 0.1 * w), p(0.5, 0.3 * h, 0.5))
+        .key(1.0, Vec3::new(-w, 0.9 * h, 0.1 * w), p(0.5, 0.3 * h, 0.5))
         // Up and to the side: along the long side from above, the tops of
         // the whole field and its long side in view (the paper's frames
         // 25-90): unrestricted.
         .key(2.0, Vec3::new(-1.2 * w, h + 0.5 * w, -0.6 * w), p(0.45, 0.0, 0.5))
-        .key(2.0, Vec3::new(-1.5 * w, h + 0.8 * w, -1.0 * w), p(0.5, 0.0, 0.5))
+        .key(2.0, Vec3::new(-1.5 * w, h + 0.8 * w, -w), p(0.5, 0.0, 0.5))
         // Down, grazing along the long side: restricted.
         .key(3.0, Vec3::new(-1.2 * w, 0.5 * h, -0.3 * w), p(0.6, 0.4 * h, 0.2))
         // Out and round, the whole long side from afar: unrestricted.
