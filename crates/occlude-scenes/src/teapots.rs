@@ -4,9 +4,22 @@
 //!
 //! Teapots are made of small triangles, so only many of them together occlude;
 //! there are thin gaps to see far through; and along the long side about half
-//! of the field is in view. The walkthrough looks along the field from outside
-//! (much visible), then weaves through its inside (much occluded), then flies
-//! above it.
+//! of the field is in view.
+//!
+//! The walkthrough views the field from outside with the whole of it in the
+//! view frustum nearly all the time, as the paper's does: in its Table 1,
+//! view-frustum culling draws 11,139,928 of the scene's 11,520,000 triangles
+//! a frame on average (96.7 %). That share is an input of the experiment
+//! (where the camera is and looks), matched here from the published VFC row,
+//! not a cost fitted to an outcome; the scene tests check that at least 92 %
+//! of the triangles are in the frustum on average and that the eye never
+//! enters the field. As the paper's walkthrough ("sections with both
+//! restricted and unrestricted visibility"; "we viewed the arrangement of
+//! teapots along the longer side", its frames 25-90), it alternates low
+//! views into the field, end on or grazing along a long side, where the
+//! nearest teapots hide most of the rest, with views from above along the
+//! long side and from afar, which see the tops and a long side of the whole
+//! field.
 
 use crate::newell;
 use crate::rng::Rng;
@@ -45,28 +58,36 @@ fn layout(size: Size) -> Layout {
 /// The walkthrough for a field of `length` x `height` x `width` metres.
 fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath {
     let (l, h, w) = (length, height, width);
+    // `p` is in fractions of the field along x and z, metres along y. The
+    // eye stays outside the field, beyond its ends (x < 0, x > l) or its
+    // long sides (z < 0, z > w) or above it, far enough back that the whole
+    // field stays in the frustum (60 degrees high, 4:3).
     let p = |x: f32, y: f32, z: f32| Vec3::new(x * l, y, z * w);
-    let mid = 0.5 * h;
+    // A low key lies between keys of equal height or next to an end of the
+    // path, so that the spline does not dip below it towards the ground.
     let mut b = PathBuilder::new();
-    // Outside the short end, looking along the whole field.
-    b.key(0.0, Vec3::new(-6.0, h + 1.5, 0.5 * w), p(0.5, 0.3 * h, 0.5))
-        .key(2.0, Vec3::new(-3.0, h + 0.5, -0.3 * w), p(0.4, 0.3 * h, 0.5))
-        // Along the long side: about half the field in view.
-        .key(3.0, p(0.1, h + 1.0, -1.5), p(0.45, 0.3 * h, 0.5))
-        .key(3.0, p(0.3, 0.8 * h, -1.2), p(0.55, 0.3 * h, 0.6))
-        .key(2.0, p(0.42, mid, -0.5), p(0.45, mid, 0.6))
-        // Into the field, weaving along it: restricted visibility.
-        .key(2.0, p(0.45, mid, 0.35), p(0.55, mid, 0.5))
-        .key(2.0, p(0.5, mid, 0.55), p(0.6, mid, 0.4))
-        .key(2.0, p(0.56, mid, 0.4), p(0.56, mid, 1.0))
-        .key(2.0, p(0.62, mid, 0.6), p(0.72, 0.4 * h, 0.5))
-        .key(2.0, p(0.68, 0.4 * h, 0.45), p(0.62, mid, 0.0))
-        .key(2.0, p(0.74, mid, 0.55), p(0.84, mid, 0.5))
-        // Up out of the field, looking back along it from above.
-        .key(2.0, p(0.8, h + 1.0, 0.5), p(0.4, 0.0, 0.5))
-        .key(3.0, p(0.65, h + 3.0, 0.5), p(0.2, 0.0, 0.5))
-        .key(3.0, p(0.4, h + 2.0, 1.0 + 4.0 / w), p(0.4, 0.0, 0.3))
-        .key(3.0, p(0.2, 0.6 * h, 1.0 + 3.0 / w), p(0.3, mid, 0.0));
+    // Beyond the near end, low, looking into the field end on: restricted.
+    b.key(0.0, Vec3::new(-0.8 * w, 0.5 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
+        .key(1.0, Vec3::new(-w, 0.9 * h, 0.1 * w), p(0.5, 0.3 * h, 0.5))
+        // Up and to the side: along the long side from above, the tops of
+        // the whole field and its long side in view (the paper's frames
+        // 25-90): unrestricted.
+        .key(2.0, Vec3::new(-1.2 * w, h + 0.5 * w, -0.6 * w), p(0.45, 0.0, 0.5))
+        .key(2.0, Vec3::new(-1.5 * w, h + 0.8 * w, -w), p(0.5, 0.0, 0.5))
+        // Down, grazing along the long side: restricted.
+        .key(3.0, Vec3::new(-1.2 * w, 0.5 * h, -0.3 * w), p(0.6, 0.4 * h, 0.2))
+        // Out and round, the whole long side from afar: unrestricted.
+        .key(3.0, Vec3::new(0.5 * l, h + 0.8 * w, -0.7 * l), p(0.5, 0.0, 0.5))
+        // Beyond the far end: along the other long side from above, down
+        // to look into the field end on, up above the end looking down along
+        // the field, round the corner, and low again, grazing along the
+        // other long side and end on.
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 1.6 * w), p(0.5, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 0.8 * w, 0.45 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5))
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 0.5 * w), p(0.4, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 1.2 * w, h + 0.5 * w, 2.0 * w), p(0.5, 0.0, 0.5))
+        .key(3.0, Vec3::new(l + 1.5 * w, 0.8 * h, 1.6 * w), p(0.4, 0.4 * h, 0.6))
+        .key(3.0, Vec3::new(l + 0.9 * w, 0.6 * h, 0.5 * w), p(0.5, 0.4 * h, 0.5));
     b.build()
 }
 
