@@ -470,6 +470,14 @@ mod tests {
         scene
     }
 
+    /// The driver-queue tests' camera, at the origin looking down -z at
+    /// [`quads`], and a small box behind the quads (hidden).
+    fn view_and_hidden_box() -> (Camera, Aabb) {
+        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
+        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
+        (camera, Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9)))
+    }
+
     /// A frame of GPU-bound draws, then one query read at once: with an
     /// unbounded driver queue the read waits for every draw; with a queue
     /// of zero the draws' submissions block instead, and the read waits for
@@ -478,9 +486,7 @@ mod tests {
     #[test]
     fn a_bounded_driver_queue_moves_the_wait_into_submission() {
         let scene = quads();
-        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
-        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
-        let hidden = Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9));
+        let (camera, hidden) = view_and_hidden_box();
         let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
         let frame = |driver_queue_us: f64| {
             let model = GpuModel {
@@ -518,9 +524,7 @@ mod tests {
     #[test]
     fn a_check_counts_the_blocks_of_submissions_recorded_before_it() {
         let scene = quads();
-        let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
-        let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
-        let hidden = Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9));
+        let (camera, hidden) = view_and_hidden_box();
         let second_check = |driver_queue_us: f64| {
             let model = GpuModel { gpu_draw_call_us: 100.0, driver_queue_us, ..GpuModel::modern() };
             let mut backend = SoftBackend::new(&scene, 97, 71, model);
