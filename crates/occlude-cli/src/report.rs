@@ -537,7 +537,7 @@ mod tests {
         let e = error("number.json", "42");
         assert!(e.contains("number.json: expected a bench report") && e.contains("found a number"), "{e}");
         let tables = dir.join("tables.json");
-        let paper = crate::bench::paper_tables::PaperTables {
+        let paper: crate::bench::paper_tables::PaperTables = crate::bench::paper_tables::PaperTables {
             paper: "chc".into(),
             tables: Vec::new(),
             reports: vec![report("city"), report("plant")],

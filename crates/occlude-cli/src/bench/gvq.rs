@@ -18,7 +18,9 @@
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::gvq_parts::{self, PartsRow};
+use super::gvq_parts_gpu;
 use super::gvq_shadows::{self, ShadowRow};
+use super::paper_tables::{PaperTables, Table};
 use super::published::{self, PublishedTable};
 use super::runner::far_plane;
 use anyhow::Result;
@@ -40,24 +42,10 @@ pub const OBJECTS: [u32; 5] = [100, 200, 300, 400, 500];
 pub const RESOLUTION: (u32, u32) = (512, 512);
 
 /// What `--paper gvq --json FILE` writes.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct GvqTables {
-    /// `gvq`.
-    pub paper: String,
-    /// Its tables, in the order printed.
-    pub tables: Vec<GvqTable>,
-}
+pub type GvqTables = PaperTables<GvqRows>;
 
 /// One table of the paper's.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GvqTable {
-    /// The paper's name for it.
-    pub name: String,
-    /// Where the published figures come from.
-    pub source: Option<String>,
-    /// Our rows.
-    pub rows: GvqRows,
-}
+pub type GvqTable = Table<GvqRows>;
 
 /// The rows of one table, each table with columns of its own.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -226,21 +214,27 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
     progress.set_message("gvq: Table 3");
     let (w, h) = base.resolution;
     let published = published::table("gvq", "Table 3");
-    let parts = gvq_parts::table_3(w, h, &base.gpu_model, published);
+    let (parts, clock) = match base.backend {
+        BackendKind::Soft => (
+            gvq_parts::table_3(w, h, &base.gpu_model, published),
+            format!("soft backend, simulated clock, GPU model {}", base.gpu_model.name),
+        ),
+        BackendKind::Wgpu => {
+            let ctx = Arc::new(GpuContext::new()?);
+            let clock = format!("wgpu backend on {}, measured wall-clock ms", ctx.adapter_name());
+            let frames = base.frames.clamp(1, gvq_parts_gpu::FRAMES);
+            (gvq_parts_gpu::table_3(ctx, w, h, frames, published)?, clock)
+        }
+    };
     text.push('\n');
-    text.push_str(&gvq_parts::print(&parts, w, h, &base.gpu_model));
-    let table_3 =
-        GvqTable { name: "Table 3".into(), source: published.map(|t| t.source.clone()), rows: GvqRows::Table3(parts) };
+    text.push_str(&gvq_parts::print(&parts, w, h, &clock));
+    let table_3 = Table::unordered("Table 3", published, GvqRows::Table3(parts));
     let published = published::table("gvq", "Table 1");
     let shadows = gvq_shadows::table_1(base, &OBJECTS, published, progress);
     text.push('\n');
     text.push_str(&gvq_shadows::print(&shadows, w, h, &base.gpu_model));
-    let table_1 = GvqTable {
-        name: "Table 1".into(),
-        source: published.map(|t| t.source.clone()),
-        rows: GvqRows::Table1(shadows),
-    };
-    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3, table_1] }))
+    let table_1 = Table::unordered("Table 1", published, GvqRows::Table1(shadows));
+    Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3, table_1], reports: Vec::new() }))
 }
 
 /// Table 2 over scenes of `counts` objects: the printed table and its rows.
@@ -301,8 +295,7 @@ fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result
             rows.push(row);
         }
     }
-    let source = published.map(|t| t.source.clone());
-    Ok((text, GvqTable { name: "Table 2".into(), source, rows: GvqRows::Table2(rows) }))
+    Ok((text, Table::unordered("Table 2", published, GvqRows::Table2(rows))))
 }
 
 #[cfg(test)]

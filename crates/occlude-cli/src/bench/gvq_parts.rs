@@ -40,7 +40,7 @@ use super::published::PublishedTable;
 use super::sim_gpu::SimFrame;
 use glam::{DVec2, Mat4, Vec3, Vec4};
 use occlude_core::depth_pyramid::{project_corner, PIXEL_MARGIN};
-use occlude_core::gvq::{plan, PixelRect, SatConfig, Silhouette, SummedAreaTable, NO_CHANNEL};
+use occlude_core::gvq::{plan, Lookup, PixelRect, SatConfig, Silhouette, SummedAreaTable, NO_CHANNEL};
 use occlude_core::query_box::BOX_TRIANGLES;
 use occlude_core::{Aabb, Camera};
 use occlude_soft::raster::Fragments;
@@ -70,7 +70,12 @@ pub struct PartsRow {
     pub method: String,
     /// `full`, `partial` or `occluded`.
     pub view: String,
-    /// Simulated frame time, ms.
+    /// The backend that ran it: `soft` (simulated clock) or `wgpu`
+    /// (measured on the device, `super::gvq_parts_gpu`).
+    #[serde(default)]
+    pub backend: String,
+    /// Frame time, ms: the soft backend's simulated clock, or the wgpu
+    /// backend's measured wall-clock time.
     pub frame_ms: f64,
     /// Heavy triangles (prisms) drawn, of [`Self::triangles`].
     pub drawn: u32,
@@ -78,6 +83,10 @@ pub struct PartsRow {
     pub triangles: u32,
     /// Heavy triangles with a visible fragment (what an exact test draws).
     pub visible: u32,
+    /// Heavy triangles whose decision (drawn or culled) differs from the
+    /// soft backend's by the same method (0 on the soft backend).
+    #[serde(default)]
+    pub differing_from_soft: u32,
     /// The paper's frame time on the NVIDIA 280GTX (1000 / its fps), ms.
     pub published_frame_ms: Option<f64>,
     /// The paper's frames per second, NVIDIA 280GTX.
@@ -87,14 +96,14 @@ pub struct PartsRow {
 }
 
 /// The heavy object: base triangles with their vertex normals.
-struct Heavy {
+pub(super) struct Heavy {
     /// Per triangle, its three vertices and their normals.
-    triangles: Vec<[(Vec3, Vec3); 3]>,
+    pub(super) triangles: Vec<[(Vec3, Vec3); 3]>,
 }
 
 impl Heavy {
     /// The unit sphere at the origin, `segments` around and rings.
-    fn sphere(segments: u32) -> Self {
+    pub(super) fn sphere(segments: u32) -> Self {
         let point = |i: u32, j: u32| {
             let (theta, phi) =
                 (std::f32::consts::TAU * i as f32 / segments as f32, std::f32::consts::PI * j as f32 / segments as f32);
@@ -114,7 +123,7 @@ impl Heavy {
 
     /// Triangle `i`'s prism corners: the base, then the base moved out by
     /// [`DISPLACEMENT`] along the normals.
-    fn prism(&self, i: usize) -> [Vec3; 6] {
+    pub(super) fn prism(&self, i: usize) -> [Vec3; 6] {
         let t = &self.triangles[i];
         std::array::from_fn(|k| if k < 3 { t[k].0 } else { t[k - 3].0 + t[k - 3].1 * DISPLACEMENT })
     }
@@ -130,12 +139,12 @@ impl Heavy {
 }
 
 /// The wall in front of the sphere (the static scene).
-fn wall() -> Aabb {
+pub(super) fn wall() -> Aabb {
     Aabb::new(Vec3::new(-4.0, -3.0, 2.0), Vec3::new(0.3, 3.0, 2.2))
 }
 
 /// The camera of `view`.
-fn camera(view: &str, aspect: f32) -> Camera {
+pub(super) fn camera(view: &str, aspect: f32) -> Camera {
     let position = match view {
         "full" => Vec3::new(0.0, 0.0, -6.0),
         "partial" => Vec3::new(0.0, 0.0, 6.0),
@@ -145,9 +154,9 @@ fn camera(view: &str, aspect: f32) -> Camera {
 }
 
 /// What one view's passes found, for every method's cost.
-struct ViewPasses {
-    width: u32,
-    height: u32,
+pub(super) struct ViewPasses {
+    pub(super) width: u32,
+    pub(super) height: u32,
     /// Fragments of the static scene.
     static_fragments: u64,
     /// Per pixel, whether the extruded mesh is in front of the static scene.
@@ -156,12 +165,12 @@ struct ViewPasses {
     proxy_fragments: u64,
     /// Per heavy triangle: its prism's fragments, pixel rectangle, and
     /// whether one of its fragments is in front of the static scene.
-    prisms: Vec<(u64, Option<PixelRect>, bool)>,
+    pub(super) prisms: Vec<(u64, Option<PixelRect>, bool)>,
     /// Per predicated draw size, per draw: its box's fragments and whether
     /// one passed.
     draws: Vec<Vec<(u64, bool)>>,
     /// The extruded mesh's silhouette, for its region set.
-    silhouette: Option<Silhouette>,
+    pub(super) silhouette: Option<Silhouette>,
 }
 
 /// Clip-space triangles of world triangles.
@@ -190,7 +199,7 @@ fn points_rect(vp: &Mat4, width: u32, height: u32, points: &[Vec3]) -> Option<Pi
 }
 
 impl ViewPasses {
-    fn new(heavy: &Heavy, camera: &Camera, width: u32, height: u32) -> Self {
+    pub(super) fn new(heavy: &Heavy, camera: &Camera, width: u32, height: u32) -> Self {
         let vp = camera.view_projection();
         let mut fragments = Fragments::new(width, height);
         let pixels = width as usize * height as usize;
@@ -307,7 +316,7 @@ fn draw_heavy(f: &mut SimFrame, passes: &ViewPasses, drawn: &[bool], reads: u64)
 /// Per prism, whether `test` of its pixel rectangle keeps it (one without
 /// a rectangle covers no pixel and is culled), and the texel reads the
 /// tests made in all; `test` gives both for one rectangle.
-fn cull_by_rect(passes: &ViewPasses, mut test: impl FnMut(&PixelRect) -> (bool, u64)) -> (Vec<bool>, u64) {
+pub(super) fn cull_by_rect(passes: &ViewPasses, mut test: impl FnMut(&PixelRect) -> (bool, u64)) -> (Vec<bool>, u64) {
     let mut reads = 0;
     let drawn = passes
         .prisms
@@ -323,8 +332,30 @@ fn cull_by_rect(passes: &ViewPasses, mut test: impl FnMut(&PixelRect) -> (bool, 
     (drawn, reads)
 }
 
+/// Per prism, whether the item buffer of `tiles x tiles` tiles keeps it,
+/// and the tile reads of the tests.
+pub(super) fn item_buffer_drawn(passes: &ViewPasses, tiles: u32) -> (Vec<bool>, u64) {
+    let counts = passes.tile_counts(tiles);
+    cull_by_rect(passes, |r| {
+        let (t0, t1) = (passes.tile(tiles, r.x0, r.y0), passes.tile(tiles, r.x1 - 1, r.y1 - 1));
+        let (tx0, ty0, tx1, ty1) = (t0 as u32 % tiles, t0 as u32 / tiles, t1 as u32 % tiles, t1 as u32 / tiles);
+        let seen = (ty0..=ty1).any(|ty| (tx0..=tx1).any(|tx| counts[(ty * tiles + tx) as usize] > 0));
+        (seen, u64::from((tx1 - tx0 + 1) * (ty1 - ty0 + 1)))
+    })
+}
+
+/// Per prism, whether the summed area table `sat` of the extruded mesh,
+/// read through its region set's `lookups`, keeps it, and the table reads
+/// of the tests.
+pub(super) fn sat_drawn(passes: &ViewPasses, lookups: &[Lookup], sat: &SummedAreaTable) -> (Vec<bool>, u64) {
+    cull_by_rect(passes, |r| {
+        let parts: Vec<_> = lookups.iter().filter_map(|l| l.rect.intersect(r).map(|i| (l.channel, i))).collect();
+        (parts.iter().any(|(c, i)| sat.count(*c, i) > 0), 4 * parts.len() as u64)
+    })
+}
+
 /// Table 3's rows of one view: `(method, frame_ms, drawn per prism)`.
-fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<bool>)> {
+pub(super) fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<bool>)> {
     let n = passes.prisms.len();
     let mut rows = Vec::new();
 
@@ -357,13 +388,7 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
         let mut f = frame(model, passes);
         f.draw(n as u64, passes.proxy_fragments);
         f.dispatch(pixels);
-        let counts = passes.tile_counts(tiles);
-        let (drawn, reads) = cull_by_rect(passes, |r| {
-            let (t0, t1) = (passes.tile(tiles, r.x0, r.y0), passes.tile(tiles, r.x1 - 1, r.y1 - 1));
-            let (tx0, ty0, tx1, ty1) = (t0 as u32 % tiles, t0 as u32 / tiles, t1 as u32 % tiles, t1 as u32 / tiles);
-            let seen = (ty0..=ty1).any(|ty| (tx0..=tx1).any(|tx| counts[(ty * tiles + tx) as usize] > 0));
-            (seen, u64::from((tx1 - tx0 + 1) * (ty1 - ty0 + 1)))
-        });
+        let (drawn, reads) = item_buffer_drawn(passes, tiles);
         draw_heavy(&mut f, passes, &drawn, reads);
         rows.push((format!("item-buffer-{tiles}x{tiles}"), f.ms(), drawn));
     }
@@ -380,10 +405,7 @@ fn view_rows(passes: &ViewPasses, model: &GpuModel) -> Vec<(String, f64, Vec<boo
     f.dispatch(pixels);
     f.dispatch(pixels);
     let lookups = regions.sets.first().map_or(&[][..], |s| &s.lookups[..]);
-    let (drawn, reads) = cull_by_rect(passes, |r| {
-        let parts: Vec<_> = lookups.iter().filter_map(|l| l.rect.intersect(r).map(|i| (l.channel, i))).collect();
-        (parts.iter().any(|(c, i)| sat.count(*c, i) > 0), 4 * parts.len() as u64)
-    });
+    let (drawn, reads) = sat_drawn(passes, lookups, &sat);
     draw_heavy(&mut f, passes, &drawn, reads);
     rows.push(("sat".to_string(), f.ms(), drawn));
     rows
@@ -397,30 +419,45 @@ pub fn table_3(width: u32, height: u32, model: &GpuModel, published: Option<&Pub
         let passes = ViewPasses::new(&heavy, &camera(view, width as f32 / height as f32), width, height);
         let visible = passes.prisms.iter().filter(|p| p.2).count() as u32;
         for (method, frame_ms, drawn) in view_rows(&passes, model) {
-            let p = published.and_then(|t| t.rows.iter().find(|r| r.method == method && r.view == view));
-            rows.push(PartsRow {
-                drawn: drawn.iter().filter(|&&d| d).count() as u32,
-                triangles: drawn.len() as u32,
-                visible,
-                published_frame_ms: p.and_then(|r| r.fps_gtx280).map(|fps| 1000.0 / fps),
-                published_fps_gtx280: p.and_then(|r| r.fps_gtx280),
-                published_fps_hd3870: p.and_then(|r| r.fps_hd3870),
-                method,
-                view: view.to_string(),
-                frame_ms,
-            });
+            rows.push(row(published, &method, view, frame_ms, &drawn, visible));
         }
     }
     rows
 }
 
-/// Table 3's printed form.
-pub fn print(rows: &[PartsRow], width: u32, height: u32, model: &GpuModel) -> String {
+/// The soft backend's row of `method` in `view` that drew `drawn` of
+/// prisms of which `visible` have a visible fragment, beside `published`.
+pub(super) fn row(
+    published: Option<&PublishedTable>,
+    method: &str,
+    view: &str,
+    frame_ms: f64,
+    drawn: &[bool],
+    visible: u32,
+) -> PartsRow {
+    let p = published.and_then(|t| t.rows.iter().find(|r| r.method == method && r.view == view));
+    PartsRow {
+        method: method.to_string(),
+        view: view.to_string(),
+        backend: "soft".into(),
+        frame_ms,
+        drawn: drawn.iter().filter(|&&d| d).count() as u32,
+        triangles: drawn.len() as u32,
+        visible,
+        differing_from_soft: 0,
+        published_frame_ms: p.and_then(|r| r.fps_gtx280).map(|fps| 1000.0 / fps),
+        published_fps_gtx280: p.and_then(|r| r.fps_gtx280),
+        published_fps_hd3870: p.and_then(|r| r.fps_hd3870),
+    }
+}
+
+/// Table 3's printed form, its frame times those of `clock` (which backend
+/// timed them, and how).
+pub fn print(rows: &[PartsRow], width: u32, height: u32, clock: &str) -> String {
     let mut text = format!(
-        "Granular visibility queries — Table 3: culling parts of one heavy object ({width}x{height}, soft backend, \
-         simulated clock, GPU model {}; paper's fps on NVIDIA 280GTX / ATI HD3870 beside)\n\
-         method               view       frame ms  (paper ms)  drawn / triangles  visible  (paper fps)\n",
-        model.name
+        "Granular visibility queries — Table 3: culling parts of one heavy object ({width}x{height}, {clock}; \
+         paper's fps on NVIDIA 280GTX / ATI HD3870 beside)\n\
+         method               view       frame ms  (paper ms)  drawn / triangles  visible  differ from soft  (paper fps)\n"
     );
     for r in rows {
         let paper_ms = r.published_frame_ms.map_or_else(|| "-".into(), |v| format!("{v:.2}"));
@@ -429,8 +466,8 @@ pub fn print(rows: &[PartsRow], width: u32, height: u32, model: &GpuModel) -> St
             _ => "-".into(),
         };
         text.push_str(&format!(
-            "{:<20} {:<9} {:>9.3} {:>11} {:>8} / {:<8} {:>7}  {}\n",
-            r.method, r.view, r.frame_ms, paper_ms, r.drawn, r.triangles, r.visible, fps
+            "{:<20} {:<9} {:>9.3} {:>11} {:>8} / {:<8} {:>7} {:>17}  {}\n",
+            r.method, r.view, r.frame_ms, paper_ms, r.drawn, r.triangles, r.visible, r.differing_from_soft, fps
         ));
     }
     text

@@ -6,6 +6,7 @@ pub mod config;
 pub mod dump;
 pub mod gvq;
 pub mod gvq_parts;
+pub mod gvq_parts_gpu;
 pub mod gvq_shadows;
 pub mod ideal;
 pub mod output;

@@ -165,7 +165,7 @@ pub struct PaperResult {
     pub tables: PaperTables,
     /// `--paper gvq`'s tables, whose rows have columns of their own;
     /// `--json` writes them instead of `tables` (which is then empty).
-    pub gvq: Option<super::gvq::GvqTables>,
+    pub gvq: Option<PaperTables<super::gvq::GvqRows>>,
 }
 
 /// The size `--paper` runs at unless told otherwise: the papers' scenes
@@ -391,7 +391,7 @@ mod tests {
         assert_eq!(t2.rows[0].frame_ms, row(t1, "teapots", "chc").unwrap().frame_ms);
         assert_eq!(result.tables.reports.len(), 3 * 3);
         for t in [t1, t2] {
-            assert!(t.ordering_agrees.is_some(), "{} has published figures to order", t.name);
+            assert!(t.ordering_agrees.flatten().is_some(), "{} has published figures to order", t.name);
             assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
         }
         assert!(result.text.contains("310.42") && result.text.contains("order of methods"), "{}", result.text);

@@ -1,36 +1,50 @@
 //! The tables `occlude bench --paper` prints and writes as JSON (`--json`):
 //! each of our rows beside the published one ([`super::published`]), and
 //! whether the order of the methods by frame time agrees with the paper's.
+//! One shape serves every paper: [`PaperTables`] and [`Table`] are generic
+//! over the rows, [`Row`] (the methods' frame times, the default) or a
+//! paper's own (`--paper gvq`'s, [`super::gvq::GvqRows`]).
 
 use super::published::PublishedTable;
 use super::summary::{BenchReport, MethodSummary};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
-/// What `--paper P --json FILE` writes.
+/// What `--paper P --json FILE` writes: tables whose rows are `R` (a
+/// table's rows: [`Row`]s, or a paper's own rows, module documentation).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct PaperTables {
+pub struct PaperTables<R = Vec<Row>> {
     /// The paper, as `--paper` names it.
     pub paper: String,
     /// Its tables, in the order printed.
-    pub tables: Vec<Table>,
-    /// Every run's full report (what `occlude report` reads).
+    pub tables: Vec<Table<R>>,
+    /// Every run's full report (what `occlude report` reads); left out of
+    /// the JSON when there is none (`--paper gvq` runs no bench).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub reports: Vec<BenchReport>,
 }
 
-/// One table.
+/// One table, its rows `R`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Table {
+pub struct Table<R = Vec<Row>> {
     /// The paper's name for it ("Table 1"), or what it shows.
     pub name: String,
     /// Where the published figures come from (`null`: none were published).
     pub source: Option<String>,
-    /// Our rows, scene by scene.
-    pub rows: Vec<Row>,
+    /// Our rows (for [`Row`]s, scene by scene).
+    pub rows: R,
     /// Whether, in every scene, the rows ordered by our frame time come in
-    /// the order of the published frame times (`null`: nothing published to
-    /// compare).
-    pub ordering_agrees: Option<bool>,
+    /// the order of the published frame times: `Some(None)` (`null`):
+    /// nothing published to compare; `None` (left out of the JSON): rows
+    /// that are not ordered by method ([`Table::new`] always gives one).
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "present")]
+    pub ordering_agrees: Option<Option<bool>>,
+}
+
+/// A field that is in the JSON, `null` included: `Some` of its value (a
+/// missing field is `None` by `#[serde(default)]`).
+fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Option<bool>>, D::Error> {
+    Option::<bool>::deserialize(d).map(Some)
 }
 
 /// One method (or variant) on one scene, beside the published figures.
@@ -121,6 +135,14 @@ pub fn scene_order_agrees(rows: &[Row], scene: &str) -> Option<bool> {
     Some(order(|r| r.frame_ms) == order(|r| r.published_frame_ms.unwrap_or(0.0)))
 }
 
+impl<R> Table<R> {
+    /// A table of `rows` that are not ordered by method (no
+    /// `ordering_agrees`), with the published source, if any.
+    pub fn unordered(name: &str, published: Option<&PublishedTable>, rows: R) -> Self {
+        Self { name: name.to_string(), source: published.map(|t| t.source.clone()), rows, ordering_agrees: None }
+    }
+}
+
 impl Table {
     /// A table of `rows` with the published source, if any, and the
     /// ordering verdict over its scenes.
@@ -128,8 +150,8 @@ impl Table {
         let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
         scenes.dedup();
         let verdicts: Vec<bool> = scenes.iter().filter_map(|s| scene_order_agrees(&rows, s)).collect();
-        let ordering_agrees = (!verdicts.is_empty()).then(|| verdicts.iter().all(|&v| v));
-        Self { name: name.to_string(), source: published.map(|t| t.source.clone()), rows, ordering_agrees }
+        let ordering_agrees = Some((!verdicts.is_empty()).then(|| verdicts.iter().all(|&v| v)));
+        Self { ordering_agrees, ..Self::unordered(name, published, rows) }
     }
 
     /// The table as text: every figure beside the paper's (in brackets,
@@ -181,7 +203,7 @@ impl Table {
                 r.missing_pixels,
             );
         }
-        match self.ordering_agrees {
+        match self.ordering_agrees.flatten() {
             Some(v) => {
                 let _ = writeln!(out, "order of methods by frame time agrees with the paper in every scene: {v}");
             }
@@ -209,17 +231,17 @@ mod tests {
             row("plant", "chc", 40.0, Some(38.7)),
         ];
         let t = Table::new("Table 1", None, agreeing.clone());
-        assert_eq!(t.ordering_agrees, Some(true));
+        assert_eq!(t.ordering_agrees, Some(Some(true)));
         assert!(t.render("t").contains("agrees"));
         let mut differing = agreeing;
         differing[4].frame_ms = 120.0;
         let t = Table::new("Table 1", None, differing);
         assert_eq!(scene_order_agrees(&t.rows, "city"), Some(true));
         assert_eq!(scene_order_agrees(&t.rows, "plant"), Some(false));
-        assert_eq!(t.ordering_agrees, Some(false));
+        assert_eq!(t.ordering_agrees, Some(Some(false)));
         assert!(t.render("t").contains("DIFFERS"));
         let unpublished =
             Table::new("ablation", None, vec![row("city", "chc", 1.0, None), row("city", "vfc", 2.0, None)]);
-        assert_eq!(unpublished.ordering_agrees, None);
+        assert_eq!(unpublished.ordering_agrees, Some(None));
     }
 }
