@@ -323,6 +323,7 @@ mod tests {
         assert!(tables.tables[0].source.as_deref().is_some_and(|s| s.contains("Table 2")));
         assert!(text.contains("Table 2"));
         let json = serde_json::to_value(&tables).unwrap();
+        assert!(json.get("reports").is_none() && json["tables"][0].get("ordering_agrees").is_none(), "{json}");
         for key in ["objects", "conflicts", "abs_error_px", "rel_error_pct", "published_abs_error_px"] {
             assert!(json["tables"][0]["rows"][0].get(key).is_some(), "{key}");
         }

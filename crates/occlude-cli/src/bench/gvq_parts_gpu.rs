@@ -105,6 +105,11 @@ fn draw_frame(backend: &mut WgpuBackend, camera: &Camera, drawn: &[bool]) -> Res
     backend.draw(&[WALL]);
     let kept: Vec<u32> = drawn.iter().enumerate().filter(|(_, &d)| d).map(|(i, _)| FIRST_PRISM + i as u32).collect();
     backend.draw(&kept);
+    end_frame(backend)
+}
+
+/// Ends the frame, waiting for the GPU; an error if the backend failed.
+fn end_frame(backend: &mut WgpuBackend) -> Result<()> {
     backend.end_frame();
     match backend.failure() {
         Some(e) => bail!("wgpu backend failed: {e}"),
@@ -123,8 +128,8 @@ fn timed(frames: usize, mut frame: impl FnMut() -> Result<Vec<bool>>) -> Result<
     Ok((start.elapsed().as_secs_f64() * 1e3 / frames.max(1) as f64, drawn))
 }
 
-/// Table 3's rows of one view on the GPU, `(method, frame_ms, drawn per
-/// prism)`, with the soft backend's decision of each method beside.
+/// What the rows of one view run on: the uploaded scene and its backend,
+/// and `GpuSat` with the scene it draws.
 struct GpuView<'a, 's> {
     heavy: &'a Heavy,
     scene: &'a Scene,
@@ -139,8 +144,9 @@ impl GpuView<'_, '_> {
     /// view of `camera`, whose soft passes are `passes`.
     fn rows(&mut self, camera: &Camera, passes: &ViewPasses) -> Result<Vec<(String, f64, Vec<bool>, Vec<bool>)>> {
         let n = self.heavy.triangles.len();
+        // The soft backend's decisions (which the GPU model's costs do not change).
         let soft = gvq_parts::view_rows(passes, &occlude_soft::GpuModel::modern());
-        let soft_of = |method: &str| soft.iter().find(|r| r.0 == method).map(|r| r.2.clone());
+        let soft_of = |method: &str| soft.iter().find(|r| r.0 == method).expect("soft runs every method").2.clone();
         let mut rows = Vec::new();
         let backend = &mut *self.backend;
 
@@ -149,7 +155,7 @@ impl GpuView<'_, '_> {
             draw_frame(backend, camera, &all)?;
             Ok(all)
         })?;
-        rows.push(("none".to_string(), ms, drawn, soft_of("none").unwrap_or_default()));
+        rows.push(("none".to_string(), ms, drawn, soft_of("none")));
 
         for size in gvq_parts::DRAW_SIZES {
             let boxes: Vec<Aabb> = (0..n)
@@ -169,14 +175,11 @@ impl GpuView<'_, '_> {
                         drawn[range].iter_mut().for_each(|d| *d = true);
                     }
                 }
-                backend.end_frame();
-                match backend.failure() {
-                    Some(e) => bail!("wgpu backend failed: {e}"),
-                    None => Ok(drawn),
-                }
+                end_frame(backend)?;
+                Ok(drawn)
             })?;
             let method = format!("predicates-{size}");
-            let soft = soft_of(&method).unwrap_or_default();
+            let soft = soft_of(&method);
             rows.push((method, ms, drawn, soft));
         }
 
@@ -209,7 +212,7 @@ impl GpuView<'_, '_> {
             draw_frame(backend, camera, &drawn)?;
             Ok(drawn)
         })?;
-        rows.push(("sat".to_string(), ms, drawn, soft_of("sat").unwrap_or_default()));
+        rows.push(("sat".to_string(), ms, drawn, soft_of("sat")));
         Ok(rows)
     }
 }
@@ -253,8 +256,8 @@ mod tests {
     use crate::bench::gvq_parts::{DRAW_SIZES, VIEWS};
 
     /// On the GPU every method runs in every view, the occluded sphere is
-    /// culled whole by every culling method, and the decisions are the soft
-    /// backend's but for the prisms counted as differing.
+    /// culled whole by every culling method, and every prism's decision is
+    /// the soft backend's.
     #[test]
     fn wgpu_table_3_culls_as_the_soft_backend() {
         let Some(ctx) = GpuContext::for_test("wgpu_table_3_culls_as_the_soft_backend") else {
@@ -272,9 +275,7 @@ mod tests {
                 _ => assert!(r.drawn >= r.visible, "{r:?}: fewer drawn than visible"),
             }
         }
-        eprintln!("{}", gvq_parts::print(&rows, 64, 64, "wgpu test"));
-        let differing: u32 = rows.iter().map(|r| r.differing_from_soft).sum();
-        let drawn: u32 = rows.iter().map(|r| r.drawn).sum();
-        assert!(differing * 100 <= drawn, "{differing} decisions of {drawn} differ from soft's");
+        let differing: Vec<&PartsRow> = rows.iter().filter(|r| r.differing_from_soft > 0).collect();
+        assert!(differing.is_empty(), "decisions differ from soft's: {differing:?}");
     }
 }

@@ -243,5 +243,14 @@ mod tests {
         let unpublished =
             Table::new("ablation", None, vec![row("city", "chc", 1.0, None), row("city", "vfc", 2.0, None)]);
         assert_eq!(unpublished.ordering_agrees, Some(None));
+        // A method table's verdict is in the JSON, `null` included; an
+        // unordered table's is not, and each reads back as it was.
+        let json = serde_json::to_value(&unpublished).unwrap();
+        assert!(json["ordering_agrees"].is_null() && json.get("ordering_agrees").is_some());
+        assert_eq!(serde_json::from_value::<Table>(json).unwrap(), unpublished);
+        let unordered = Table::unordered("Table 3", None, vec![row("city", "chc", 1.0, None)]);
+        let json = serde_json::to_value(&unordered).unwrap();
+        assert!(json.get("ordering_agrees").is_none(), "{json}");
+        assert_eq!(serde_json::from_value::<Table>(json).unwrap(), unordered);
     }
 }
