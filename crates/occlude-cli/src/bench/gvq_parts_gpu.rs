@@ -128,6 +128,15 @@ fn timed(frames: usize, mut frame: impl FnMut() -> Result<Vec<bool>>) -> Result<
     Ok((start.elapsed().as_secs_f64() * 1e3 / frames.max(1) as f64, drawn))
 }
 
+/// One method's row in one view: its mean frame time and, per prism,
+/// whether the GPU drew it and whether the soft backend's same method does.
+struct GpuRow {
+    method: String,
+    frame_ms: f64,
+    drawn: Vec<bool>,
+    soft: Vec<bool>,
+}
+
 /// What the rows of one view run on: the uploaded scene and its backend,
 /// and `GpuSat` with the scene it draws.
 struct GpuView<'a, 's> {
@@ -140,22 +149,25 @@ struct GpuView<'a, 's> {
 }
 
 impl GpuView<'_, '_> {
-    /// `(method, frame_ms, drawn, soft's drawn)` of every method in the
-    /// view of `camera`, whose soft passes are `passes`.
-    fn rows(&mut self, camera: &Camera, passes: &ViewPasses) -> Result<Vec<(String, f64, Vec<bool>, Vec<bool>)>> {
+    /// Every method's row in the view of `camera`, whose soft passes are
+    /// `passes`.
+    fn rows(&mut self, camera: &Camera, passes: &ViewPasses) -> Result<Vec<GpuRow>> {
         let n = self.heavy.triangles.len();
         // The soft backend's decisions (which the GPU model's costs do not change).
         let soft = gvq_parts::view_rows(passes, &occlude_soft::GpuModel::modern());
-        let soft_of = |method: &str| soft.iter().find(|r| r.0 == method).expect("soft runs every method").2.clone();
+        let row = |method: String, (frame_ms, drawn): (f64, Vec<bool>)| {
+            let soft = soft.iter().find(|r| r.0 == method).expect("soft runs every method").2.clone();
+            GpuRow { method, frame_ms, drawn, soft }
+        };
         let mut rows = Vec::new();
         let backend = &mut *self.backend;
 
-        let (ms, drawn) = timed(self.frames, || {
+        let timing = timed(self.frames, || {
             let all = vec![true; n];
             draw_frame(backend, camera, &all)?;
             Ok(all)
         })?;
-        rows.push(("none".to_string(), ms, drawn, soft_of("none")));
+        rows.push(row("none".into(), timing));
 
         for size in gvq_parts::DRAW_SIZES {
             let boxes: Vec<Aabb> = (0..n)
@@ -163,7 +175,7 @@ impl GpuView<'_, '_> {
                 .chunks(size)
                 .map(|chunk| Aabb::from_points(&chunk.iter().flat_map(|&i| self.heavy.prism(i)).collect::<Vec<_>>()))
                 .collect();
-            let (ms, drawn) = timed(self.frames, || {
+            let timing = timed(self.frames, || {
                 backend.begin_frame(camera);
                 backend.draw(&[WALL]);
                 let queries: Vec<_> = boxes.iter().map(|b| backend.issue_query(std::slice::from_ref(b))).collect();
@@ -178,9 +190,7 @@ impl GpuView<'_, '_> {
                 end_frame(backend)?;
                 Ok(drawn)
             })?;
-            let method = format!("predicates-{size}");
-            let soft = soft_of(&method);
-            rows.push((method, ms, drawn, soft));
+            rows.push(row(format!("predicates-{size}"), timing));
         }
 
         let (w, h) = (passes.width, passes.height);
@@ -188,7 +198,7 @@ impl GpuView<'_, '_> {
             let layout = ItemLayout::new(self.scene, &[WALL, PROXY], level)?;
             let slot = layout.slots().iter().position(|&i| i == PROXY).expect("the proxy has a slot") as u32;
             let tiles = layout.tiles_per_side();
-            let (ms, drawn) = timed(self.frames, || {
+            let (frame_ms, drawn) = timed(self.frames, || {
                 let counts = backend.item_buffer(camera, &layout).map_err(|e| anyhow::anyhow!("{e}"))?;
                 let (drawn, _) = gvq_parts::cull_by_rect(passes, |r| {
                     let (t0, t1) = (layout.tile_of(r.x0, r.y0, w, h), layout.tile_of(r.x1 - 1, r.y1 - 1, w, h));
@@ -200,11 +210,13 @@ impl GpuView<'_, '_> {
                 draw_frame(backend, camera, &drawn)?;
                 Ok(drawn)
             })?;
+            // The soft backend's item buffer at the same tiling (its rows
+            // have 90 tiles a side where this has 128).
             let soft = gvq_parts::item_buffer_drawn(passes, tiles).0;
-            rows.push((format!("item-buffer-{tiles}x{tiles}"), ms, drawn, soft));
+            rows.push(GpuRow { method: format!("item-buffer-{tiles}x{tiles}"), frame_ms, drawn, soft });
         }
 
-        let (ms, drawn) = timed(self.frames, || {
+        let timing = timed(self.frames, || {
             let regions = plan(&[None, passes.silhouette], &SatConfig::default());
             let frame = self.sat.query(self.sat_scene, camera, &regions).map_err(anyhow::Error::msg)?;
             let sat = SummedAreaTable::from_channel_image(w, h, regions.channels, &frame.channel_image);
@@ -212,7 +224,7 @@ impl GpuView<'_, '_> {
             draw_frame(backend, camera, &drawn)?;
             Ok(drawn)
         })?;
-        rows.push(("sat".to_string(), ms, drawn, soft_of("sat")));
+        rows.push(row("sat".into(), timing));
         Ok(rows)
     }
 }
@@ -240,10 +252,10 @@ pub fn table_3(
         let visible = passes.prisms.iter().filter(|p| p.2).count() as u32;
         let mut gpu_view =
             GpuView { heavy: &heavy, scene: &scene, backend: &mut backend, sat: &sat, sat_scene: &sat_scene, frames };
-        for (method, frame_ms, drawn, soft) in gpu_view.rows(&camera, &passes)? {
-            let mut row = gvq_parts::row(published, &method, view, frame_ms, &drawn, visible);
+        for r in gpu_view.rows(&camera, &passes)? {
+            let mut row = gvq_parts::row(published, &r.method, view, r.frame_ms, &r.drawn, visible);
             row.backend = "wgpu".into();
-            row.differing_from_soft = drawn.iter().zip(&soft).filter(|(g, s)| g != s).count() as u32;
+            row.differing_from_soft = r.drawn.iter().zip(&r.soft).filter(|(g, s)| g != s).count() as u32;
             rows.push(row);
         }
     }
