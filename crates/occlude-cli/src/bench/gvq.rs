@@ -2,7 +2,9 @@
 //! Tables 1 to 3. Table 1 (section 4.1, shadow-volume culling) is
 //! [`super::gvq_shadows`]'s and Table 3 (section 4.2, culling parts of one
 //! heavy object) [`super::gvq_parts`]'s, both on the soft backend's
-//! simulated clock, printed and written after Table 2. Table 2
+//! simulated clock (with `--backend wgpu`, Table 3 runs on the GPU and is
+//! timed there, [`super::gvq_parts_gpu`]), printed and written after
+//! Table 2. Table 2
 //! (section 4.1): summed-area-table queries of 100 to 500 randomly
 //! placed objects of 606 triangles (`occlude_scenes::scattered`), the CPU
 //! time of the overlap test, the colouring and split and merge, the
@@ -205,7 +207,8 @@ impl Counter {
 }
 
 /// Runs Table 2 with the seed, frames, resolution and backend of `base`,
-/// Table 3 at its resolution with its GPU model, and Table 1 with its
+/// Table 3 at its resolution with its GPU model (or on its backend's GPU,
+/// at most [`gvq_parts_gpu::FRAMES`] of its frames), and Table 1 with its
 /// seed, resolution and GPU model on at most [`gvq_shadows::FRAMES`] of
 /// its frames (module documentation); returns the printed tables and
 /// their JSON, in that order.
