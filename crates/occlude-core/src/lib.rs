@@ -61,6 +61,7 @@ pub mod geometry;
 pub mod gpu_culling;
 pub mod gvq;
 pub mod hierarchy;
+pub mod inner_box;
 pub mod host_culling;
 pub mod item_buffer;
 pub mod methods;

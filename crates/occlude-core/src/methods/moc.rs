@@ -74,6 +74,7 @@
 //! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS
 //! [`query_box::padded`]: crate::query_box::padded
 
+use super::occluder_proxies::OccluderProxies;
 use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
 use crate::backend::{Backend, CpuCullingWork};
 use crate::geometry::Aabb;
@@ -149,15 +150,19 @@ pub struct MocParams {
     pub count: u32,
     /// `moc.merge`: `layer` (the paper's heuristic, default) or `quick`.
     pub merge: MergeMode,
+    /// `moc.proxies` (default off): render each occluder as its mesh's
+    /// inner box where the conditions hold (module doc), else in full.
+    pub proxies: bool,
 }
 
 impl MocParams {
-    /// Reads `moc.occluders`, `moc.count` and `moc.merge`.
+    /// Reads `moc.occluders`, `moc.count`, `moc.merge` and `moc.proxies`.
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
         let occluders = r.get("occluders", Occluders::Drawn, "drawn, last or largest", |_| true)?;
         let count = r.get("count", 64u32, "an integer from 1 to 65536", |v| (1..=65536).contains(&v))?;
         let Merge(merge) = r.get("merge", Merge(MergeMode::LayerMerge), "layer or quick", |_| true)?;
-        Ok(Self { occluders, count, merge })
+        let proxies = r.flag("proxies", false)?;
+        Ok(Self { occluders, count, merge, proxies })
     }
 }
 
@@ -170,12 +175,23 @@ pub struct MaskedOcclusion {
     drawn: Vec<u32>,
     /// This frame's work, reported by [`CullingMethod::counters`].
     work: CpuCullingWork,
+    /// The meshes' inner boxes (`moc.proxies`).
+    proxies: OccluderProxies,
+    /// Occluders rendered as inner boxes this frame.
+    proxied: u64,
 }
 
 impl MaskedOcclusion {
     /// A method with no state from earlier frames.
     pub fn new(params: MocParams) -> Self {
-        Self { params, buffer: None, drawn: Vec::new(), work: CpuCullingWork::default() }
+        Self {
+            params,
+            buffer: None,
+            drawn: Vec::new(),
+            work: CpuCullingWork::default(),
+            proxies: OccluderProxies::default(),
+            proxied: 0,
+        }
     }
 
     /// The masked buffer as it stood at the end of the last frame, if any.
@@ -209,23 +225,35 @@ impl MaskedOcclusion {
     }
 }
 
-/// Renders `instances` into `buffer` seen through `view_projection`; returns
-/// the work done.
+/// Renders `instances` into `buffer` seen through `view_projection`, each as
+/// its inner box where `proxies` gives one for it this frame, else in full;
+/// returns the work done and how many were rendered as boxes.
 fn render_occluders(
     buffer: &mut MaskedBuffer,
     ctx: &FrameContext<'_>,
     view_projection: Mat4,
     instances: &[u32],
-) -> CpuCullingWork {
+    proxies: Option<&OccluderProxies>,
+) -> (CpuCullingWork, u64) {
     let mut work = CpuCullingWork::default();
+    let mut proxied = 0;
+    let size = (buffer.width(), buffer.height());
     for &i in instances {
         let inst = &ctx.scene.instances[i as usize];
-        let mesh = &ctx.scene.meshes[inst.mesh as usize];
-        let done =
-            buffer.render_triangles(&mesh.positions, &mesh.indices, view_projection * inst.transform, CullMode::Back);
+        let to_clip = view_projection * inst.transform;
+        let done = match proxies.and_then(|p| p.proxy(ctx.scene, &ctx.camera, inst, size)) {
+            Some((corners, indices)) => {
+                proxied += 1;
+                buffer.render_triangles(&corners, indices, to_clip, CullMode::Back)
+            }
+            None => {
+                let mesh = &ctx.scene.meshes[inst.mesh as usize];
+                buffer.render_triangles(&mesh.positions, &mesh.indices, to_clip, CullMode::Back)
+            }
+        };
         work += CpuCullingWork { triangles: done.triangles, tiles: done.tiles, boxes: 0 };
     }
-    work
+    (work, proxied)
 }
 
 /// Charges `work` on the backend's clock and adds it to the frame's
@@ -270,7 +298,14 @@ impl CullingMethod for MaskedOcclusion {
         let box_projection = biased(view_projection);
 
         self.work = CpuCullingWork::default();
-        charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &before));
+        let proxies = if self.params.proxies {
+            self.proxies.prepare(ctx.scene);
+            Some(&self.proxies)
+        } else {
+            None
+        };
+        let (work, mut proxied) = render_occluders(buffer, ctx, view_projection, &before, proxies);
+        charge(&mut self.work, backend, work);
         self.drawn.clear();
 
         let h = ctx.hierarchy;
@@ -303,12 +338,15 @@ impl CullingMethod for MaskedOcclusion {
                 let drawn = ctx.draw_instances(backend, &candidates);
                 self.drawn.extend_from_slice(drawn);
                 if self.params.occluders == Occluders::Drawn {
-                    charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &candidates));
+                    let (work, boxes) = render_occluders(buffer, ctx, view_projection, &candidates, proxies);
+                    charge(&mut self.work, backend, work);
+                    proxied += boxes;
                 }
             } else {
                 ctx.push_in_frustum(h.children(node), &mut queue);
             }
         }
+        self.proxied = proxied;
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
@@ -316,6 +354,8 @@ impl CullingMethod for MaskedOcclusion {
             ("occluder_triangles", self.work.triangles as f64),
             ("occluder_tiles", self.work.tiles as f64),
             ("tested_boxes", self.work.boxes as f64),
+            ("proxy_occluders", self.proxied as f64),
+            ("meshes_with_proxy", self.proxies.meshes_with_box() as f64),
         ]
     }
 }

@@ -13,6 +13,7 @@ mod front_to_back;
 pub mod hiz;
 pub mod ioc;
 pub mod moc;
+mod occluder_proxies;
 mod node_walk;
 pub mod nohc;
 pub mod om;

@@ -1,0 +1,130 @@
+//! `moc.proxies`: each mesh's [inner box](crate::inner_box), computed once
+//! per mesh when first needed, and the check of whether an instance may be
+//! rendered into `moc`'s buffer as that box this frame (the conditions of
+//! the argument in `moc`'s module doc, "Inner-box proxies").
+
+use crate::camera::Camera;
+use crate::inner_box::{inner_box, InnerBox};
+use crate::query_box::BOX_TRIANGLES;
+use crate::scene::{Instance, Scene};
+use glam::{Mat2, Mat3, Mat4, Vec3, Vec4};
+use std::cell::OnceCell;
+
+/// How far (pixels, on each axis) a rasterizer's vertex may lie from the
+/// exact projection of its position: half a step of the 1/256-pixel grid
+/// (1/512) for snapping, the rest for the `f32` rounding of clip
+/// coordinates (about `1e-4` pixel).
+const VERTEX_SHIFT_PIXELS: f32 = 1.0 / 256.0;
+
+/// Pixels beyond the screen within which an instance's box must project:
+/// inside the range the buffer snaps (8000) and the soft backend's guard
+/// band (8192), so that neither clips the mesh or its box at the sides.
+const SIDE_RANGE_PIXELS: f32 = 7900.0;
+
+/// Smallest clip `z` of the instance's box corners, as a fraction of their
+/// `w`: the box lies in front of the near plane (`z = 0`) with room for the
+/// rounding of the corners' clip coordinates.
+const NEAR_ROOM: f32 = 1e-4;
+
+/// The 12 triangles of a box as indices into
+/// [`Aabb::corners`](crate::geometry::Aabb::corners).
+const BOX_INDICES: [u32; 36] = {
+    let mut out = [0u32; 36];
+    let mut i = 0;
+    while i < 36 {
+        out[i] = BOX_TRIANGLES[i / 3][i % 3] as u32;
+        i += 1;
+    }
+    out
+};
+
+/// The inner boxes of a scene's meshes, each computed on first use.
+#[derive(Debug, Default)]
+pub(super) struct OccluderProxies {
+    boxes: Vec<OnceCell<Option<InnerBox>>>,
+}
+
+impl OccluderProxies {
+    /// Makes room for `scene`'s meshes, forgetting the boxes when the mesh
+    /// count changed (another scene).
+    pub(super) fn prepare(&mut self, scene: &Scene) {
+        if self.boxes.len() != scene.meshes.len() {
+            self.boxes = (0..scene.meshes.len()).map(|_| OnceCell::new()).collect();
+        }
+    }
+
+    /// How many meshes have been given an inner box so far.
+    pub(super) fn meshes_with_box(&self) -> usize {
+        self.boxes.iter().filter(|b| matches!(b.get(), Some(Some(_)))).count()
+    }
+
+    /// The triangles (corner positions in mesh space and indices) to render
+    /// for `instance` in place of its mesh this frame, or `None` when it has
+    /// no inner box or the conditions do not hold
+    /// ([`proxy_applies`]).
+    pub(super) fn proxy(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        instance: &Instance,
+        size: (u32, u32),
+    ) -> Option<([Vec3; 8], &'static [u32])> {
+        let cell = self.boxes.get(instance.mesh as usize)?;
+        let inner = cell.get_or_init(|| inner_box(&scene.meshes[instance.mesh as usize])).as_ref()?;
+        proxy_applies(camera, instance, inner, size).then(|| (inner.bounds.corners(), &BOX_INDICES[..]))
+    }
+}
+
+/// Whether `instance` may be rendered as its mesh's inner box `inner`
+/// through `camera` on a `width` x `height` screen: its world box lies in
+/// front of the near plane, away from the eye, and within
+/// [`SIDE_RANGE_PIXELS`] of the screen; the transforms are affine; and the
+/// box's clearance, carried into view space, is more than twice the
+/// farthest a vertex of the mesh or of the box can move on screen
+/// ([`VERTEX_SHIFT_PIXELS`] on each axis) at the box's farthest depth.
+pub(super) fn proxy_applies(camera: &Camera, instance: &Instance, inner: &InnerBox, (width, height): (u32, u32)) -> bool {
+    let (view, projection) = (camera.view(), camera.projection());
+    let affine = |m: &Mat4| m.row(3) == Vec4::W;
+    // Clip x and y at a fixed depth must be linear in view x and y.
+    let lateral = projection.x_axis.z == 0.0
+        && projection.y_axis.z == 0.0
+        && projection.x_axis.w == 0.0
+        && projection.y_axis.w == 0.0;
+    if !affine(&view) || !affine(&instance.transform) || !lateral || camera.box_touches_near_region(&instance.bounds) {
+        return false;
+    }
+    let view_projection = camera.view_projection();
+    let side_x = 1.0 + 2.0 * SIDE_RANGE_PIXELS / width.max(1) as f32;
+    let side_y = 1.0 + 2.0 * SIDE_RANGE_PIXELS / height.max(1) as f32;
+    let mut farthest_w = 0.0f32;
+    for corner in instance.bounds.corners() {
+        let c = view_projection * corner.extend(1.0);
+        let inside = c.w > 0.0 && c.z >= NEAR_ROOM * c.w && c.x.abs() <= side_x * c.w && c.y.abs() <= side_y * c.w;
+        if !inside {
+            return false;
+        }
+        farthest_w = farthest_w.max(c.w);
+    }
+    // A shift of (dx, dy) in NDC at a fixed depth is a shift of
+    // w L^-1 (dx, dy) in view x and y, L the projection's upper-left 2x2.
+    let l = Mat2::from_cols(projection.x_axis.truncate().truncate(), projection.y_axis.truncate().truncate());
+    let ndc_shift = (2.0 * VERTEX_SHIFT_PIXELS / width.max(1) as f32).hypot(2.0 * VERTEX_SHIFT_PIXELS / height.max(1) as f32);
+    let view_shift = farthest_w * frobenius2(l.inverse()) * ndc_shift;
+    // Distances shrink by at most the smallest singular value of the
+    // mesh-to-view map, which is at least 1 / |M^-1|_F.
+    let mesh_to_view = Mat3::from_mat4(view) * Mat3::from_mat4(instance.transform);
+    let inverse = mesh_to_view.inverse();
+    let shrink = 1.0 / frobenius3(inverse);
+    let clearance = inner.clearance * shrink;
+    clearance.is_finite() && view_shift.is_finite() && clearance > 2.0 * view_shift
+}
+
+/// Frobenius norm of a 2x2 matrix.
+fn frobenius2(m: Mat2) -> f32 {
+    (m.x_axis.length_squared() + m.y_axis.length_squared()).sqrt()
+}
+
+/// Frobenius norm of a 3x3 matrix.
+fn frobenius3(m: Mat3) -> f32 {
+    (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
+}
