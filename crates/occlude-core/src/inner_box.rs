@@ -1,102 +1,126 @@
-//! Inner boxes: an axis-aligned box strictly inside a closed mesh's solid,
-//! with a stated clearance from its surface. `moc` renders such a box (12
-//! triangles) into its occlusion buffer in place of the full mesh (the
-//! argument why that is conservative is in `methods::moc`'s module doc).
+//! Inner boxes: axis-aligned boxes strictly inside a mesh's closed parts,
+//! each with a stated clearance from the part's surface. `moc` renders such
+//! boxes (12 triangles each) into its occlusion buffer in place of the full
+//! mesh (the argument why that is conservative is in `methods::moc`'s
+//! module doc).
 //!
 //! # How a box is found, and why it is inside
-//! 1. The mesh must be closed: after welding vertices with equal positions,
-//!    every edge of a non-degenerate triangle belongs to exactly two
-//!    triangles (a triangle with two equal welded corners has no area and is
-//!    left out). The surface then splits space into an inside and an outside
-//!    by parity: a point off the surface is inside when a ray from it crosses
-//!    the surface an odd number of times, the same for every ray.
-//! 2. A centre `c` is inside when six rays from it (three skewed directions
-//!    and their opposites, in `f64`) all cross the surface an odd number of
-//!    times. A ray that passes within a relative `1e-9` of a triangle's edge,
-//!    or runs nearly parallel to its plane, makes the count inconclusive and
-//!    the candidate is rejected, so `f64` rounding cannot flip a crossing.
-//!    The candidates are the centre of the mesh's bounding box, then six
-//!    points a quarter of the box's half-size from it along each axis.
-//! 3. The box about `c` grows while no triangle overlaps it (exact
-//!    separating-axis test in `f64`, touching counts as overlap): first
-//!    uniformly, a fraction of the bounding box's half-size, then along each
-//!    axis in turn, longest first; each by bisection, keeping the largest
-//!    size found free. A box that contains an inside point and meets no
-//!    triangle is connected and never crosses the surface, so all of it is
-//!    inside.
-//! 4. The free box is shrunk by a margin of 1/16 of its smallest half-size on
-//!    every side and its corners rounded inwards to `f32`. Every triangle lies
-//!    outside the free box, so it is at least that margin (the
+//! 1. Parts: vertices with equal positions are welded, triangles with two
+//!    equal welded corners (no area) are left out, and the rest fall into
+//!    connected parts (triangles sharing a welded vertex). A part is closed
+//!    when each of its edges belongs to an even number of its triangles
+//!    (two, or four where two solids touch along an edge). A closed part
+//!    splits space by parity: a point off its surface is inside when a ray
+//!    from it crosses the part an odd number of times, the same count for
+//!    every ray. Open parts (a hole for a spout, a missing face) get no box.
+//!    Parts are taken one by one because scenes build objects from solids
+//!    that overlap (a ledge through a wall): the overlap is even, outside by
+//!    parity, and would cut a box of the whole mesh down to one cell.
+//! 2. A centre `c` is inside a part when six rays from it (three skewed
+//!    directions and their opposites, in `f64`) all cross the part an odd
+//!    number of times. A ray that passes within a relative `1e-9` of a
+//!    triangle's edge, or runs nearly parallel to its plane, makes the count
+//!    inconclusive and the candidate is rejected, so `f64` rounding cannot
+//!    flip a crossing. The candidates are the centre of the part's bounding
+//!    box, then six points a quarter of the box's half-size from it along
+//!    each axis.
+//! 3. A box about `c` grows while no triangle of the part overlaps it
+//!    (separating-axis test in `f64`, touching counts as overlap): first
+//!    uniformly, a fraction of the bounding box's half-size, then face by
+//!    face, those across the longest axis first; each by bisection, keeping
+//!    the largest size found free. A box that contains an inside point and
+//!    meets no triangle never crosses the surface, so all of it is inside.
+//! 4. The free box is shrunk by a margin of 1/32 of its smallest size on
+//!    every side and its corners rounded inwards to `f32`. Every triangle of
+//!    the part lies outside the free box, so at least that margin (the
 //!    [`InnerBox::clearance`]) from every point of the inner box.
+//! 5. A mesh keeps the [`MAX_BOXES`] boxes of largest surface area.
 //!
 //! # Limits
-//! Open meshes (a missing face, a hole for a spout) and meshes whose centre
-//! candidates lie outside or on the surface get no box. The box is centred on
-//! its candidate, so it is small for shapes whose inside is far from every
-//! candidate (an L or a ring) and for thin shapes tilted off the axes.
+//! Open parts and parts whose centre candidates lie outside or on the surface
+//! get no box. A box grows from its candidate one face at a time, so it is
+//! small for parts whose inside is far from every candidate (a ring) or
+//! narrow around it (an L's corner), and for thin parts tilted off the axes.
 
 use crate::geometry::Aabb;
 use crate::scene::Mesh;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
-/// A box inside a closed mesh's solid, in mesh space.
+/// A box inside a closed part of a mesh, in mesh space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InnerBox {
     /// The box.
     pub bounds: Aabb,
     /// A distance (mesh space) from every point of the box to every triangle
-    /// of the mesh is at least this, and it is positive.
+    /// of its part is at least this, and it is positive.
     pub clearance: f32,
 }
+
+/// Most boxes kept per mesh: each costs 12 occluder triangles.
+pub const MAX_BOXES: usize = 4;
 
 /// Bisection steps of each growth.
 const STEPS: u32 = 20;
 
-/// The inner box of `mesh`, or `None` when the mesh is not closed or no
-/// candidate centre is found inside it (module doc).
-pub fn inner_box(mesh: &Mesh) -> Option<InnerBox> {
-    let triangles = surface_triangles(mesh)?;
-    let bounds = &mesh.bounds;
-    let (lo, hi) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
+/// The inner boxes of `mesh`'s closed parts, largest surface first, at most
+/// [`MAX_BOXES`]; empty when no part is closed with an inside centre found
+/// (module doc).
+pub fn inner_boxes(mesh: &Mesh) -> Vec<InnerBox> {
+    let mut boxes: Vec<InnerBox> = closed_parts(mesh).iter().filter_map(|part| part_box(part)).collect();
+    boxes.sort_by(|a, b| b.bounds.surface_area().total_cmp(&a.bounds.surface_area()));
+    boxes.truncate(MAX_BOXES);
+    boxes
+}
+
+/// The inner box of one closed part's triangles, if a centre is found inside.
+fn part_box(triangles: &[[DVec3; 3]]) -> Option<InnerBox> {
+    let (lo, hi) =
+        triangles.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let half = (hi - lo) * 0.5;
     if half.min_element() <= 0.0 || !half.is_finite() {
         return None;
     }
     let mid = (lo + hi) * 0.5;
     let offsets = [DVec3::ZERO, DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
-    let centre = offsets.iter().map(|o| mid + *o * half * 0.25).find(|&c| is_inside(c, &triangles))?;
-    let free = FreeBoxes { centre, triangles: &triangles };
+    let centre = offsets.iter().map(|o| mid + *o * half * 0.25).find(|&c| is_inside(c, triangles))?;
+    let free = FreeBoxes { triangles };
 
-    // Uniform growth, then each axis, longest first.
-    let uniform = bisect(0.0, 1.0, |t| free.is_free(half * t));
-    let mut size = half * uniform;
-    if size.min_element() <= 0.0 {
+    // Uniform growth about the centre, then each face in turn, those across
+    // the longest axis first.
+    let uniform = bisect(0.0, 1.0, |t| free.is_free(centre - half * t, centre + half * t));
+    if uniform <= 0.0 {
         return None;
     }
+    let (mut min, mut max) = (centre - half * uniform, centre + half * uniform);
     let mut axes = [0usize, 1, 2];
     axes.sort_by(|&a, &b| half[b].total_cmp(&half[a]));
     for axis in axes {
-        // Beyond the far face of the bounding box the box leaves the solid.
-        let limit = half[axis] + (centre[axis] - mid[axis]).abs();
-        let grown = bisect(size[axis], limit, |s| {
-            let mut e = size;
-            e[axis] = s;
-            free.is_free(e)
+        // Beyond the bounding box the box leaves the solid.
+        let reach = bisect(0.0, min[axis] - lo[axis], |d| {
+            let mut m = min;
+            m[axis] -= d;
+            free.is_free(m, max)
         });
-        size[axis] = grown;
+        min[axis] -= reach;
+        let reach = bisect(0.0, hi[axis] - max[axis], |d| {
+            let mut m = max;
+            m[axis] += d;
+            free.is_free(min, m)
+        });
+        max[axis] += reach;
     }
 
-    let margin = size.min_element() / 16.0;
-    let inner = size - DVec3::splat(margin);
-    let min = round_towards(centre - inner, centre);
-    let max = round_towards(centre + inner, centre);
-    Some(InnerBox { bounds: Aabb::new(min, max), clearance: margin as f32 })
+    let margin = (max - min).min_element() / 32.0;
+    let inner = (min + DVec3::splat(margin), max - DVec3::splat(margin));
+    let centre = (min + max) * 0.5;
+    let bounds = Aabb::new(round_towards(inner.0, centre), round_towards(inner.1, centre));
+    Some(InnerBox { bounds, clearance: margin as f32 })
 }
 
-/// The mesh's triangles in `f64` when the mesh is closed (module doc, step
-/// 1), else `None`. Triangles with two equal welded corners are left out.
-fn surface_triangles(mesh: &Mesh) -> Option<Vec<[DVec3; 3]>> {
+/// The triangles (in `f64`) of each closed part of `mesh` (module doc, step
+/// 1). A mesh with an index out of range has none.
+fn closed_parts(mesh: &Mesh) -> Vec<Vec<[DVec3; 3]>> {
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
     // -0.0 and 0.0 are the same position.
     let key = |p: Vec3| (p + Vec3::ZERO).to_array().map(f32::to_bits);
@@ -108,20 +132,50 @@ fn surface_triangles(mesh: &Mesh) -> Option<Vec<[DVec3; 3]>> {
             *welded.entry(key(p)).or_insert(next)
         })
         .collect();
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut triangles = Vec::with_capacity(mesh.indices.len() / 3);
+    let mut triangles: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(mesh.indices.len() / 3);
     for t in mesh.indices.chunks_exact(3) {
-        let v = [t[0], t[1], t[2]].map(|i| ids.get(i as usize).copied());
-        let [Some(a), Some(b), Some(c)] = v else { return None };
-        if a == b || b == c || c == a {
-            continue;
+        let Some(v) = [t[0], t[1], t[2]].map(|i| ids.get(i as usize).copied()).into_iter().collect::<Option<Vec<_>>>()
+        else {
+            return Vec::new();
+        };
+        let (a, b, c) = (v[0], v[1], v[2]);
+        if a != b && b != c && c != a {
+            triangles.push(([a, b, c], [t[0], t[1], t[2]]));
         }
-        for (x, y) in [(a, b), (b, c), (c, a)] {
+    }
+    // Parts: union-find over welded vertices.
+    let mut parent: Vec<u32> = (0..welded.len() as u32).collect();
+    fn root(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    for (w, _) in &triangles {
+        for k in 1..3 {
+            let (a, b) = (root(&mut parent, w[0]), root(&mut parent, w[k]));
+            parent[a as usize] = b;
+        }
+    }
+    // Parts in the order of their first triangle, so the result is the
+    // same on every run.
+    let mut part_of_root: HashMap<u32, usize> = HashMap::new();
+    let mut parts: Vec<(Vec<[DVec3; 3]>, HashMap<(u32, u32), u32>)> = Vec::new();
+    for (w, t) in &triangles {
+        let r = root(&mut parent, w[0]);
+        let next = parts.len();
+        let index = *part_of_root.entry(r).or_insert(next);
+        if index == next {
+            parts.push(Default::default());
+        }
+        let (tris, edges) = &mut parts[index];
+        for (x, y) in [(w[0], w[1]), (w[1], w[2]), (w[2], w[0])] {
             *edges.entry((x.min(y), x.max(y))).or_insert(0) += 1;
         }
-        triangles.push([t[0], t[1], t[2]].map(|i| mesh.positions[i as usize].as_dvec3()));
+        tris.push(t.map(|i| mesh.positions[i as usize].as_dvec3()));
     }
-    (!triangles.is_empty() && edges.values().all(|&n| n == 2)).then_some(triangles)
+    parts.into_iter().filter(|(_, edges)| edges.values().all(|&n| n % 2 == 0)).map(|(t, _)| t).collect()
 }
 
 /// Whether `p` is inside by parity along six rays that all agree (module
@@ -166,17 +220,16 @@ fn ray_crosses(p: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<bool> {
     Some(u > 0.0 && v > 0.0 && w > 0.0 && along > 0.0)
 }
 
-/// Boxes about a fixed centre tested against a mesh's triangles.
+/// Boxes tested against a part's triangles.
 struct FreeBoxes<'a> {
-    centre: DVec3,
     triangles: &'a [[DVec3; 3]],
 }
 
 impl FreeBoxes<'_> {
-    /// Whether the closed box of half-size `half` about the centre meets no
-    /// triangle.
-    fn is_free(&self, half: DVec3) -> bool {
-        !self.triangles.iter().any(|t| triangle_meets_box(&t.map(|v| v - self.centre), half))
+    /// Whether the closed box from `min` to `max` meets no triangle.
+    fn is_free(&self, min: DVec3, max: DVec3) -> bool {
+        let (centre, half) = ((min + max) * 0.5, (max - min) * 0.5);
+        !self.triangles.iter().any(|t| triangle_meets_box(&t.map(|v| v - centre), half))
     }
 }
 
@@ -274,8 +327,7 @@ mod tests {
     /// the origin: star-shaped about the origin, so the origin is inside.
     fn lumpy_sphere(levels: u32, mut radius: impl FnMut(Vec3) -> f32) -> Mesh {
         let mut positions = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-        let mut indices: Vec<u32> =
-            vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
+        let mut indices: Vec<u32> = vec![0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
         for _ in 0..levels {
             let mut mids: HashMap<(u32, u32), u32> = HashMap::new();
             let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| {
@@ -300,13 +352,15 @@ mod tests {
     fn a_closed_box_gets_most_of_itself_clear_of_its_faces() {
         let b = Aabb::new(Vec3::new(-1.0, 2.0, 3.0), Vec3::new(4.0, 3.0, 9.0));
         let mesh = box_mesh(b);
-        let inner = inner_box(&mesh).expect("a closed box has an inner box");
+        let boxes = inner_boxes(&mesh);
+        assert_eq!(boxes.len(), 1);
+        let inner = boxes[0];
         assert!(inner.clearance > 0.0);
         assert!(b.contains_point(inner.bounds.min) && b.contains_point(inner.bounds.max), "{inner:?}");
         assert!(clear_of_surface(&mesh, &inner.bounds, f64::from(inner.clearance) * 0.999), "{inner:?}");
-        // Free growth nearly reaches the faces; the margin takes 1/16 of the
-        // thinnest half-size (0.5) off every side.
-        let (got, want) = (inner.bounds.extent(), b.extent() - Vec3::splat(2.0 * 0.5 / 16.0));
+        // Free growth nearly reaches the faces; the margin takes 1/32 of the
+        // smallest size (1) off every side.
+        let (got, want) = (inner.bounds.extent(), b.extent() - Vec3::splat(2.0 / 32.0));
         assert!((got - want).abs().max_element() < 1e-4, "{got} against {want}");
     }
 
@@ -316,29 +370,46 @@ mod tests {
         let boxed = box_mesh(Aabb::new(Vec3::ZERO, Vec3::ONE));
         let positions: Vec<Vec3> = boxed.indices.iter().map(|&i| boxed.positions[i as usize]).collect();
         let mesh = Mesh::new(positions, (0..36).collect());
-        assert!(inner_box(&mesh).is_some());
+        assert_eq!(inner_boxes(&mesh).len(), 1);
     }
 
     #[test]
     fn an_open_mesh_gets_none() {
         let mut mesh = box_mesh(Aabb::new(Vec3::ZERO, Vec3::ONE));
         mesh.indices.truncate(30); // one face missing
-        assert_eq!(inner_box(&mesh), None);
-        // A face twice: four triangles on each of its edges.
-        let mut doubled = box_mesh(Aabb::new(Vec3::ZERO, Vec3::ONE));
-        doubled.indices.extend_from_slice(&doubled.indices[..6].to_vec());
-        assert_eq!(inner_box(&doubled), None);
+        assert_eq!(inner_boxes(&mesh), vec![]);
+        // A triangle of the face repeated: three of its edges are used three times.
+        let mut odd = box_mesh(Aabb::new(Vec3::ZERO, Vec3::ONE));
+        odd.indices.extend_from_slice(&odd.indices[..3].to_vec());
+        assert_eq!(inner_boxes(&odd), vec![]);
     }
 
     #[test]
-    fn two_boxes_apart_get_none_when_the_centre_is_between_them() {
-        // Closed, but every candidate centre lies in the gap (outside).
-        let left = box_mesh(Aabb::new(Vec3::new(-10.0, 0.0, 0.0), Vec3::new(-9.0, 1.0, 1.0)));
-        let right = box_mesh(Aabb::new(Vec3::new(9.0, 0.0, 0.0), Vec3::new(10.0, 1.0, 1.0)));
-        let mut positions = left.positions.clone();
-        positions.extend_from_slice(&right.positions);
-        let indices = left.indices.iter().copied().chain(right.indices.iter().map(|i| i + 8)).collect();
-        assert_eq!(inner_box(&Mesh::new(positions, indices)), None);
+    fn overlapping_and_touching_solids_are_parts_of_their_own() {
+        // A slab through a tower (overlapping, no shared vertex), and a
+        // column touching the tower along an edge (welded: one part with
+        // that edge used 4 times).
+        let tower = Aabb::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 10.0, 1.0));
+        let slab = Aabb::new(Vec3::new(-1.5, 4.9, -1.5), Vec3::new(1.5, 5.1, 1.5));
+        let touching = Aabb::new(Vec3::new(1.0, 0.0, 1.0), Vec3::new(2.0, 10.0, 2.0));
+        let (mut positions, mut indices) = (Vec::new(), Vec::new());
+        for b in [tower, slab, touching] {
+            let m = box_mesh(b);
+            indices.extend(m.indices.iter().map(|i| i + positions.len() as u32));
+            positions.extend_from_slice(&m.positions);
+        }
+        let mesh = Mesh::new(positions, indices);
+        let boxes = inner_boxes(&mesh);
+        assert_eq!(boxes.len(), 2, "{boxes:?}");
+        // The largest is the tower's, nearly all of it, through the slab
+        // (another part), clear of its own part.
+        let inner = boxes[0];
+        assert!(tower.contains_point(inner.bounds.min) && tower.contains_point(inner.bounds.max), "{boxes:?}");
+        assert!(inner.bounds.extent().cmpgt(Vec3::new(1.8, 9.8, 1.8)).all(), "{boxes:?}");
+        let own =
+            Mesh::new(mesh.positions.clone(), mesh.indices[..36].iter().chain(&mesh.indices[72..]).copied().collect());
+        assert!(clear_of_surface(&own, &inner.bounds, f64::from(inner.clearance) * 0.999), "{inner:?}");
+        assert!(!clear_of_surface(&mesh, &inner.bounds, 0.0), "the slab crosses the tower's box");
     }
 
     proptest! {
@@ -350,12 +421,13 @@ mod tests {
         fn random_closed_meshes_keep_their_clearance(seed in any::<u64>(), levels in 0u32..3) {
             let mut rng = crate::rng::Rng::new(seed, 7);
             let mesh = lumpy_sphere(levels, |_| rng.range(0.3, 1.0));
-            if let Some(inner) = inner_box(&mesh) {
+            for inner in inner_boxes(&mesh) {
                 prop_assert!(inner.clearance > 0.0);
                 prop_assert!(inner.bounds.min.cmplt(inner.bounds.max).all(), "{:?}", inner);
                 prop_assert!(clear_of_surface(&mesh, &inner.bounds, f64::from(inner.clearance) * 0.999), "{:?}", inner);
-                let triangles = surface_triangles(&mesh).unwrap();
-                prop_assert!(is_inside(inner.bounds.center().as_dvec3(), &triangles));
+                let parts = closed_parts(&mesh);
+                prop_assert_eq!(parts.len(), 1);
+                prop_assert!(is_inside(inner.bounds.center().as_dvec3(), &parts[0]));
             }
         }
     }
@@ -364,7 +436,7 @@ mod tests {
     fn a_lumpy_sphere_gets_a_box() {
         let mut rng = crate::rng::Rng::new(3, 7);
         let mesh = lumpy_sphere(2, |_| rng.range(0.8, 1.0));
-        let inner = inner_box(&mesh).expect("the origin is inside");
+        let inner = inner_boxes(&mesh)[0];
         assert!(inner.bounds.extent().min_element() > 0.5, "{inner:?}");
     }
 }

@@ -25,6 +25,17 @@
 //!   largest from the eye (size over distance), rendered before the walk:
 //!   designated occluders without temporal state.
 //!
+//! With `moc.proxies=on` (default off), whichever occluders are chosen, an
+//! occluder whose mesh has an [inner box](crate::inner_box) (a closed mesh;
+//! the box is computed once per mesh, on first use, and not charged to the
+//! frame: it is scene preparation, like the hierarchy) is rendered as that
+//! box's 12 triangles when the conditions of "Inner-box proxies" below hold
+//! for its instance this frame, and in full otherwise. It is a switch beside
+//! `moc.occluders`, not a fourth value of it, because it changes how an
+//! occluder is rendered, not which objects occlude. The counters
+//! `proxy_occluders` (occluders rendered as boxes this frame) and
+//! `meshes_with_proxy` (meshes found to have a box so far) report its use.
+//!
 //! # Why it never culls a visible object
 //!
 //! A node is culled only when the buffer answers
@@ -69,6 +80,61 @@
 //!   a pixel centre within 1/256 pixel of that vertex's outer edges can
 //!   differ: the one assumption left, for GPUs only (the depth bounds allow
 //!   for that step).
+//!
+//!
+//! ## Inner-box proxies
+//!
+//! An instance `X` is rendered as its mesh's inner box `Q` only when (checked
+//! each frame by `occluder_proxies::proxy_applies`): the instance and view
+//! transforms are affine; the projection's clip `z` and `w` do not depend on
+//! view `x` and `y` (perspective and orthographic projections); `X`'s world box
+//! is clear of the camera's near region, with every corner in front of the
+//! near plane (clip `z >= 1e-4 w`) and within 7900 pixels of the screen; and
+//! `Q`'s clearance `m` (mesh space: every triangle of the mesh is at least `m`
+//! from `Q`), carried into view space as `m' = m / |M^-1|_F` (`M` the linear
+//! part of the mesh-to-view map; `1 / |M^-1|_F` is at most its smallest
+//! singular value, so no distance shrinks below that factor), exceeds `2 s`,
+//! where `s` is how far a point at the box's largest clip `w` moves in view
+//! space when its projection moves by 1/256 pixel on each axis at fixed depth
+//! (`s = w |L^-1|_F |(2/256W, 2/256H)|`, `L` the projection's upper-left 2x2).
+//! Then `Q` covers only pixels where `X` itself is drawn no farther than `Q`:
+//!
+//! - Snapping is a small motion. The buffer and the rasterizer draw the
+//!   triangles of `X` and of `Q` from snapped screen vertices, each within
+//!   1/512 pixel of its exact projection on each axis, plus the `f32` rounding
+//!   of clip coordinates (about `1e-4` pixel): within 1/256. Depth is not
+//!   snapped, and depth fixes clip `w`, so a vertex moved on screen at fixed
+//!   depth is a vertex moved in view space at fixed depth, by at most `s` (clip
+//!   `w` is affine, so no vertex of `X` lies deeper than the box's farthest
+//!   corner). Projection keeps triangles triangles in front of the eye, so
+//!   what is drawn is an exact picture of a moved mesh `X'` and a moved box
+//!   `Q'`, every point of each within `s` of where it was (a point of a
+//!   triangle is a convex combination of its corners). No triangle of either
+//!   is clipped (in front of the near plane, inside the guard band) or drawn
+//!   unsnapped by the buffer, so the buffer's coverage of `Q'` is the
+//!   rasterizer's.
+//! - Still inside. Along the straight motion of the vertices from `X`, `Q` to
+//!   `X'`, `Q'`, the box stays more than `m' - 2s > 0` from the surface, so it
+//!   never crosses it and stays inside by parity, as `Q` is inside `X`
+//!   ([`crate::inner_box`]). `X'` is closed as `X` is: welded vertices have
+//!   equal positions, so they project and snap alike.
+//! - An odd number of crossings. In screen space (pixel `x`, `y`, depth) take a
+//!   pixel centre `c` that the buffer covers with `Q'`, and the point `q` of
+//!   `Q'` over `c`. Every vertex of `X'` has depth `>= 0`, so the point over `c`
+//!   at depth `-1` is outside `X'`, and the segment from it to `q` crosses `X'`
+//!   an odd number of times: at least one triangle of `X'` covers `c` at a depth
+//!   at most `q`'s. (The top-left rule decides a centre on a shared edge for
+//!   exactly one of its triangles, as if the centre were moved off the edge
+//!   by an infinitesimal step, for `X'` and `Q'` alike, so the count holds
+//!   there too.) Objects are drawn two-sided, so that triangle is in `X`'s
+//!   image: `E(c) <= depth of Q' at c <=` the buffer's bound ("Depth
+//!   precision" above). An object visible at `c` is in front of `X` there,
+//!   so in front of the bound, and is tested visible. The `f32` rounding of
+//!   depth, which snapping does not move, is the rounding the tests allow
+//!   for above.
+//! - Where a condition fails, the instance is rendered in full, as without
+//!   proxies. These conditions cost a few matrix products per occluder and
+//!   are not charged on the simulated clock.
 //!
 //! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region
 //! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS
@@ -233,7 +299,7 @@ fn render_occluders(
     ctx: &FrameContext<'_>,
     view_projection: Mat4,
     instances: &[u32],
-    proxies: Option<&OccluderProxies>,
+    mut proxies: Option<&mut OccluderProxies>,
 ) -> (CpuCullingWork, u64) {
     let mut work = CpuCullingWork::default();
     let mut proxied = 0;
@@ -241,10 +307,10 @@ fn render_occluders(
     for &i in instances {
         let inst = &ctx.scene.instances[i as usize];
         let to_clip = view_projection * inst.transform;
-        let done = match proxies.and_then(|p| p.proxy(ctx.scene, &ctx.camera, inst, size)) {
+        let done = match proxies.as_mut().and_then(|p| p.proxy(ctx.scene, &ctx.camera, inst, size)) {
             Some((corners, indices)) => {
                 proxied += 1;
-                buffer.render_triangles(&corners, indices, to_clip, CullMode::Back)
+                buffer.render_triangles(corners, indices, to_clip, CullMode::Back)
             }
             None => {
                 let mesh = &ctx.scene.meshes[inst.mesh as usize];
@@ -298,13 +364,13 @@ impl CullingMethod for MaskedOcclusion {
         let box_projection = biased(view_projection);
 
         self.work = CpuCullingWork::default();
-        let proxies = if self.params.proxies {
+        let mut proxies = if self.params.proxies {
             self.proxies.prepare(ctx.scene);
-            Some(&self.proxies)
+            Some(&mut self.proxies)
         } else {
             None
         };
-        let (work, mut proxied) = render_occluders(buffer, ctx, view_projection, &before, proxies);
+        let (work, mut proxied) = render_occluders(buffer, ctx, view_projection, &before, proxies.as_deref_mut());
         charge(&mut self.work, backend, work);
         self.drawn.clear();
 
@@ -338,7 +404,8 @@ impl CullingMethod for MaskedOcclusion {
                 let drawn = ctx.draw_instances(backend, &candidates);
                 self.drawn.extend_from_slice(drawn);
                 if self.params.occluders == Occluders::Drawn {
-                    let (work, boxes) = render_occluders(buffer, ctx, view_projection, &candidates, proxies);
+                    let (work, boxes) =
+                        render_occluders(buffer, ctx, view_projection, &candidates, proxies.as_deref_mut());
                     charge(&mut self.work, backend, work);
                     proxied += boxes;
                 }

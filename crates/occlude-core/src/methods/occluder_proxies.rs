@@ -4,7 +4,7 @@
 //! the argument in `moc`'s module doc, "Inner-box proxies").
 
 use crate::camera::Camera;
-use crate::inner_box::{inner_box, InnerBox};
+use crate::inner_box::{inner_boxes, InnerBox};
 use crate::query_box::BOX_TRIANGLES;
 use crate::scene::{Instance, Scene};
 use glam::{Mat2, Mat3, Mat4, Vec3, Vec4};
@@ -38,10 +38,16 @@ const BOX_INDICES: [u32; 36] = {
     out
 };
 
-/// The inner boxes of a scene's meshes, each computed on first use.
+/// The inner boxes of a scene's meshes, each mesh's computed on first use,
+/// and the triangles of this frame's proxy.
 #[derive(Debug, Default)]
 pub(super) struct OccluderProxies {
-    boxes: Vec<OnceCell<Option<InnerBox>>>,
+    boxes: Vec<OnceCell<Vec<InnerBox>>>,
+    /// Corners (mesh space) of the boxes that apply to the last instance
+    /// asked about, 8 per box.
+    corners: Vec<Vec3>,
+    /// Indices into `corners`.
+    indices: Vec<u32>,
 }
 
 impl OccluderProxies {
@@ -53,25 +59,32 @@ impl OccluderProxies {
         }
     }
 
-    /// How many meshes have been given an inner box so far.
+    /// How many meshes have been given at least one inner box so far.
     pub(super) fn meshes_with_box(&self) -> usize {
-        self.boxes.iter().filter(|b| matches!(b.get(), Some(Some(_)))).count()
+        self.boxes.iter().filter(|b| b.get().is_some_and(|b| !b.is_empty())).count()
     }
 
     /// The triangles (corner positions in mesh space and indices) to render
-    /// for `instance` in place of its mesh this frame, or `None` when it has
-    /// no inner box or the conditions do not hold
-    /// ([`proxy_applies`]).
+    /// for `instance` in place of its mesh this frame: those of its mesh's
+    /// inner boxes for which [`proxy_applies`] holds; `None` when there is
+    /// none.
     pub(super) fn proxy(
-        &self,
+        &mut self,
         scene: &Scene,
         camera: &Camera,
         instance: &Instance,
         size: (u32, u32),
-    ) -> Option<([Vec3; 8], &'static [u32])> {
+    ) -> Option<(&[Vec3], &[u32])> {
         let cell = self.boxes.get(instance.mesh as usize)?;
-        let inner = cell.get_or_init(|| inner_box(&scene.meshes[instance.mesh as usize])).as_ref()?;
-        proxy_applies(camera, instance, inner, size).then(|| (inner.bounds.corners(), &BOX_INDICES[..]))
+        let boxes = cell.get_or_init(|| inner_boxes(&scene.meshes[instance.mesh as usize]));
+        self.corners.clear();
+        self.indices.clear();
+        for inner in boxes.iter().filter(|b| proxy_applies(camera, instance, b, size)) {
+            let base = self.corners.len() as u32;
+            self.corners.extend_from_slice(&inner.bounds.corners());
+            self.indices.extend(BOX_INDICES.iter().map(|i| base + i));
+        }
+        (!self.corners.is_empty()).then_some((&self.corners[..], &self.indices[..]))
     }
 }
 
@@ -82,7 +95,12 @@ impl OccluderProxies {
 /// box's clearance, carried into view space, is more than twice the
 /// farthest a vertex of the mesh or of the box can move on screen
 /// ([`VERTEX_SHIFT_PIXELS`] on each axis) at the box's farthest depth.
-pub(super) fn proxy_applies(camera: &Camera, instance: &Instance, inner: &InnerBox, (width, height): (u32, u32)) -> bool {
+pub(super) fn proxy_applies(
+    camera: &Camera,
+    instance: &Instance,
+    inner: &InnerBox,
+    (width, height): (u32, u32),
+) -> bool {
     let (view, projection) = (camera.view(), camera.projection());
     let affine = |m: &Mat4| m.row(3) == Vec4::W;
     // Clip x and y at a fixed depth must be linear in view x and y.
@@ -108,7 +126,8 @@ pub(super) fn proxy_applies(camera: &Camera, instance: &Instance, inner: &InnerB
     // A shift of (dx, dy) in NDC at a fixed depth is a shift of
     // w L^-1 (dx, dy) in view x and y, L the projection's upper-left 2x2.
     let l = Mat2::from_cols(projection.x_axis.truncate().truncate(), projection.y_axis.truncate().truncate());
-    let ndc_shift = (2.0 * VERTEX_SHIFT_PIXELS / width.max(1) as f32).hypot(2.0 * VERTEX_SHIFT_PIXELS / height.max(1) as f32);
+    let ndc_shift =
+        (2.0 * VERTEX_SHIFT_PIXELS / width.max(1) as f32).hypot(2.0 * VERTEX_SHIFT_PIXELS / height.max(1) as f32);
     let view_shift = farthest_w * frobenius2(l.inverse()) * ndc_shift;
     // Distances shrink by at most the smallest singular value of the
     // mesh-to-view map, which is at least 1 / |M^-1|_F.
