@@ -26,15 +26,18 @@
 //!   designated occluders without temporal state.
 //!
 //! With `moc.proxies=on` (default off), whichever occluders are chosen, an
-//! occluder whose mesh has an [inner box](crate::inner_box) (a closed mesh;
-//! the box is computed once per mesh, on first use, and not charged to the
-//! frame: it is scene preparation, like the hierarchy) is rendered as that
-//! box's 12 triangles when the conditions of "Inner-box proxies" below hold
-//! for its instance this frame, and in full otherwise. It is a switch beside
-//! `moc.occluders`, not a fourth value of it, because it changes how an
-//! occluder is rendered, not which objects occlude. The counters
-//! `proxy_occluders` (occluders rendered as boxes this frame) and
-//! `meshes_with_proxy` (meshes found to have a box so far) report its use.
+//! occluder whose mesh has [inner boxes](crate::inner_box) (boxes inside the
+//! mesh's closed parts, at most four; computed once per mesh, on first use,
+//! and not charged to the frame: it is scene preparation, like the
+//! hierarchy) is rendered as those boxes' 12 triangles each when the
+//! conditions of "Inner-box proxies" below hold for its instance this frame,
+//! and in full otherwise; a box too thin for its distance (its clearance
+//! below what snapping needs there) is left out, as it would cover next to
+//! no pixel. It is a switch beside `moc.occluders`, not a fourth value of
+//! it, because it changes how an occluder is rendered, not which objects
+//! occlude. The counters `proxy_occluders` (occluders rendered as boxes this
+//! frame) and `meshes_with_proxy` (meshes found to have a box so far)
+//! report its use.
 //!
 //! # Why it never culls a visible object
 //!
@@ -84,20 +87,22 @@
 //!
 //! ## Inner-box proxies
 //!
-//! An instance `X` is rendered as its mesh's inner box `Q` only when (checked
-//! each frame by `occluder_proxies::proxy_applies`): the instance and view
+//! An instance `X` is rendered as an inner box `Q` of its mesh's closed part
+//! `P` only when (checked each frame by `occluder_proxies::needed_clearance`):
+//! the instance and view
 //! transforms are affine; the projection's clip `z` and `w` do not depend on
 //! view `x` and `y` (perspective and orthographic projections); `X`'s world box
 //! is clear of the camera's near region, with every corner in front of the
 //! near plane (clip `z >= 1e-4 w`) and within 7900 pixels of the screen; and
-//! `Q`'s clearance `m` (mesh space: every triangle of the mesh is at least `m`
+//! `Q`'s clearance `m` (mesh space: every triangle of `P` is at least `m`
 //! from `Q`), carried into view space as `m' = m / |M^-1|_F` (`M` the linear
 //! part of the mesh-to-view map; `1 / |M^-1|_F` is at most its smallest
 //! singular value, so no distance shrinks below that factor), exceeds `2 s`,
 //! where `s` is how far a point at the box's largest clip `w` moves in view
 //! space when its projection moves by 1/256 pixel on each axis at fixed depth
 //! (`s = w |L^-1|_F |(2/256W, 2/256H)|`, `L` the projection's upper-left 2x2).
-//! Then `Q` covers only pixels where `X` itself is drawn no farther than `Q`:
+//! Then `Q` covers only pixels where `X` itself is drawn no farther than `Q`
+//! (below, `X` stands for the part `P` of it, whose triangles are `X`'s):
 //!
 //! - Snapping is a small motion. The buffer and the rasterizer draw the
 //!   triangles of `X` and of `Q` from snapped screen vertices, each within
@@ -132,8 +137,8 @@
 //!   so in front of the bound, and is tested visible. The `f32` rounding of
 //!   depth, which snapping does not move, is the rounding the tests allow
 //!   for above.
-//! - Where a condition fails, the instance is rendered in full, as without
-//!   proxies. These conditions cost a few matrix products per occluder and
+//! - Where an instance's condition fails, it is rendered in full, as without
+//!   proxies; a box whose clearance falls short is left out. These conditions cost a few matrix products per occluder and
 //!   are not charged on the simulated clock.
 //!
 //! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region

@@ -1,6 +1,6 @@
-//! `moc.proxies`: each mesh's [inner box](crate::inner_box), computed once
+//! `moc.proxies`: each mesh's [inner boxes](crate::inner_box), computed once
 //! per mesh when first needed, and the check of whether an instance may be
-//! rendered into `moc`'s buffer as that box this frame (the conditions of
+//! rendered into `moc`'s buffer as those boxes this frame (the conditions of
 //! the argument in `moc`'s module doc, "Inner-box proxies").
 
 use crate::camera::Camera;
@@ -65,9 +65,12 @@ impl OccluderProxies {
     }
 
     /// The triangles (corner positions in mesh space and indices) to render
-    /// for `instance` in place of its mesh this frame: those of its mesh's
-    /// inner boxes for which [`proxy_applies`] holds; `None` when there is
-    /// none.
+    /// for `instance` in place of its mesh this frame, or `None` to render
+    /// the mesh: `None` when the mesh has no inner box or
+    /// [`needed_clearance`] finds the instance unfit; else the boxes whose
+    /// clearance is more than it needs, none at all when every box is too
+    /// thin for its distance (a box that small on screen would hide next to
+    /// nothing).
     pub(super) fn proxy(
         &mut self,
         scene: &Scene,
@@ -77,30 +80,31 @@ impl OccluderProxies {
     ) -> Option<(&[Vec3], &[u32])> {
         let cell = self.boxes.get(instance.mesh as usize)?;
         let boxes = cell.get_or_init(|| inner_boxes(&scene.meshes[instance.mesh as usize]));
+        if boxes.is_empty() {
+            return None;
+        }
+        let needed = needed_clearance(camera, instance, size)?;
         self.corners.clear();
         self.indices.clear();
-        for inner in boxes.iter().filter(|b| proxy_applies(camera, instance, b, size)) {
+        for inner in boxes.iter().filter(|b| b.clearance > needed) {
             let base = self.corners.len() as u32;
             self.corners.extend_from_slice(&inner.bounds.corners());
             self.indices.extend(BOX_INDICES.iter().map(|i| base + i));
         }
-        (!self.corners.is_empty()).then_some((&self.corners[..], &self.indices[..]))
+        Some((&self.corners[..], &self.indices[..]))
     }
 }
 
-/// Whether `instance` may be rendered as its mesh's inner box `inner`
-/// through `camera` on a `width` x `height` screen: its world box lies in
-/// front of the near plane, away from the eye, and within
-/// [`SIDE_RANGE_PIXELS`] of the screen; the transforms are affine; and the
-/// box's clearance, carried into view space, is more than twice the
-/// farthest a vertex of the mesh or of the box can move on screen
-/// ([`VERTEX_SHIFT_PIXELS`] on each axis) at the box's farthest depth.
-pub(super) fn proxy_applies(
-    camera: &Camera,
-    instance: &Instance,
-    inner: &InnerBox,
-    (width, height): (u32, u32),
-) -> bool {
+/// The clearance (mesh space) an inner box of `instance` needs to be
+/// rendered in place of its mesh through `camera` on a `width` x `height`
+/// screen, or `None` when no box may be: the instance and view transforms
+/// must be affine, the projection's clip `z` and `w` independent of view `x`
+/// and `y`, and the instance's world box clear of the near region, in front
+/// of the near plane and within [`SIDE_RANGE_PIXELS`] of the screen. The
+/// clearance, carried into view space, must be more than twice the farthest
+/// a vertex of the mesh or of the box can move when its projection moves by
+/// [`VERTEX_SHIFT_PIXELS`] on each axis at the box's farthest depth.
+pub(super) fn needed_clearance(camera: &Camera, instance: &Instance, (width, height): (u32, u32)) -> Option<f32> {
     let (view, projection) = (camera.view(), camera.projection());
     let affine = |m: &Mat4| m.row(3) == Vec4::W;
     // Clip x and y at a fixed depth must be linear in view x and y.
@@ -109,7 +113,7 @@ pub(super) fn proxy_applies(
         && projection.x_axis.w == 0.0
         && projection.y_axis.w == 0.0;
     if !affine(&view) || !affine(&instance.transform) || !lateral || camera.box_touches_near_region(&instance.bounds) {
-        return false;
+        return None;
     }
     let view_projection = camera.view_projection();
     let side_x = 1.0 + 2.0 * SIDE_RANGE_PIXELS / width.max(1) as f32;
@@ -119,7 +123,7 @@ pub(super) fn proxy_applies(
         let c = view_projection * corner.extend(1.0);
         let inside = c.w > 0.0 && c.z >= NEAR_ROOM * c.w && c.x.abs() <= side_x * c.w && c.y.abs() <= side_y * c.w;
         if !inside {
-            return false;
+            return None;
         }
         farthest_w = farthest_w.max(c.w);
     }
@@ -132,10 +136,8 @@ pub(super) fn proxy_applies(
     // Distances shrink by at most the smallest singular value of the
     // mesh-to-view map, which is at least 1 / |M^-1|_F.
     let mesh_to_view = Mat3::from_mat4(view) * Mat3::from_mat4(instance.transform);
-    let inverse = mesh_to_view.inverse();
-    let shrink = 1.0 / frobenius3(inverse);
-    let clearance = inner.clearance * shrink;
-    clearance.is_finite() && view_shift.is_finite() && clearance > 2.0 * view_shift
+    let needed = 2.0 * view_shift * frobenius3(mesh_to_view.inverse());
+    needed.is_finite().then_some(needed)
 }
 
 /// Frobenius norm of a 2x2 matrix.
