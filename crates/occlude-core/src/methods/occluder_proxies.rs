@@ -52,7 +52,8 @@ pub(super) struct OccluderProxies {
 
 impl OccluderProxies {
     /// Makes room for `scene`'s meshes, forgetting the boxes when the mesh
-    /// count changed (another scene).
+    /// count changed. A method serves one scene (as `chc`'s per-node state
+    /// does, the boxes belong to it); a new mesh count means a new scene.
     pub(super) fn prepare(&mut self, scene: &Scene) {
         if self.boxes.len() != scene.meshes.len() {
             self.boxes = (0..scene.meshes.len()).map(|_| OnceCell::new()).collect();
