@@ -118,6 +118,9 @@ fn part_box(triangles: &[[DVec3; 3]]) -> Option<InnerBox> {
     Some(InnerBox { bounds, clearance: margin as f32 })
 }
 
+/// A part's triangles and how many of them use each welded edge.
+type Part = (Vec<[DVec3; 3]>, HashMap<(u32, u32), u32>);
+
 /// The triangles (in `f64`) of each closed part of `mesh` (module doc, step
 /// 1). A mesh with an index out of range has none.
 fn closed_parts(mesh: &Mesh) -> Vec<Vec<[DVec3; 3]>> {
@@ -161,7 +164,7 @@ fn closed_parts(mesh: &Mesh) -> Vec<Vec<[DVec3; 3]>> {
     // Parts in the order of their first triangle, so the result is the
     // same on every run.
     let mut part_of_root: HashMap<u32, usize> = HashMap::new();
-    let mut parts: Vec<(Vec<[DVec3; 3]>, HashMap<(u32, u32), u32>)> = Vec::new();
+    let mut parts: Vec<Part> = Vec::new();
     for (w, t) in &triangles {
         let r = root(&mut parent, w[0]);
         let next = parts.len();
@@ -380,7 +383,7 @@ mod tests {
         assert_eq!(inner_boxes(&mesh), vec![]);
         // A triangle of the face repeated: three of its edges are used three times.
         let mut odd = box_mesh(Aabb::new(Vec3::ZERO, Vec3::ONE));
-        odd.indices.extend_from_slice(&odd.indices[..3].to_vec());
+        odd.indices.extend_from_within(..3);
         assert_eq!(inner_boxes(&odd), vec![]);
     }
 
