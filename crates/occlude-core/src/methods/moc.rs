@@ -462,4 +462,17 @@ mod tests {
         let first = &rig.run(&mut method("moc", &["moc.occluders=last"]), &mut rig.mock(), 1)[0];
         assert_draws_exactly(first, &[WALL, BEHIND, SIDE]);
     }
+
+    /// With `moc.proxies=on` the wall, a closed box, goes into the buffer as
+    /// its inner box and still hides the cube behind it.
+    #[test]
+    fn the_walls_inner_box_hides_the_cube_behind_it() {
+        let rig = Rig::wall();
+        let mut moc = method("moc", &["moc.proxies=on"]);
+        let calls = &rig.run(&mut moc, &mut rig.mock(), 1)[0];
+        assert_draws_exactly(calls, &[WALL, SIDE]);
+        let counter = |name| moc.method.counters().iter().find(|c| c.0 == name).map(|c| c.1);
+        assert!(counter("proxy_occluders") >= Some(1.0), "{:?}", moc.method.counters());
+        assert!(counter("meshes_with_proxy") >= Some(1.0), "{:?}", moc.method.counters());
+    }
 }
