@@ -90,8 +90,9 @@
 //! `P` only when (checked each frame by `occluder_proxies::needed_clearance`):
 //! the instance and view transforms are affine; the projection's clip `z`
 //! and `w` do not depend on view `x` and `y` (perspective and orthographic
-//! projections); `X`'s world box is clear of the camera's near region, with every corner in front of the
-//! near plane (clip `z >= 1e-4 w`) and within 7900 pixels of the screen; and
+//! projections); `X`'s world box is clear of the camera's near region, with
+//! every corner in front of the near plane (clip `z >= 1e-4 w`) and within
+//! 7900 pixels of the screen; and
 //! `Q`'s clearance `m` (mesh space: every triangle of `P` is at least `m`
 //! from `Q`), carried into view space as `m' = m / |M^-1|_F` (`M` the linear
 //! part of the mesh-to-view map; `1 / |M^-1|_F` is at most its smallest
