@@ -215,6 +215,41 @@ fn moc_is_exact_with_every_occluder_choice() {
     }
 }
 
+/// `moc.proxies=on`: occluders rendered as their meshes' inner boxes where
+/// the argument allows (`moc`'s module doc), with occluders drawn during the
+/// walk and with last frame's: exact on every frame of every small scene and
+/// of the imported building, both hierarchies, and boxes rendered in place
+/// of meshes on every scene that has closed meshes.
+#[test]
+fn moc_with_inner_box_proxies_is_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("building.glb");
+    std::fs::write(&path, export::glb(&building::generate(2, 2, 1))).unwrap();
+    let options = ImportOptions { auto_path: AutoPath::Walk, ..ImportOptions::default() };
+    let mut scenes: Vec<Scene> = PAPER_SCENES.iter().map(|name| small(name)).collect();
+    scenes.push(import(&path, ModelFormat::Glb, &options).unwrap().scene);
+    let variants: [&[&str]; 2] = [&["moc.proxies=on"], &["moc.proxies=on", "moc.occluders=last"]];
+    let mut proxied_scenes = 0;
+    for scene in &scenes {
+        for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+            for opts in variants {
+                let cfg = BenchConfig {
+                    methods: vec!["vfc".into(), "moc".into()],
+                    options: MethodOptions::parse(opts).unwrap(),
+                    frames: 45,
+                    ..config(&scene.name, hierarchy)
+                };
+                let run = exact_run(scene, &cfg);
+                let proxied: f64 = run.methods[1].counters["proxy_occluders"].iter().sum();
+                if proxied > 0.0 && hierarchy == HierarchyKind::Bvh && opts.len() == 1 {
+                    proxied_scenes += 1;
+                }
+            }
+        }
+    }
+    assert!(proxied_scenes >= 3, "inner boxes were rendered on {proxied_scenes} scenes only");
+}
+
 /// CHC++'s batching and multiqueries must show: fewer queries and state
 /// changes than CHC on the city walkthrough.
 #[test]

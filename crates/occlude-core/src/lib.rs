@@ -62,6 +62,7 @@ pub mod gpu_culling;
 pub mod gvq;
 pub mod hierarchy;
 pub mod host_culling;
+pub mod inner_box;
 pub mod item_buffer;
 pub mod methods;
 pub mod mock;

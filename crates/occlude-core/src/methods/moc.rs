@@ -25,6 +25,20 @@
 //!   largest from the eye (size over distance), rendered before the walk:
 //!   designated occluders without temporal state.
 //!
+//! With `moc.proxies=on` (default off), whichever occluders are chosen, an
+//! occluder whose mesh has [inner boxes](crate::inner_box) (boxes inside the
+//! mesh's closed parts, at most four; computed once per mesh, on first use,
+//! and not charged to the frame: it is scene preparation, like the
+//! hierarchy) is rendered as those boxes' 12 triangles each when the
+//! conditions of "Inner-box proxies" below hold for its instance this frame,
+//! and in full otherwise; a box too thin for its distance (its clearance
+//! below what snapping needs there) is left out, as it would cover next to
+//! no pixel. It is a switch beside `moc.occluders`, not a fourth value of
+//! it, because it changes how an occluder is rendered, not which objects
+//! occlude. The counters `proxy_occluders` (occluders rendered as boxes this
+//! frame) and `meshes_with_proxy` (meshes found to have a box so far)
+//! report its use.
+//!
 //! # Why it never culls a visible object
 //!
 //! A node is culled only when the buffer answers
@@ -70,10 +84,67 @@
 //!   differ: the one assumption left, for GPUs only (the depth bounds allow
 //!   for that step).
 //!
+//! ## Inner-box proxies
+//!
+//! An instance `X` is rendered as an inner box `Q` of its mesh's closed part
+//! `P` only when (checked each frame by `occluder_proxies::needed_clearance`):
+//! the instance and view transforms are affine; the projection's clip `z`
+//! and `w` do not depend on view `x` and `y` (perspective and orthographic
+//! projections); `X`'s world box is clear of the camera's near region, with
+//! every corner in front of the near plane (clip `z >= 1e-4 w`) and within
+//! 7900 pixels of the screen; and
+//! `Q`'s clearance `m` (mesh space: every triangle of `P` is at least `m`
+//! from `Q`), carried into view space as `m' = m / |M^-1|_F` (`M` the linear
+//! part of the mesh-to-view map; `1 / |M^-1|_F` is at most its smallest
+//! singular value, so no distance shrinks below that factor), exceeds `2 s`,
+//! where `s` is how far a point at the box's largest clip `w` moves in view
+//! space when its projection moves by 1/256 pixel on each axis at fixed depth
+//! (`s = w |L^-1|_F |(2/256W, 2/256H)|`, `L` the projection's upper-left 2x2).
+//! Then `Q` covers only pixels where `X` itself is drawn no farther than `Q`
+//! (below, `X` stands for the part `P` of it, whose triangles are `X`'s):
+//!
+//! - Snapping is a small motion. The buffer and the rasterizer draw the
+//!   triangles of `X` and of `Q` from snapped screen vertices, each within
+//!   1/512 pixel of its exact projection on each axis, plus the `f32` rounding
+//!   of clip coordinates (about `1e-4` pixel): within 1/256. Depth is not
+//!   snapped, and depth fixes clip `w`, so a vertex moved on screen at fixed
+//!   depth is a vertex moved in view space at fixed depth, by at most `s` (clip
+//!   `w` is affine, so no vertex of `X` lies deeper than the box's farthest
+//!   corner). Projection keeps triangles triangles in front of the eye, so
+//!   what is drawn is an exact picture of a moved mesh `X'` and a moved box
+//!   `Q'`, every point of each within `s` of where it was (a point of a
+//!   triangle is a convex combination of its corners). No triangle of either
+//!   is clipped (in front of the near plane, inside the guard band) or drawn
+//!   unsnapped by the buffer, so the buffer's coverage of `Q'` is the
+//!   rasterizer's.
+//! - Still inside. Along the straight motion of the vertices from `X`, `Q` to
+//!   `X'`, `Q'`, the box stays more than `m' - 2s > 0` from the surface, so it
+//!   never crosses it and stays inside by parity, as `Q` is inside `X`
+//!   ([`crate::inner_box`]). `X'` is closed as `X` is: welded vertices have
+//!   equal positions, so they project and snap alike.
+//! - An odd number of crossings. In screen space (pixel `x`, `y`, depth) take a
+//!   pixel centre `c` that the buffer covers with `Q'`, and the point `q` of
+//!   `Q'` over `c`. Every vertex of `X'` has depth `>= 0`, so the point over `c`
+//!   at depth `-1` is outside `X'`, and the segment from it to `q` crosses `X'`
+//!   an odd number of times: at least one triangle of `X'` covers `c` at a depth
+//!   at most `q`'s. (The top-left rule decides a centre on a shared edge for
+//!   exactly one of its triangles, as if the centre were moved off the edge
+//!   by an infinitesimal step, for `X'` and `Q'` alike, so the count holds
+//!   there too.) Objects are drawn two-sided, so that triangle is in `X`'s
+//!   image: `E(c) <= depth of Q' at c <=` the buffer's bound ("Depth
+//!   precision" above). An object visible at `c` is in front of `X` there,
+//!   so in front of the bound, and is tested visible. The `f32` rounding of
+//!   depth, which snapping does not move, is the rounding the tests allow
+//!   for above.
+//! - Where an instance's condition fails, it is rendered in full, as without
+//!   proxies; a box whose clearance falls short is left out. These conditions cost a few matrix products per occluder and
+//!   are not charged on the simulated clock.
+//!
 //! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region
 //! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS
 //! [`query_box::padded`]: crate::query_box::padded
 
+use super::occluder_proxies::OccluderProxies;
 use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
 use crate::backend::{Backend, CpuCullingWork};
 use crate::geometry::Aabb;
@@ -149,15 +220,19 @@ pub struct MocParams {
     pub count: u32,
     /// `moc.merge`: `layer` (the paper's heuristic, default) or `quick`.
     pub merge: MergeMode,
+    /// `moc.proxies` (default off): render each occluder as its mesh's
+    /// inner box where the conditions hold (module doc), else in full.
+    pub proxies: bool,
 }
 
 impl MocParams {
-    /// Reads `moc.occluders`, `moc.count` and `moc.merge`.
+    /// Reads `moc.occluders`, `moc.count`, `moc.merge` and `moc.proxies`.
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
         let occluders = r.get("occluders", Occluders::Drawn, "drawn, last or largest", |_| true)?;
         let count = r.get("count", 64u32, "an integer from 1 to 65536", |v| (1..=65536).contains(&v))?;
         let Merge(merge) = r.get("merge", Merge(MergeMode::LayerMerge), "layer or quick", |_| true)?;
-        Ok(Self { occluders, count, merge })
+        let proxies = r.flag("proxies", false)?;
+        Ok(Self { occluders, count, merge, proxies })
     }
 }
 
@@ -170,12 +245,23 @@ pub struct MaskedOcclusion {
     drawn: Vec<u32>,
     /// This frame's work, reported by [`CullingMethod::counters`].
     work: CpuCullingWork,
+    /// The meshes' inner boxes (`moc.proxies`).
+    proxies: OccluderProxies,
+    /// Occluders rendered as inner boxes this frame.
+    proxied: u64,
 }
 
 impl MaskedOcclusion {
     /// A method with no state from earlier frames.
     pub fn new(params: MocParams) -> Self {
-        Self { params, buffer: None, drawn: Vec::new(), work: CpuCullingWork::default() }
+        Self {
+            params,
+            buffer: None,
+            drawn: Vec::new(),
+            work: CpuCullingWork::default(),
+            proxies: OccluderProxies::default(),
+            proxied: 0,
+        }
     }
 
     /// The masked buffer as it stood at the end of the last frame, if any.
@@ -209,23 +295,35 @@ impl MaskedOcclusion {
     }
 }
 
-/// Renders `instances` into `buffer` seen through `view_projection`; returns
-/// the work done.
+/// Renders `instances` into `buffer` seen through `view_projection`, each as
+/// its inner box where `proxies` gives one for it this frame, else in full;
+/// returns the work done and how many were rendered as boxes.
 fn render_occluders(
     buffer: &mut MaskedBuffer,
     ctx: &FrameContext<'_>,
     view_projection: Mat4,
     instances: &[u32],
-) -> CpuCullingWork {
+    mut proxies: Option<&mut OccluderProxies>,
+) -> (CpuCullingWork, u64) {
     let mut work = CpuCullingWork::default();
+    let mut proxied = 0;
+    let size = (buffer.width(), buffer.height());
     for &i in instances {
         let inst = &ctx.scene.instances[i as usize];
-        let mesh = &ctx.scene.meshes[inst.mesh as usize];
-        let done =
-            buffer.render_triangles(&mesh.positions, &mesh.indices, view_projection * inst.transform, CullMode::Back);
+        let to_clip = view_projection * inst.transform;
+        let done = match proxies.as_mut().and_then(|p| p.proxy(ctx.scene, &ctx.camera, inst, size)) {
+            Some((corners, indices)) => {
+                proxied += 1;
+                buffer.render_triangles(corners, indices, to_clip, CullMode::Back)
+            }
+            None => {
+                let mesh = &ctx.scene.meshes[inst.mesh as usize];
+                buffer.render_triangles(&mesh.positions, &mesh.indices, to_clip, CullMode::Back)
+            }
+        };
         work += CpuCullingWork { triangles: done.triangles, tiles: done.tiles, boxes: 0 };
     }
-    work
+    (work, proxied)
 }
 
 /// Charges `work` on the backend's clock and adds it to the frame's
@@ -270,7 +368,14 @@ impl CullingMethod for MaskedOcclusion {
         let box_projection = biased(view_projection);
 
         self.work = CpuCullingWork::default();
-        charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &before));
+        let mut proxies = if self.params.proxies {
+            self.proxies.prepare(ctx.scene);
+            Some(&mut self.proxies)
+        } else {
+            None
+        };
+        let (work, mut proxied) = render_occluders(buffer, ctx, view_projection, &before, proxies.as_deref_mut());
+        charge(&mut self.work, backend, work);
         self.drawn.clear();
 
         let h = ctx.hierarchy;
@@ -303,12 +408,16 @@ impl CullingMethod for MaskedOcclusion {
                 let drawn = ctx.draw_instances(backend, &candidates);
                 self.drawn.extend_from_slice(drawn);
                 if self.params.occluders == Occluders::Drawn {
-                    charge(&mut self.work, backend, render_occluders(buffer, ctx, view_projection, &candidates));
+                    let (work, boxes) =
+                        render_occluders(buffer, ctx, view_projection, &candidates, proxies.as_deref_mut());
+                    charge(&mut self.work, backend, work);
+                    proxied += boxes;
                 }
             } else {
                 ctx.push_in_frustum(h.children(node), &mut queue);
             }
         }
+        self.proxied = proxied;
     }
 
     fn counters(&self) -> Vec<(&'static str, f64)> {
@@ -316,6 +425,8 @@ impl CullingMethod for MaskedOcclusion {
             ("occluder_triangles", self.work.triangles as f64),
             ("occluder_tiles", self.work.tiles as f64),
             ("tested_boxes", self.work.boxes as f64),
+            ("proxy_occluders", self.proxied as f64),
+            ("meshes_with_proxy", self.proxies.meshes_with_box() as f64),
         ]
     }
 }
@@ -349,5 +460,18 @@ mod tests {
         }
         let first = &rig.run(&mut method("moc", &["moc.occluders=last"]), &mut rig.mock(), 1)[0];
         assert_draws_exactly(first, &[WALL, BEHIND, SIDE]);
+    }
+
+    /// With `moc.proxies=on` the wall, a closed box, goes into the buffer as
+    /// its inner box and still hides the cube behind it.
+    #[test]
+    fn the_walls_inner_box_hides_the_cube_behind_it() {
+        let rig = Rig::wall();
+        let mut moc = method("moc", &["moc.proxies=on"]);
+        let calls = &rig.run(&mut moc, &mut rig.mock(), 1)[0];
+        assert_draws_exactly(calls, &[WALL, SIDE]);
+        let counter = |name| moc.method.counters().iter().find(|c| c.0 == name).map(|c| c.1);
+        assert!(counter("proxy_occluders") >= Some(1.0), "{:?}", moc.method.counters());
+        assert!(counter("meshes_with_proxy") >= Some(1.0), "{:?}", moc.method.counters());
     }
 }

@@ -15,6 +15,7 @@ pub mod ioc;
 pub mod moc;
 mod node_walk;
 pub mod nohc;
+mod occluder_proxies;
 pub mod om;
 pub mod opt;
 pub mod options;
