@@ -56,6 +56,10 @@ const SIZE: (u32, u32) = (1024, 600);
 /// [`TimeScale::Auto`] axis is logarithmic, as in the CHC paper's Figure 7.
 const LOG_RATIO: f64 = 30.0;
 
+/// Width of the legend strip right of each chart, in pixels: beside the
+/// lines, the legend never covers them.
+const LEGEND_WIDTH: u32 = 110;
+
 /// Font family every text element uses.
 pub(crate) const FONT: &str = "sans-serif";
 
@@ -257,8 +261,11 @@ impl Panel<'_> {
     {
         let frames = self.series.iter().map(|s| s.values.len()).max().unwrap_or(0);
         let x_range = 0..frames.saturating_sub(1).max(1);
-        let mut builder = ChartBuilder::on(area);
-        builder.caption(&self.caption, (FONT, 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+        let body = area.titled(&self.caption, (FONT, 18))?;
+        let (plot, legend) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(LEGEND_WIDTH));
+        self.legend(&legend)?;
+        let mut builder = ChartBuilder::on(&plot);
+        builder.margin(12).x_label_area_size(40).y_label_area_size(70);
         match y_axis(self.series.iter().flat_map(|s| s.values.iter().copied()), self.scale) {
             YAxis::Linear(top) => {
                 let chart = builder.build_cartesian_2d(x_range, 0.0..top)?;
@@ -272,8 +279,23 @@ impl Panel<'_> {
         }
     }
 
-    /// Draws the mesh, one line per method (of the values `keep` accepts) and
-    /// the legend.
+    /// Draws each method's colour and name, one under another, on `area`.
+    fn legend<DB>(&self, area: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    where
+        DB: DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        for (i, s) in self.series.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let y = 20 + 22 * i as i32;
+            area.draw(&PathElement::new(vec![(0, y), (24, y)], colour.stroke_width(3)))?;
+            area.draw(&Text::new(s.name, (30, y - 8), (FONT, 15)))?;
+        }
+        Ok(())
+    }
+
+    /// Draws the mesh and one line per method (of the values `keep`
+    /// accepts).
     fn lines<'a, DB, Y>(
         &self,
         mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordusize, Y>>,
@@ -297,19 +319,7 @@ impl Panel<'_> {
         for (i, s) in self.series.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
             let points = s.values.iter().copied().enumerate().filter(|&(_, v)| keep(v));
-            chart
-                .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
-                .label(s.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
-        }
-        if !self.series.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .label_font((FONT, 15))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()?;
+            chart.draw_series(LineSeries::new(points, colour.stroke_width(2)))?;
         }
         Ok(())
     }
