@@ -399,6 +399,13 @@ mod tests {
         // The defaults' row of Table 2 is Table 1's CHC, not a second run.
         assert_eq!(t2.rows[0].frame_ms, row(t1, "teapots", "chc").unwrap().frame_ms);
         assert_eq!(result.tables.reports.len(), 3 * 3);
+        // The plotted runs are each scene's run of Table 1's methods, not a lane.
+        assert_eq!(result.compared_runs, [0, 3, 6]);
+        for (&i, scene) in result.compared_runs.iter().zip(CHC_SCENES) {
+            let report = &result.tables.reports[i];
+            let names: Vec<&str> = report.methods.iter().map(|m| m.name.as_str()).collect();
+            assert_eq!((report.scene.as_str(), &names[..]), (*scene, &CHC.methods[..]));
+        }
         for t in [t1, t2] {
             assert!(t.ordering_agrees.is_some(), "{} has published figures to order", t.name);
             assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
@@ -459,6 +466,7 @@ mod tests {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
         let result = run("ioc", &base, &ProgressBar::hidden()).unwrap();
         assert_eq!(result.tables.reports.len(), 3);
+        assert_eq!(result.compared_runs, [0, 1, 2]);
         for (report, (scene, label)) in result.tables.reports.iter().zip(IOC_SCENES) {
             assert_eq!(report.scene, scene);
             assert_eq!(report.hierarchy, "bvh");
