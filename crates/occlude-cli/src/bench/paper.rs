@@ -404,7 +404,7 @@ mod tests {
         for (&i, scene) in result.compared_runs.iter().zip(CHC_SCENES) {
             let report = &result.tables.reports[i];
             let names: Vec<&str> = report.methods.iter().map(|m| m.name.as_str()).collect();
-            assert_eq!((report.scene.as_str(), &names[..]), (*scene, &CHC.methods[..]));
+            assert_eq!((report.scene.as_str(), &names[..]), (*scene, CHC.methods));
         }
         for t in [t1, t2] {
             assert!(t.ordering_agrees.is_some(), "{} has published figures to order", t.name);
