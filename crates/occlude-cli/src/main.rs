@@ -152,10 +152,14 @@ struct BenchArgs {
     /// Write one CSV row per method and frame.
     #[arg(long, value_parser = parse_output_path)]
     csv: Option<PathBuf>,
-    /// Plot frame time over the walkthrough, one line per method (.svg or .png).
+    /// Plot frame time over the walkthrough, one line per method (.svg or
+    /// .png). With --paper, one plot per scene, the scene's name put before
+    /// the extension (chc.svg: chc-teapots.svg, chc-city.svg, chc-plant.svg),
+    /// titled with the paper's figure.
     #[arg(long, value_parser = parse_output_path)]
     plot: Option<PathBuf>,
-    /// Plot queries and state changes per frame (.svg or .png).
+    /// Plot queries and state changes per frame (.svg or .png; with --paper,
+    /// one per scene, named as --plot's).
     #[arg(long, value_parser = parse_output_path)]
     plot_queries: Option<PathBuf>,
     // Run a paper's experiments instead.
@@ -328,6 +332,9 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
                 bench::paper::PAPERS.join(", ")
             )));
         }
+        if args.plot.is_some() || args.plot_queries.is_some() {
+            bench::paper_figures::check_plottable(paper).map_err(usage)?;
+        }
     }
     for path in args.plot.iter().chain(&args.plot_queries) {
         bench::plot::plot_format(path).map_err(usage)?;
@@ -361,6 +368,11 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
             }
             eprintln!("wrote {}", path.display());
         }
+        for (path, kind) in plots(args) {
+            for written in bench::paper_figures::write(&result, kind, path)? {
+                eprintln!("wrote {}", written.display());
+            }
+        }
         return Ok(());
     }
     progress.set_message(format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
@@ -376,11 +388,9 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
         bench::output::write_csv(&report, path)?;
         eprintln!("wrote {}", path.display());
     }
-    for (path, kind) in [(&args.plot, PlotKind::FrameTime), (&args.plot_queries, PlotKind::QueriesAndStateChanges)] {
-        if let Some(path) = path {
-            bench::plot::write_plot(&report, kind, path)?;
-            eprintln!("wrote {}", path.display());
-        }
+    for (path, kind) in plots(args) {
+        bench::plot::write_plot(&report, kind, path)?;
+        eprintln!("wrote {}", path.display());
     }
     if config.dump_frame.is_some() && run.dumps.is_empty() {
         eprintln!("note: --dump-frame wrote nothing: none of the methods records its decisions (om does)");
@@ -397,6 +407,13 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
         ),
         None => Ok(()),
     }
+}
+
+/// The plots asked for: `--plot`'s frame times, `--plot-queries`' queries
+/// and state changes.
+fn plots(args: &BenchArgs) -> impl Iterator<Item = (&PathBuf, PlotKind)> {
+    let frame_time = args.plot.as_ref().map(|p| (p, PlotKind::FrameTime));
+    frame_time.into_iter().chain(args.plot_queries.as_ref().map(|p| (p, PlotKind::QueriesAndStateChanges)))
 }
 
 /// `occlude calibrate`: a backend other than wgpu, a bad check scene or

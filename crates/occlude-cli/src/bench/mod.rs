@@ -11,6 +11,7 @@ pub mod gvq_shadows;
 pub mod ideal;
 pub mod output;
 pub mod paper;
+pub mod paper_figures;
 pub mod paper_tables;
 pub mod plot;
 pub mod published;

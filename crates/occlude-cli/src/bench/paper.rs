@@ -166,6 +166,10 @@ pub struct PaperResult {
     /// `--paper gvq`'s tables, whose rows have columns of their own;
     /// `--json` writes them instead of `tables` (which is then empty).
     pub gvq: Option<PaperTables<super::gvq::GvqRows>>,
+    /// Indices into `tables.reports` of each scene's run of the compared
+    /// methods (not of a table's variants), in scene order: what
+    /// [`super::paper_figures`] plots.
+    pub compared_runs: Vec<usize>,
 }
 
 /// The size `--paper` runs at unless told otherwise: the papers' scenes
@@ -199,6 +203,7 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
                 text,
                 tables: PaperTables { paper: "gvq".into(), ..PaperTables::default() },
                 gvq: Some(gvq),
+                compared_runs: Vec::new(),
             });
         }
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
@@ -218,6 +223,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         }
     }
     let mut reports = Vec::new();
+    let mut compared_runs = Vec::new();
     for &scene_name in e.scenes {
         let config = BenchConfig {
             scene: scene_name.into(),
@@ -240,6 +246,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         let report = run.report(&config);
         compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published)));
         let defaults = report.methods.iter().find(|m| m.name == e.varied).cloned();
+        compared_runs.push(reports.len());
         reports.push(report);
         let lanes: Vec<_> = run
             .variants
@@ -275,7 +282,8 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
         }
         tables.push(t);
     }
-    Ok(PaperResult { text, tables: PaperTables { paper: e.paper.to_string(), tables, reports }, gvq: None })
+    let tables = PaperTables { paper: e.paper.to_string(), tables, reports };
+    Ok(PaperResult { text, tables, gvq: None, compared_runs })
 }
 
 /// The IOC poster's scenes, as its tables name them.
@@ -349,8 +357,9 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
     }
     // The poster's tables stay text: their published figures are GPU times
     // of parts of the frame, not the rows of [`Table`].
+    let compared_runs = (0..reports.len()).collect();
     let tables = PaperTables { paper: "ioc".into(), tables: Vec::new(), reports };
-    Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None })
+    Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None, compared_runs })
 }
 
 fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {
@@ -390,6 +399,13 @@ mod tests {
         // The defaults' row of Table 2 is Table 1's CHC, not a second run.
         assert_eq!(t2.rows[0].frame_ms, row(t1, "teapots", "chc").unwrap().frame_ms);
         assert_eq!(result.tables.reports.len(), 3 * 3);
+        // The plotted runs are each scene's run of Table 1's methods, not a lane.
+        assert_eq!(result.compared_runs, [0, 3, 6]);
+        for (&i, scene) in result.compared_runs.iter().zip(CHC_SCENES) {
+            let report = &result.tables.reports[i];
+            let names: Vec<&str> = report.methods.iter().map(|m| m.name.as_str()).collect();
+            assert_eq!((report.scene.as_str(), &names[..]), (*scene, CHC.methods));
+        }
         for t in [t1, t2] {
             assert!(t.ordering_agrees.flatten().is_some(), "{} has published figures to order", t.name);
             assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
@@ -450,6 +466,7 @@ mod tests {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
         let result = run("ioc", &base, &ProgressBar::hidden()).unwrap();
         assert_eq!(result.tables.reports.len(), 3);
+        assert_eq!(result.compared_runs, [0, 1, 2]);
         for (report, (scene, label)) in result.tables.reports.iter().zip(IOC_SCENES) {
             assert_eq!(report.scene, scene);
             assert_eq!(report.hierarchy, "bvh");

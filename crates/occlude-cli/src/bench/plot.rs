@@ -25,12 +25,40 @@ pub enum PlotKind {
     QueriesAndStateChanges,
 }
 
+/// How a frame-time axis is scaled.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimeScale {
+    /// Logarithmic where the positive frame times spread over more than a
+    /// factor of 30, linear otherwise: an ordinary run's plots.
+    #[default]
+    Auto,
+    /// Linear from zero, whatever the spread (the CHC paper's Figures 5 and 6).
+    Linear,
+    /// Logarithmic, whatever the spread (the CHC paper's Figure 7).
+    Log,
+}
+
+/// What a plot says on top and how it scales its times; the default is an
+/// ordinary run's plot. `--paper` sets both to the paper's figure.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PlotStyle {
+    /// The title, in place of the plot kind's own ("Frame times", "Queries
+    /// and state changes"); the run's setup follows it either way.
+    pub title: Option<String>,
+    /// The frame-time axis (count axes are always linear).
+    pub time_scale: TimeScale,
+}
+
 /// Image size in pixels.
 const SIZE: (u32, u32) = (1024, 600);
 
-/// Above this ratio of the largest to the smallest positive frame time the
-/// frame-time axis is logarithmic, as in the CHC paper's Figure 7.
+/// Above this ratio of the largest to the smallest positive frame time an
+/// [`TimeScale::Auto`] axis is logarithmic, as in the CHC paper's Figure 7.
 const LOG_RATIO: f64 = 30.0;
+
+/// Width of the legend strip right of each chart, in pixels: beside the
+/// lines, the legend never covers them.
+const LEGEND_WIDTH: u32 = 110;
 
 /// Font family every text element uses.
 pub(crate) const FONT: &str = "sans-serif";
@@ -69,16 +97,22 @@ pub fn plot_format(path: &Path) -> anyhow::Result<PlotFormat> {
     }
 }
 
-/// Writes a plot of `report` to `path`; the format follows the extension
-/// (see [`plot_format`]).
+/// Writes a plot of `report` to `path` in the default style; the format
+/// follows the extension (see [`plot_format`]).
 pub fn write_plot(report: &BenchReport, kind: PlotKind, path: &Path) -> anyhow::Result<()> {
+    write_styled_plot(report, kind, &PlotStyle::default(), path)
+}
+
+/// Writes a plot of `report` to `path` in `style` (a paper's figure's title
+/// and axis); the format follows the extension (see [`plot_format`]).
+pub fn write_styled_plot(report: &BenchReport, kind: PlotKind, style: &PlotStyle, path: &Path) -> anyhow::Result<()> {
     let format = plot_format(path)?;
     register_font()?;
     let written = match format {
-        PlotFormat::Svg => svg_string(report, kind).and_then(|svg| Ok(std::fs::write(path, svg)?)),
+        PlotFormat::Svg => styled_svg_string(report, kind, style).and_then(|svg| Ok(std::fs::write(path, svg)?)),
         PlotFormat::Png => {
             let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-            draw(report, kind, &root).and_then(|()| Ok(root.present()?))
+            draw(report, kind, style, &root).and_then(|()| Ok(root.present()?))
         }
     };
     written.with_context(|| format!("writing plot {}", path.display()))
@@ -87,11 +121,16 @@ pub fn write_plot(report: &BenchReport, kind: PlotKind, path: &Path) -> anyhow::
 /// A plot of `report` as an SVG document in memory, so that a report page can
 /// embed it; [`write_plot`] writes the same document to an .svg file.
 pub fn svg_string(report: &BenchReport, kind: PlotKind) -> anyhow::Result<String> {
+    styled_svg_string(report, kind, &PlotStyle::default())
+}
+
+/// [`svg_string`] in `style`.
+fn styled_svg_string(report: &BenchReport, kind: PlotKind, style: &PlotStyle) -> anyhow::Result<String> {
     register_font()?;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        draw(report, kind, &root)?;
+        draw(report, kind, style, &root)?;
         root.present()?;
     }
     Ok(svg)
@@ -107,7 +146,12 @@ pub(crate) fn register_font() -> anyhow::Result<()> {
 }
 
 /// Draws the whole plot on `root`.
-fn draw<DB>(report: &BenchReport, kind: PlotKind, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+fn draw<DB>(
+    report: &BenchReport,
+    kind: PlotKind,
+    style: &PlotStyle,
+    root: &DrawingArea<DB, Shift>,
+) -> anyhow::Result<()>
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -117,31 +161,40 @@ where
         "{} ({}), {} hierarchy, {} GPU model, {} backend",
         report.scene, report.size, report.hierarchy, report.gpu_model, report.backend
     );
+    // The papers plot over the frame index, the frames at the run's rate.
+    let x_desc = report.fps.map_or_else(|| "frame".to_string(), |fps| format!("frame (at {fps} fps)"));
+    let title = |own: &str| format!("{}: {setup}", style.title.as_deref().unwrap_or(own));
     match kind {
         PlotKind::FrameTime => {
             let y_desc = if report.backend == "soft" { "simulated frame time (ms)" } else { "frame time (ms)" };
             let panel = Panel {
-                caption: format!("Frame times: {setup}"),
+                caption: title("Frame times"),
+                x_desc: &x_desc,
                 y_desc,
                 counts: false,
+                scale: style.time_scale,
                 series: series(&report.methods, |f| f.frame_ms),
             };
             panel.draw(root)
         }
         PlotKind::QueriesAndStateChanges => {
-            let root = root.titled(&format!("Queries and state changes: {setup}"), (FONT, 20))?;
+            let root = root.titled(&title("Queries and state changes"), (FONT, 20))?;
             let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
             let queries = Panel {
                 caption: "occlusion queries per frame".into(),
+                x_desc: &x_desc,
                 y_desc: "queries",
                 counts: true,
+                scale: TimeScale::Linear,
                 series: series(&report.methods, |f| f.queries as f64),
             };
             queries.draw(&top)?;
             let changes = Panel {
                 caption: "render-state changes per frame".into(),
+                x_desc: &x_desc,
                 y_desc: "state changes",
                 counts: true,
+                scale: TimeScale::Linear,
                 series: series(&report.methods, |f| f.state_changes as f64),
             };
             changes.draw(&bottom)
@@ -163,10 +216,12 @@ fn series(methods: &[MethodSummary], value: impl Fn(&FrameStats) -> f64) -> Vec<
 /// One chart: a line per method over the frame index.
 struct Panel<'a> {
     caption: String,
+    x_desc: &'a str,
     y_desc: &'a str,
-    /// Whole numbers per frame: a linear axis with integer labels. Otherwise
-    /// times: a logarithmic axis where their spread calls for one.
+    /// Whole numbers per frame, labelled without decimals.
     counts: bool,
+    /// The y-axis's scale.
+    scale: TimeScale,
     series: Vec<Series<'a>>,
 }
 
@@ -179,16 +234,19 @@ enum YAxis {
     Log(f64, f64),
 }
 
-/// Linear from 0 unless `allow_log` and the finite positive values span more
-/// than [`LOG_RATIO`]; a plot with no positive value gets the range 0 to 1.
-fn y_axis(values: impl Iterator<Item = f64>, allow_log: bool) -> YAxis {
+/// Logarithmic around the finite positive values if `scale` is `Log`, or
+/// `Auto` and they span more than [`LOG_RATIO`], from the power of ten
+/// below them to the one above, so that at least two labels (which a log
+/// axis puts at powers of ten) show; linear from 0 otherwise. A plot with
+/// no positive value gets the linear range 0 to 1.
+fn y_axis(values: impl Iterator<Item = f64>, scale: TimeScale) -> YAxis {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if hi <= 0.0 {
         YAxis::Linear(1.0)
-    } else if allow_log && hi / lo > LOG_RATIO {
-        YAxis::Log(lo / 1.25, hi * 1.25)
+    } else if scale == TimeScale::Log || (scale == TimeScale::Auto && hi / lo > LOG_RATIO) {
+        YAxis::Log(10f64.powf((lo / 1.25).log10().floor()), 10f64.powf((hi * 1.25).log10().ceil()))
     } else {
         YAxis::Linear(hi * 1.05)
     }
@@ -203,9 +261,12 @@ impl Panel<'_> {
     {
         let frames = self.series.iter().map(|s| s.values.len()).max().unwrap_or(0);
         let x_range = 0..frames.saturating_sub(1).max(1);
-        let mut builder = ChartBuilder::on(area);
-        builder.caption(&self.caption, (FONT, 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
-        match y_axis(self.series.iter().flat_map(|s| s.values.iter().copied()), !self.counts) {
+        let body = area.titled(&self.caption, (FONT, 18))?;
+        let (plot, legend) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(LEGEND_WIDTH));
+        self.legend(&legend)?;
+        let mut builder = ChartBuilder::on(&plot);
+        builder.margin(12).x_label_area_size(40).y_label_area_size(70);
+        match y_axis(self.series.iter().flat_map(|s| s.values.iter().copied()), self.scale) {
             YAxis::Linear(top) => {
                 let chart = builder.build_cartesian_2d(x_range, 0.0..top)?;
                 self.lines(chart, |v| v.is_finite())
@@ -218,8 +279,23 @@ impl Panel<'_> {
         }
     }
 
-    /// Draws the mesh, one line per method (of the values `keep` accepts) and
-    /// the legend.
+    /// Draws each method's colour and name, one under another, on `area`.
+    fn legend<DB>(&self, area: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    where
+        DB: DrawingBackend,
+        DB::ErrorType: 'static,
+    {
+        for (i, s) in self.series.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let y = 20 + 22 * i as i32;
+            area.draw(&PathElement::new(vec![(0, y), (24, y)], colour.stroke_width(3)))?;
+            area.draw(&Text::new(s.name, (30, y - 8), (FONT, 15)))?;
+        }
+        Ok(())
+    }
+
+    /// Draws the mesh and one line per method (of the values `keep`
+    /// accepts).
     fn lines<'a, DB, Y>(
         &self,
         mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordusize, Y>>,
@@ -231,7 +307,7 @@ impl Panel<'_> {
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let mut mesh = chart.configure_mesh();
-        mesh.x_desc("frame")
+        mesh.x_desc(self.x_desc)
             .y_desc(self.y_desc)
             .label_style((FONT, 14))
             .axis_desc_style((FONT, 16))
@@ -243,19 +319,7 @@ impl Panel<'_> {
         for (i, s) in self.series.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
             let points = s.values.iter().copied().enumerate().filter(|&(_, v)| keep(v));
-            chart
-                .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
-                .label(s.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
-        }
-        if !self.series.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .label_font((FONT, 15))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()?;
+            chart.draw_series(LineSeries::new(points, colour.stroke_width(2)))?;
         }
         Ok(())
     }
@@ -479,10 +543,15 @@ mod tests {
 
     #[test]
     fn log_axis_only_for_wide_positive_spreads() {
-        assert_eq!(y_axis([0.0, 1.0, 20.0].into_iter(), true), YAxis::Linear(21.0));
-        assert_eq!(y_axis([0.0, 1.0, 40.0].into_iter(), true), YAxis::Log(0.8, 50.0));
-        assert_eq!(y_axis([1.0, 40.0].into_iter(), false), YAxis::Linear(42.0));
-        assert_eq!(y_axis([0.0, -3.0, f64::NAN].into_iter(), true), YAxis::Linear(1.0));
-        assert_eq!(y_axis(std::iter::empty(), true), YAxis::Linear(1.0));
+        use TimeScale::{Auto, Linear, Log};
+        assert_eq!(y_axis([0.0, 1.0, 20.0].into_iter(), Auto), YAxis::Linear(21.0));
+        assert_eq!(y_axis([0.0, 1.0, 40.0].into_iter(), Auto), YAxis::Log(0.1, 100.0));
+        assert_eq!(y_axis([1.0, 40.0].into_iter(), Linear), YAxis::Linear(42.0));
+        assert_eq!(y_axis([0.0, -3.0, f64::NAN].into_iter(), Auto), YAxis::Linear(1.0));
+        assert_eq!(y_axis(std::iter::empty(), Auto), YAxis::Linear(1.0));
+        // Forced: a narrow spread on a log axis, a wide one on a linear axis.
+        assert_eq!(y_axis([0.0, 1.0, 2.0].into_iter(), Log), YAxis::Log(0.1, 10.0));
+        assert_eq!(y_axis([20.0, 30.0].into_iter(), Log), YAxis::Log(10.0, 100.0));
+        assert_eq!(y_axis([0.0, -3.0].into_iter(), Log), YAxis::Linear(1.0));
     }
 }

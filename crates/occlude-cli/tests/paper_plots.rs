@@ -1,0 +1,91 @@
+//! `occlude bench --paper P --plot PATH` as a user runs it: one plot per
+//! scene, named after PATH, one line per compared method, titled with the
+//! paper's figure; a bad extension or a paper without a walkthrough is a
+//! usage error before anything runs.
+
+use std::path::Path;
+use std::process::Command;
+
+fn occlude(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_occlude")).args(args).output().expect("occlude runs")
+}
+
+/// The y-axis tick labels of the SVG plot at `path` (the text right-aligned
+/// left of the plotting area, which only the y-axis has).
+fn y_labels(svg: &str) -> Vec<f64> {
+    svg.split("<text")
+        .filter(|t| t.contains("text-anchor=\"end\""))
+        .filter_map(|t| t.split('>').nth(1)?.split('<').next()?.trim().parse().ok())
+        .collect()
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let plot = dir.path().join("chc.svg");
+    let queries = dir.path().join("q.svg");
+    let out = occlude(&[
+        "bench",
+        "--paper",
+        "chc",
+        "--size",
+        "small",
+        "--frames",
+        "4",
+        "--resolution",
+        "96x64",
+        "--plot",
+        plot.to_str().unwrap(),
+        "--plot-queries",
+        queries.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "stderr: {stderr}");
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["chc-city.svg", "chc-plant.svg", "chc-teapots.svg", "q-city.svg", "q-plant.svg", "q-teapots.svg"]
+    );
+    for (scene, figure) in [("teapots", "Figure 5"), ("city", "Figure 6"), ("plant", "Figure 7")] {
+        let svg = read(&dir.path().join(format!("chc-{scene}.svg")));
+        assert!(svg.starts_with("<svg"), "{scene}: {}", &svg[..svg.len().min(80)]);
+        assert!(svg.contains(&format!("CHC paper, {figure}: frame times: {scene} (small)")), "{scene}: no title");
+        assert!(svg.contains("frame (at 30 fps)"), "{scene}: the x axis does not give the frame rate");
+        // Table 1's methods, each once: Table 2's variants of chc are no lines.
+        for method in ["vfc", "sw", "chc", "ideal", "opt"] {
+            let entries = svg.matches(&format!("\n{method}\n</text>")).count();
+            assert_eq!(entries, 1, "{scene}: {entries} legend entries of {method}");
+        }
+        assert!(stderr.contains(&format!("chc-{scene}.svg")), "{stderr}");
+        let q = read(&dir.path().join(format!("q-{scene}.svg")));
+        assert!(q.contains("queries and state changes (no figure in the paper)"), "{scene}: {q:.300}");
+    }
+    // Figures 5 and 6 are linear from zero; Figure 7 is logarithmic, as the
+    // paper's: at least two labels, powers of ten, each ten times the last.
+    let city = y_labels(&read(&dir.path().join("chc-city.svg")));
+    assert_eq!(city.first(), Some(&0.0), "city's y labels: {city:?}");
+    let plant = y_labels(&read(&dir.path().join("chc-plant.svg")));
+    assert!(plant.len() >= 2 && plant[0] > 0.0, "plant's y labels: {plant:?}");
+    assert!(plant.windows(2).all(|w| (w[1] / w[0] - 10.0).abs() < 1e-9), "plant's y labels: {plant:?}");
+}
+
+#[test]
+fn a_bad_plot_is_refused_before_anything_runs() {
+    for (args, needle) in [
+        (&["bench", "--paper", "chc", "--plot", "chc.jpg"][..], "chc.jpg"),
+        (&["bench", "--paper", "chcpp", "--plot-queries", "q.gif"], "q.gif"),
+        (&["bench", "--paper", "gvq", "--plot", "gvq.svg"], "--paper gvq"),
+    ] {
+        let out = occlude(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(out.stdout.is_empty(), "{args:?}: nothing should run");
+    }
+}
