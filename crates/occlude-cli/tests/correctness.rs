@@ -11,7 +11,7 @@ use occlude_cli::bench::runner::{cameras, run_scene, run_scene_with_variants, Va
 use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene};
-use occlude_scenes::import::{import, ModelFormat};
+use occlude_scenes::import::{import, Imported, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, PAPER_SCENES};
 use occlude_soft::SoftBackend;
 use std::collections::HashSet;
@@ -215,6 +215,17 @@ fn moc_is_exact_with_every_occluder_choice() {
     }
 }
 
+/// The generated building (two floors of two by two rooms, furnished)
+/// written as GLB and imported with its automatic walk, as `occlude bench
+/// --scene building.glb --auto-path walk` would.
+fn imported_building() -> Imported {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("building.glb");
+    std::fs::write(&path, export::glb(&building::generate(2, 2, 1))).unwrap();
+    let options = ImportOptions { auto_path: AutoPath::Walk, ..ImportOptions::default() };
+    import(&path, ModelFormat::Glb, &options).unwrap()
+}
+
 /// `moc.proxies=on`: occluders rendered as their meshes' inner boxes where
 /// the argument allows (`moc`'s module doc), with occluders drawn during the
 /// walk and with last frame's: exact on every frame of every small scene and
@@ -222,12 +233,8 @@ fn moc_is_exact_with_every_occluder_choice() {
 /// of meshes on every scene that has closed meshes.
 #[test]
 fn moc_with_inner_box_proxies_is_exact() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("building.glb");
-    std::fs::write(&path, export::glb(&building::generate(2, 2, 1))).unwrap();
-    let options = ImportOptions { auto_path: AutoPath::Walk, ..ImportOptions::default() };
     let mut scenes: Vec<Scene> = PAPER_SCENES.iter().map(|name| small(name)).collect();
-    scenes.push(import(&path, ModelFormat::Glb, &options).unwrap().scene);
+    scenes.push(imported_building().scene);
     let variants: [&[&str]; 2] = [&["moc.proxies=on"], &["moc.proxies=on", "moc.occluders=last"]];
     let mut proxied_scenes = 0;
     for scene in &scenes {
@@ -279,11 +286,7 @@ fn chcpp_saves_queries_and_state_changes_over_chc() {
 /// culling.
 #[test]
 fn conservative_methods_match_vfc_on_an_imported_building() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("building.glb");
-    std::fs::write(&path, export::glb(&building::generate(2, 2, 1))).unwrap();
-    let options = ImportOptions { auto_path: AutoPath::Walk, ..ImportOptions::default() };
-    let imported = import(&path, ModelFormat::Glb, &options).unwrap();
+    let imported = imported_building();
     assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
     for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
         let run = exact_run(&imported.scene, &config("building.glb", hierarchy));
