@@ -80,7 +80,9 @@
 //!
 //! # Rasterization
 //! Per subtile row of a triangle, each edge's x-intercepts on the four pixel
-//! rows are computed at once, then the masks and depth bounds of eight
+//! rows are computed at once (evaluated on the first subtile row, then stepped
+//! by one addition per row, the bands widened by the steps' proven rounding),
+//! then the masks and depth bounds of eight
 //! neighbouring subtiles at once by shifts and one plane evaluation per eight
 //! subtiles (in `f64`, then a step per subtile in `f32`)
 //! (the `raster::lanes` module: only rows whose intercept lies within its proven

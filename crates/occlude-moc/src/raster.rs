@@ -57,9 +57,25 @@ pub enum CullMode {
     None,
 }
 
-/// Relative error allowance of the intercept bands: `2^-46`, far above the few
-/// units in the last place (`2^-53`) the few rounded operations can lose.
+/// Relative error allowance of the intercept bands for one evaluation: `2^-46`,
+/// far above the few units in the last place (`2^-53`) the few rounded
+/// operations can lose.
 const BAND_SCALE: f64 = 1.0 / (1u64 << 46) as f64;
+
+/// Relative error allowance of the intercept bands per step from one subtile
+/// row to the next ([`band_scale`]): `2^-52`, twice the `2^-53` one rounded
+/// addition can lose.
+const STEP_SCALE: f64 = 1.0 / (1u64 << 52) as f64;
+
+/// The factor of an edge's intercept band ([`Edge::band`]) on a screen
+/// `y_max` pixels high: [`BAND_SCALE`] for the intercept of a subtile row's
+/// first pixel rows, evaluated directly, plus [`STEP_SCALE`] for each of the
+/// at most `y_max / 4 + 1` steps of `4 slope` that carry it down to the rows
+/// below (`raster::lanes`, "Stepped intercepts").
+#[inline]
+fn band_scale(y_max: f64) -> f64 {
+    BAND_SCALE + STEP_SCALE * (y_max * 0.25 + 1.0)
+}
 
 /// How far a rasterizer's vertices may lie from a [`ScreenTriangle`]'s, and
 /// what the triangle gives up for it.
@@ -121,12 +137,13 @@ impl Edge {
     /// Half-width, in pixels, of the band around the computed intercept outside
     /// which [`covers`](Self::covers) is decided by the side of the intercept,
     /// for pixel centres within `x_max`, `y_max` of the origin: the intercept's
-    /// own rounding plus the edge function's rounding divided by its slope.
-    /// Infinite or NaN when the intercept cannot be trusted.
+    /// own rounding plus the edge function's rounding divided by its slope,
+    /// and the rounding of the steps that carry the intercept from row to row
+    /// ([`band_scale`]). Infinite or NaN when the intercept cannot be trusted.
     fn band(&self, x_max: f64, y_max: f64) -> f64 {
         let intercept = self.slope.abs() * y_max + self.offset.abs() + x_max + 1.0;
         let function = (self.a.abs() * x_max + self.b.abs() * y_max + self.c.abs()) / self.a.abs();
-        BAND_SCALE * (intercept + function)
+        band_scale(y_max) * (intercept + function)
     }
 
     /// The pixels `lo..hi` of row `y` (centre `y + 0.5`), clipped to `x0..x1`,
@@ -393,7 +410,8 @@ struct Band<'a> {
 
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
-    /// the four pixel rows' spans ([`Lanes::edge_spans`], [`exact_spans`]), then per [`LANES`] subtiles
+    /// the four pixel rows' spans ([`Lanes::edge_spans`], the intercepts
+    /// stepped from the band's first row, [`exact_spans`]), then per [`LANES`] subtiles
     /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
     /// triangle is one call, so that the steps inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
@@ -407,9 +425,11 @@ impl Band<'_> {
     #[inline(always)]
     fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
-        for sy in r0.max(self.first)..r1.min(self.end) {
+        let first = r0.max(self.first);
+        let mut intercepts = lanes.first_intercepts(tri, (first * 4) as i32);
+        for sy in first..r1.min(self.end) {
             let y = (sy * 4) as i32;
-            let mut spans = lanes.edge_spans(tri, y);
+            let mut spans = lanes.edge_spans(tri, y, &mut intercepts);
             if spans.exact != 0 {
                 exact_spans(tri, y, &mut spans);
             }

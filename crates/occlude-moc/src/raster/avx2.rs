@@ -71,10 +71,18 @@ impl Avx2 {
 }
 
 impl Lanes for Avx2 {
+    type Intercepts = [__m256d; 3];
+
     #[inline(always)]
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
+    fn first_intercepts(self, tri: &ScreenTriangle, y: i32) -> [__m256d; 3] {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { edge_spans(tri, y) }
+        unsafe { first_intercepts(tri, y) }
+    }
+
+    #[inline(always)]
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut [__m256d; 3]) -> Spans {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { edge_spans(tri, y, intercepts) }
     }
 
     #[inline(always)]
@@ -122,29 +130,40 @@ unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
     merge(group, &cover, &depth, mode);
 }
 
-/// [`lanes::edge_spans`](super::lanes::edge_spans) in AVX2: the three edges'
-/// intercepts computed side by side (unrolled), one test of all twelve rows
-/// against their bands, and only where one fails (rare) the per-edge
-/// [`Spans::exact`] bits.
+/// [`lanes::first_intercepts`](super::lanes::first_intercepts) in AVX2: an
+/// edge's four rows in one register.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
+unsafe fn first_intercepts(tri: &ScreenTriangle, y: i32) -> [__m256d; 3] {
     let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
     let py = _mm256_add_pd(_mm256_cvtepi32_pd(rows), _mm256_set1_pd(0.5));
+    std::array::from_fn(|i| {
+        let edge = &tri.edges[i];
+        let t = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset));
+        _mm256_sub_pd(t, _mm256_set1_pd(0.5))
+    })
+}
+
+/// [`lanes::edge_spans`](super::lanes::edge_spans) in AVX2: the three edges
+/// side by side (unrolled), their intercepts stepped by an addition each, one
+/// test of all twelve rows against their bands, and only where one fails
+/// (rare) the per-edge [`Spans::exact`] bits.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn edge_spans(tri: &ScreenTriangle, y: i32, intercepts: &mut [__m256d; 3]) -> Spans {
+    let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
     let (t_min, t_max) = (_mm256_set1_pd(tri.t_min), _mm256_set1_pd(tri.t_max));
-    let (half, one) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
+    let one = _mm256_set1_pd(1.0);
     let inside =
         _mm_andnot_si128(_mm_cmpgt_epi32(_mm_set1_epi32(tri.y0), rows), _mm_cmpgt_epi32(_mm_set1_epi32(tri.y1), rows));
     let (x0, x1) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
     let (mut lo, mut hi) = (_mm_blendv_epi8(x1, x0, inside), _mm_blendv_epi8(x0, x1, inside));
     // Per edge: the floor of its four intercepts, and which of them lie
     // farther than the band from a pixel boundary.
-    let intercepts = |i: usize| {
+    let mut intercept = |i: usize| {
         let (edge, band) = (&tri.edges[i], _mm256_set1_pd(tri.bands[i]));
-        let t = _mm256_sub_pd(
-            _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset)),
-            half,
-        );
+        let t = intercepts[i];
+        intercepts[i] = _mm256_add_pd(t, _mm256_set1_pd(edge.slope * 4.0));
         // A NaN intercept becomes `t_max` (as in the portable clamp). On a
         // row of the triangle that leaves the edge to the exact rule all the
         // same: an intercept there is NaN or infinite only where the slope, the
@@ -160,7 +179,7 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
         );
         (k, safe)
     };
-    let edges = [intercepts(0), intercepts(1), intercepts(2)];
+    let edges = [intercept(0), intercept(1), intercept(2)];
     let all_safe = _mm256_and_pd(_mm256_and_pd(edges[0].1, edges[1].1), edges[2].1);
     let mut exact = 0u8;
     if _mm256_movemask_pd(all_safe) != 0xF {

@@ -2,7 +2,8 @@
 //! rows) of a triangle, after HPG 2016 section 4 (coverage from the edges'
 //! x-intercepts per scanline, then shifts, no per-pixel work):
 //!
-//! - [`edge_spans`]: each edge's x-intercept on the four pixel rows at once,
+//! - [`edge_spans`]: each edge's x-intercept on the four pixel rows at once
+//!   (stepped from the subtile row above, "Stepped intercepts" below),
 //!   giving each row's covered pixels `lo..hi`;
 //! - [`subtile_lanes`]: from those spans, the coverage masks and depth bounds of
 //!   eight neighbouring subtiles at once.
@@ -24,6 +25,25 @@
 //! its edges' half-lines with the triangle's pixel window, so the order in which
 //! edges are applied does not matter. Masks are therefore exactly the per-pixel
 //! definition.
+//!
+//! # Stepped intercepts
+//! An edge's intercepts `t = slope py + offset - 0.5` are evaluated so on the
+//! first subtile row a triangle draws ([`first_intercepts`]), then carried to
+//! each next subtile row by one rounded addition of `4 slope` (exact: a
+//! product by a power of two) in [`edge_spans`]. In exact arithmetic the sum
+//! after `j` steps is the evaluated intercept of the first row plus `4 j
+//! slope`, which is the same function of the row as the evaluation there and
+//! errs as little; each rounded addition adds at most `2^-53` of its result.
+//! The rows that matter lie within `0..y_max` (and those before them in the
+//! same lane too), where `|t| <= |slope| y_max + |offset| + 0.5`, below the
+//! band's intercept term `|slope| y_max + |offset| + x_max + 1`; there are at
+//! most `y_max / 4 + 1` steps, so the steps together err by at most
+//! `(y_max / 4 + 1) 2^-53` of that term (to first order; the band allows
+//! twice as much, [`band_scale`](super::band_scale)). A step's error only
+//! moves `t` within the band, and the band is what decides a row without
+//! testing pixels, so masks stay exactly the per-pixel definition. A test
+//! checks the steps' error against this allowance on random triangles on
+//! screens up to 30,000 rows tall.
 
 use super::{floor_in, ScreenTriangle};
 use crate::buffer::{outside_mask, Group, MergeMode};
@@ -55,23 +75,41 @@ impl Spans {
     }
 }
 
+/// Each edge's intercepts `slope py + offset - 0.5` (the pixel index whose
+/// centre the edge crosses) on the four pixel rows of a subtile row: evaluated
+/// on the first subtile row drawn ([`first_intercepts`]), then stepped down by
+/// `4 slope` per subtile row ([`edge_spans`]).
+pub(crate) type Intercepts = [[f64; 4]; 3];
+
+/// Portable [`Intercepts`] of the four pixel rows from `y`, evaluated.
+pub(crate) fn first_intercepts(tri: &ScreenTriangle, y: i32) -> Intercepts {
+    std::array::from_fn(|i| {
+        let edge = &tri.edges[i];
+        std::array::from_fn(|r| edge.slope * (f64::from(y + r as i32) + 0.5) + edge.offset - 0.5)
+    })
+}
+
 /// Portable [`Spans`] of the four pixel rows from `y` of `tri`, each row
 /// starting as the triangle's window `x0..x1` (rows outside `y0..y1` empty:
-/// `x1..x0`).
-pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32) -> Spans {
+/// `x1..x0`), from the edges' `intercepts` on these rows, which it then steps
+/// to the next subtile row's.
+pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32, intercepts: &mut Intercepts) -> Spans {
     let mut spans = Spans { lo: [tri.x1; 4], hi: [tri.x0; 4], exact: 0 };
     for r in 0..4 {
         if (tri.y0..tri.y1).contains(&(y + r as i32)) {
             (spans.lo[r], spans.hi[r]) = (tri.x0, tri.x1);
         }
     }
-    'edges: for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+    let rows = *intercepts;
+    for (t, edge) in intercepts.iter_mut().zip(&tri.edges) {
+        *t = t.map(|t| t + edge.slope * 4.0);
+    }
+    'edges: for (i, ((edge, &band), rows)) in tri.edges.iter().zip(&tri.bands).zip(rows).enumerate() {
         let mut bound = [0i32; 4];
-        for (r, b) in bound.iter_mut().enumerate() {
-            let py = f64::from(y + r as i32) + 0.5;
+        for (b, t) in bound.iter_mut().zip(rows) {
             // Clamped as the AVX2 `min` and `max` clamp (a NaN intercept
             // becomes `t_max`; see there why its band then fails).
-            let t = (edge.slope * py + edge.offset - 0.5).min(tri.t_max).max(tri.t_min);
+            let t = t.min(tri.t_max).max(tri.t_min);
             let k = floor_in(t, tri.t_min, tri.t_max);
             let fraction = t - f64::from(k);
             if !(fraction > band && 1.0 - fraction > band) {
@@ -146,8 +184,14 @@ pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
 /// ([`Avx2`](super::avx2::Avx2)), so that one traversal
 /// (`Band::draw_with`) serves both.
 pub(crate) trait Lanes: Copy {
-    /// The [`Spans`] of the four pixel rows from `y` ([`edge_spans`]).
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans;
+    /// The edges' [`Intercepts`] in the lanes' layout.
+    type Intercepts: Copy;
+    /// The [`Intercepts`] of the four pixel rows from `y`
+    /// ([`first_intercepts`]).
+    fn first_intercepts(self, tri: &ScreenTriangle, y: i32) -> Self::Intercepts;
+    /// The [`Spans`] of the four pixel rows from `y`, whose `intercepts` it
+    /// steps to the next subtile row's ([`edge_spans`]).
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut Self::Intercepts) -> Spans;
     /// [`Spans::reach`].
     fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
         spans.reach()
@@ -162,9 +206,16 @@ pub(crate) trait Lanes: Copy {
 pub(crate) struct Portable;
 
 impl Lanes for Portable {
+    type Intercepts = Intercepts;
+
     #[inline]
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32) -> Spans {
-        edge_spans(tri, y)
+    fn first_intercepts(self, tri: &ScreenTriangle, y: i32) -> Intercepts {
+        first_intercepts(tri, y)
+    }
+
+    #[inline]
+    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut Intercepts) -> Spans {
+        edge_spans(tri, y, intercepts)
     }
 
     #[inline]
@@ -277,10 +328,12 @@ mod tests {
         let mut subtiles = 0;
         for (_, _, tri) in triangles(11, 4000) {
             let (r0, r1) = tri.subtile_rows();
+            let (mut stepped, mut avx2_stepped) =
+                (first_intercepts(&tri, r0 as i32 * 4), avx2.first_intercepts(&tri, r0 as i32 * 4));
             for sy in r0..r1 {
                 let y = (sy * 4) as i32;
-                let spans = edge_spans(&tri, y);
-                assert_eq!(avx2.edge_spans(&tri, y), spans, "{:?} row {sy}", tri.edges);
+                let spans = edge_spans(&tri, y, &mut stepped);
+                assert_eq!(avx2.edge_spans(&tri, y, &mut avx2_stepped), spans, "{:?} row {sy}", tri.edges);
                 for sx in (tri.x0 / 8) as u32..=((tri.x1 - 1) / 8) as u32 {
                     let (c, d) = subtile_lanes(&tri, &spans, sx, sy);
                     let (ac, ad) = avx2.subtile_lanes(&tri, &spans, sx, sy);
@@ -291,5 +344,57 @@ mod tests {
             }
         }
         assert!(subtiles > 10_000, "{subtiles}");
+    }
+
+    /// The crate doc's "Stepped intercepts": on random triangles up to 30,000
+    /// rows tall, an intercept stepped from the first subtile row lies within
+    /// `STEP_SCALE (y_max / 4 + 1)` of the band's intercept term of the one
+    /// evaluated on its row, the part of the band ([`super::super::band_scale`])
+    /// that allows for the steps.
+    #[test]
+    fn stepped_intercepts_stay_within_the_step_allowance() {
+        let mut rng = Lcg(23);
+        let screens = [(1920u32, 1080u32), (640, 8000), (4000, 30000), (83, 45)];
+        let (mut rounded, mut rows) = (0usize, 0usize);
+        let mut worst = 0f64;
+        for round in 0..3000 {
+            let (w, h) = screens[round % screens.len()];
+            let (wf, hf) = (f64::from(w), f64::from(h));
+            let mut t = [0; 3].map(|_| DVec3::new(rng.unit() * wf, rng.unit() * hf, rng.unit()));
+            if round % 3 == 0 {
+                // A near-horizontal edge: a steep intercept.
+                t[1].y = t[0].y + (rng.unit() - 0.5) * 1e-3;
+            }
+            for p in &mut t {
+                (p.x, p.y) = ((p.x * 256.0).round() / 256.0, (p.y * 256.0).round() / 256.0);
+            }
+            let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h, super::super::Tolerance::NONE) else {
+                continue;
+            };
+            let (r0, r1) = tri.subtile_rows();
+            let mut stepped = first_intercepts(&tri, r0 as i32 * 4);
+            for sy in r0..r1 {
+                let y = (sy * 4) as i32;
+                let evaluated = first_intercepts(&tri, y);
+                for (i, edge) in tri.edges.iter().enumerate() {
+                    let term = edge.slope.abs() * hf + edge.offset.abs() + wf + 1.0;
+                    let allowance = super::super::STEP_SCALE * (hf * 0.25 + 1.0) * term;
+                    for r in 0..4 {
+                        if !(tri.y0..tri.y1).contains(&(y + r as i32)) || !evaluated[i][r].is_finite() {
+                            continue;
+                        }
+                        let error = (stepped[i][r] - evaluated[i][r]).abs();
+                        assert!(error <= allowance, "{t:?} edge {i} row {}: {error} > {allowance}", y + r as i32);
+                        worst = worst.max(error / allowance);
+                        rounded += usize::from(error > 0.0);
+                        rows += 1;
+                    }
+                }
+                let _ = edge_spans(&tri, y, &mut stepped);
+            }
+        }
+        // Stepping does round (the test is not vacuous), well within the allowance.
+        assert!(rows > 100_000 && rounded > rows / 10, "{rounded} of {rows}");
+        eprintln!("stepped intercepts: {rounded} of {rows} rows rounded, worst {worst:.3} of the allowance");
     }
 }

@@ -17,7 +17,7 @@ use std::arch::x86_64::*;
 
 use glam::Vec4;
 
-use super::{CullMode, DepthPlane, Edge, ScreenTriangle, BAND_SCALE};
+use super::{band_scale, CullMode, DepthPlane, Edge, ScreenTriangle};
 use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
 
 /// Triangles set up by one [`setup4`] call.
@@ -209,6 +209,7 @@ pub(crate) unsafe fn setup4(
         _mm256_or_pd(rejected, _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
     batch.rejected = _mm256_movemask_pd(rejected);
     // The edges (Edge::new with no margin) and their bands (Edge::band).
+    let scale = _mm256_set1_pd(band_scale(h));
     for (i, e) in batch.edges.iter_mut().enumerate() {
         let (p, q) = (i, (i + 1) % 3);
         let a = _mm256_sub_pd(vy[p], vy[q]);
@@ -227,7 +228,7 @@ pub(crate) unsafe fn setup4(
             _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(a), wv), _mm256_mul_pd(abs(b), hv)), abs(c)),
             abs(a),
         );
-        let band = _mm256_mul_pd(_mm256_set1_pd(BAND_SCALE), _mm256_add_pd(intercept, function));
+        let band = _mm256_mul_pd(scale, _mm256_add_pd(intercept, function));
         for (out, v) in e.iter_mut().zip([a, b, c, slope, offset, band]) {
             _mm256_storeu_pd(out.as_mut_ptr(), v);
         }
