@@ -4,7 +4,7 @@
 //! device.
 //!
 //! Every frame is the soft rows' (the same scene, light, walkthrough and
-//! volume geometry: [`gvq_shadows::scene_rows`] runs the soft passes and
+//! volume geometry: `gvq_shadows::scene_rows` runs the soft passes and
 //! hands their clip-space triangles over). Per frame and method, timed:
 //! - the culling step: `none` keeps every volume; `sat-conservative` and
 //!   `sat-approximate` count the soft backend's region plans with `GpuSat`
