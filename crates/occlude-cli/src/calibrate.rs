@@ -206,6 +206,13 @@ fn timed(
     (median(frames.iter().map(|f| f.cpu_ms).collect()), median(frames.iter().map(|f| f.gpu_ms).collect()))
 }
 
+/// Issues `count` queries of `query_box`, their results left unread.
+fn issue_queries(backend: &mut WgpuBackend<'_>, count: usize, query_box: Aabb) {
+    (0..count).for_each(|_| {
+        backend.issue_query(&[query_box]);
+    });
+}
+
 /// Measures the cost model on `ctx`'s adapter, and why its GPU-driven costs
 /// could not be measured, if they could not.
 pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(GpuModel, Option<String>)> {
@@ -246,16 +253,10 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
     let (_, gpu_quads) = timed(&mut backend, &camera, repeats, |b| b.draw(&quad_list));
     let small_box = Aabb::new(Vec3::new(-0.05, -0.05, -50.0), Vec3::new(0.05, 0.05, -49.9));
     let screen_box = Aabb::new(Vec3::new(-3.0, -3.0, -3.0), Vec3::new(3.0, 3.0, -2.0));
-    let (cpu_queries, gpu_queries) = timed(&mut backend, &camera, repeats, |b| {
-        (0..SMALL_QUERIES).for_each(|_| {
-            b.issue_query(&[small_box]);
-        });
-    });
-    let (_, gpu_screen_queries) = timed(&mut backend, &camera, repeats, |b| {
-        (0..SCREEN_QUERIES).for_each(|_| {
-            b.issue_query(&[screen_box]);
-        });
-    });
+    let (cpu_queries, gpu_queries) =
+        timed(&mut backend, &camera, repeats, |b| issue_queries(b, SMALL_QUERIES, small_box));
+    let (_, gpu_screen_queries) =
+        timed(&mut backend, &camera, repeats, |b| issue_queries(b, SCREEN_QUERIES, screen_box));
 
     let draw_us = |total: f64, base: f64| per(total, base, DRAWS as f64) * 1e3;
     let gpu_draw_call_us = draw_us(gpu_draws, gpu0);
@@ -380,11 +381,7 @@ fn measure_hib_query(
 ) -> Result<(), GpuCullingUnsupported> {
     backend.set_query_mode(QueryMode::Hib)?;
     let (cpu0, _) = timed(backend, camera, repeats, |_| {});
-    let (cpu_queries, _) = timed(backend, camera, repeats, |b| {
-        (0..SMALL_QUERIES).for_each(|_| {
-            b.issue_query(&[small_box]);
-        });
-    });
+    let (cpu_queries, _) = timed(backend, camera, repeats, |b| issue_queries(b, SMALL_QUERIES, small_box));
     backend.set_query_mode(QueryMode::Hardware)?;
     model.cpu_hib_query_us = Some(per(cpu_queries, cpu0, SMALL_QUERIES as f64) * 1e3);
     Ok(())
