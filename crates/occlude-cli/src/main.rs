@@ -149,7 +149,8 @@ struct BenchArgs {
     /// Write the full report as JSON.
     #[arg(long, value_parser = parse_output_path)]
     json: Option<PathBuf>,
-    /// Write one CSV row per method and frame.
+    /// Write one CSV row per method and frame (with --paper, of every run
+    /// behind the tables, each row led by its run, scene and parameters).
     #[arg(long, value_parser = parse_output_path)]
     csv: Option<PathBuf>,
     /// Plot frame time over the walkthrough, one line per method (.svg or
@@ -332,8 +333,9 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
                 bench::paper::PAPERS.join(", ")
             )));
         }
-        if args.plot.is_some() || args.plot_queries.is_some() {
-            bench::paper_figures::check_plottable(paper).map_err(usage)?;
+        let per_frame = [(&args.plot, "--plot"), (&args.plot_queries, "--plot-queries"), (&args.csv, "--csv")];
+        for (_, option) in per_frame.iter().filter(|(path, _)| path.is_some()) {
+            bench::paper::check_walkthroughs(paper, option).map_err(usage)?;
         }
     }
     for path in args.plot.iter().chain(&args.plot_queries) {
@@ -366,6 +368,10 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
                 Some(gvq) => bench::output::write_json(gvq, path)?,
                 None => bench::output::write_json(&result.tables, path)?,
             }
+            eprintln!("wrote {}", path.display());
+        }
+        if let Some(path) = &args.csv {
+            bench::output::write_paper_csv(&result.tables.reports, path)?;
             eprintln!("wrote {}", path.display());
         }
         for (path, kind) in plots(args) {

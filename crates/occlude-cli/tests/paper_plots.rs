@@ -1,7 +1,8 @@
 //! `occlude bench --paper P --plot PATH` as a user runs it: one plot per
 //! scene, named after PATH, one line per compared method, titled with the
-//! paper's figure; a bad extension or a paper without a walkthrough is a
-//! usage error before anything runs.
+//! paper's figure; `--csv` beside it writes every run's frames; a bad
+//! extension or a paper without a walkthrough is a usage error before
+//! anything runs.
 
 use std::path::Path;
 use std::process::Command;
@@ -28,6 +29,7 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
     let dir = tempfile::tempdir().unwrap();
     let plot = dir.path().join("chc.svg");
     let queries = dir.path().join("q.svg");
+    let csv = dir.path().join("chc.csv");
     let out = occlude(&[
         "bench",
         "--paper",
@@ -42,15 +44,18 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
         plot.to_str().unwrap(),
         "--plot-queries",
         queries.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "stderr: {stderr}");
+    check_paper_csv(&read(&csv));
     let mut names: Vec<String> =
         std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
     names.sort();
     assert_eq!(
         names,
-        ["chc-city.svg", "chc-plant.svg", "chc-teapots.svg", "q-city.svg", "q-plant.svg", "q-teapots.svg"]
+        ["chc-city.svg", "chc-plant.svg", "chc-teapots.svg", "chc.csv", "q-city.svg", "q-plant.svg", "q-teapots.svg"]
     );
     for (scene, figure) in [("teapots", "Figure 5"), ("city", "Figure 6"), ("plant", "Figure 7")] {
         let svg = read(&dir.path().join(format!("chc-{scene}.svg")));
@@ -75,12 +80,34 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
     assert!(plant.windows(2).all(|w| (w[1] / w[0] - 10.0).abs() < 1e-9), "plant's y labels: {plant:?}");
 }
 
+/// `--csv` of `--paper chc` at 4 frames: every run behind the tables (per
+/// scene Table 1's five methods and Table 2's two variants of `chc`), each
+/// of its frames a row led by the run, the scene and the parameters.
+fn check_paper_csv(csv: &str) {
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert!(header.starts_with("run,scene,params,method,frame,frame_ms,"), "{header}");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(rows.iter().all(|r| r.len() == header.split(',').count()), "a row's width differs from the header's");
+    assert_eq!(rows.len(), 3 * (5 + 2) * 4, "3 scenes x 7 method runs x 4 frames");
+    for scene in ["teapots", "city", "plant"] {
+        let chc: std::collections::BTreeSet<(&str, &str)> =
+            rows.iter().filter(|r| r[1] == scene && r[3] == "chc").map(|r| (r[0], r[2])).collect();
+        let params: std::collections::BTreeSet<&str> = chc.iter().map(|&(_, p)| p).collect();
+        assert_eq!((chc.len(), params.len()), (3, 3), "{scene}: chc's three runs, each with its parameters: {chc:?}");
+        assert!(params.iter().all(|p| p.contains("tav=")), "{scene}: {params:?}");
+    }
+    let frame_ms: f64 = rows[0][5].parse().unwrap();
+    assert!(frame_ms > 0.0, "the first row's frame time: {frame_ms}");
+}
+
 #[test]
 fn a_bad_plot_is_refused_before_anything_runs() {
     for (args, needle) in [
         (&["bench", "--paper", "chc", "--plot", "chc.jpg"][..], "chc.jpg"),
         (&["bench", "--paper", "chcpp", "--plot-queries", "q.gif"], "q.gif"),
         (&["bench", "--paper", "gvq", "--plot", "gvq.svg"], "--paper gvq"),
+        (&["bench", "--paper", "gvq", "--csv", "gvq.csv"], "--csv cannot be combined with --paper gvq"),
     ] {
         let out = occlude(args);
         let stderr = String::from_utf8_lossy(&out.stderr);

@@ -172,6 +172,20 @@ pub struct PaperResult {
     pub compared_runs: Vec<usize>,
 }
 
+/// Papers whose tables come from no walkthrough runs (`gvq`'s are counts
+/// over its own frames): `--plot`, `--plot-queries` and `--csv`, which
+/// write a paper run's walkthroughs frame by frame, are usage errors with
+/// them.
+pub const NO_WALKTHROUGHS: [&str; 1] = ["gvq"];
+
+/// An error unless `paper`'s runs have walkthroughs for `option` to write.
+pub fn check_walkthroughs(paper: &str, option: &str) -> Result<()> {
+    if NO_WALKTHROUGHS.contains(&paper) {
+        anyhow::bail!("{option} cannot be combined with --paper {paper}: its tables have no walkthrough runs");
+    }
+    Ok(())
+}
+
 /// The size `--paper` runs at unless told otherwise: the papers' scenes
 /// have millions of triangles.
 pub const DEFAULT_SIZE: Size = Size::Paper;

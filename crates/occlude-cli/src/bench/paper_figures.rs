@@ -11,14 +11,10 @@
 //! paper's Figure 7 (the city; the paper plots frame rates) and the IOC
 //! poster's Figure 4.
 
-use super::paper::PaperResult;
+use super::paper::{check_walkthroughs, PaperResult};
 use super::plot::{write_styled_plot, PlotKind, PlotStyle, TimeScale};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
-
-/// Papers whose runs have no walkthrough to plot: `--plot` with them is a
-/// usage error.
-pub const NOT_PLOTTED: [&str; 1] = ["gvq"];
 
 /// One scene's figures in a paper.
 struct SceneFigures {
@@ -137,21 +133,11 @@ pub fn scene_path(path: &Path, scene: &str) -> PathBuf {
     path.with_file_name(name)
 }
 
-/// An error unless `paper`'s runs can be plotted.
-pub fn check_plottable(paper: &str) -> Result<()> {
-    if NOT_PLOTTED.contains(&paper) {
-        bail!(
-            "--plot and --plot-queries cannot be combined with --paper {paper}: its tables have no walkthrough to plot"
-        );
-    }
-    Ok(())
-}
-
 /// Writes `kind` plots of each scene of `result` (the run of the compared
 /// methods) to the files [`scene_path`] names after `path`; returns them.
 pub fn write(result: &PaperResult, kind: PlotKind, path: &Path) -> Result<Vec<PathBuf>> {
     let paper = &result.tables.paper;
-    check_plottable(paper)?;
+    check_walkthroughs(paper, "--plot")?;
     let mut written = Vec::new();
     for &i in &result.compared_runs {
         let report = result.tables.reports.get(i).context("a compared run's report is missing")?;
@@ -195,8 +181,8 @@ mod tests {
 
     #[test]
     fn gvq_is_not_plotted() {
-        assert!(check_plottable("chc").is_ok());
-        let err = check_plottable("gvq").unwrap_err().to_string();
-        assert!(err.contains("--paper gvq"), "{err}");
+        assert!(check_walkthroughs("chc", "--plot").is_ok());
+        let err = check_walkthroughs("gvq", "--plot").unwrap_err().to_string();
+        assert!(err.contains("--plot") && err.contains("--paper gvq"), "{err}");
     }
 }
