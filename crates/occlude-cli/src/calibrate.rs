@@ -9,7 +9,8 @@
 //! off-screen triangle, many zero-coverage triangles, full-screen quads, query
 //! boxes; for GPU-driven culling many tiny dispatches, one over a million
 //! flags, batched tests of tiny and of screen-covering boxes, a list draw of
-//! off-screen triangles, a read-back), minus an empty frame's time, as the
+//! off-screen triangles, a read-back; queries counted in an item-buffer
+//! batch), minus an empty frame's time, as the
 //! median of several repeats. On an adapter without GPU-resident culling the
 //! GPU-driven costs stay those of `modern`, and the TOML says so.
 
@@ -19,7 +20,7 @@ use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use indicatif::ProgressBar;
 use occlude_core::{
-    Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, Scene,
+    Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, QueryMode, Scene,
 };
 use occlude_soft::GpuModel;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -205,6 +206,13 @@ fn timed(
     (median(frames.iter().map(|f| f.cpu_ms).collect()), median(frames.iter().map(|f| f.gpu_ms).collect()))
 }
 
+/// Issues `count` queries of `query_box`, their results left unread.
+fn issue_queries(backend: &mut WgpuBackend<'_>, count: usize, query_box: Aabb) {
+    (0..count).for_each(|_| {
+        backend.issue_query(&[query_box]);
+    });
+}
+
 /// Measures the cost model on `ctx`'s adapter, and why its GPU-driven costs
 /// could not be measured, if they could not.
 pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(GpuModel, Option<String>)> {
@@ -245,16 +253,10 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
     let (_, gpu_quads) = timed(&mut backend, &camera, repeats, |b| b.draw(&quad_list));
     let small_box = Aabb::new(Vec3::new(-0.05, -0.05, -50.0), Vec3::new(0.05, 0.05, -49.9));
     let screen_box = Aabb::new(Vec3::new(-3.0, -3.0, -3.0), Vec3::new(3.0, 3.0, -2.0));
-    let (cpu_queries, gpu_queries) = timed(&mut backend, &camera, repeats, |b| {
-        (0..SMALL_QUERIES).for_each(|_| {
-            b.issue_query(&[small_box]);
-        });
-    });
-    let (_, gpu_screen_queries) = timed(&mut backend, &camera, repeats, |b| {
-        (0..SCREEN_QUERIES).for_each(|_| {
-            b.issue_query(&[screen_box]);
-        });
-    });
+    let (cpu_queries, gpu_queries) =
+        timed(&mut backend, &camera, repeats, |b| issue_queries(b, SMALL_QUERIES, small_box));
+    let (_, gpu_screen_queries) =
+        timed(&mut backend, &camera, repeats, |b| issue_queries(b, SCREEN_QUERIES, screen_box));
 
     let draw_us = |total: f64, base: f64| per(total, base, DRAWS as f64) * 1e3;
     let gpu_draw_call_us = draw_us(gpu_draws, gpu0);
@@ -284,7 +286,10 @@ pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(
         ..GpuModel::modern()
     };
     let boxes = Boxes { tiny: small_box, screen: screen_box, pixels };
-    let unmeasured = measure_culling(&mut backend, &camera, repeats, boxes, &mut model).err().map(|e| e.0);
+    let unmeasured = measure_culling(&mut backend, &camera, repeats, boxes, &mut model)
+        .and_then(|()| measure_hib_query(&mut backend, &camera, repeats, small_box, &mut model))
+        .err()
+        .map(|e| e.0);
     Ok((model, unmeasured))
 }
 
@@ -358,6 +363,27 @@ fn measure_culling(
     model.gpu_box_fragment_ns = (box_pixel_ns - model.gpu_query_fragment_ns).max(0.0);
     model.gpu_indirect_draw_us = per_element(gpu_list, DRAWS as f64) * 1e3;
     model.readback_us = (median(waits) - dispatch_us).max(0.0);
+    Ok(())
+}
+
+/// Sets `model`'s `cpu_hib_query_us` from a frame of [`SMALL_QUERIES`]
+/// queries of `small_box` counted in one item-buffer batch
+/// (`QueryMode::Hib`), as `cpu_query_us` from hardware queries: its CPU
+/// time beyond an empty frame's, per query (the batch's one submission at
+/// the frame's end shared among them). Needs the compute shaders of
+/// GPU-resident culling.
+fn measure_hib_query(
+    backend: &mut WgpuBackend<'_>,
+    camera: &Camera,
+    repeats: usize,
+    small_box: Aabb,
+    model: &mut GpuModel,
+) -> Result<(), GpuCullingUnsupported> {
+    backend.set_query_mode(QueryMode::Hib)?;
+    let (cpu0, _) = timed(backend, camera, repeats, |_| {});
+    let (cpu_queries, _) = timed(backend, camera, repeats, |b| issue_queries(b, SMALL_QUERIES, small_box));
+    backend.set_query_mode(QueryMode::Hardware)?;
+    model.cpu_hib_query_us = Some(per(cpu_queries, cpu0, SMALL_QUERIES as f64) * 1e3);
     Ok(())
 }
 

@@ -294,6 +294,8 @@ fn calibrate_writes_a_model_the_soft_backend_loads() {
     // dispatches are well above the noise of an empty frame).
     assert!(!text.contains("culling costs not measured"), "{text}");
     assert!(model.gpu_dispatch_us > 0.0 && model.cpu_dispatch_us > 0.0, "{model:?}");
+    // And so is the CPU cost of a query recorded in an item-buffer batch.
+    assert!(text.contains("cpu_hib_query_us") && model.cpu_hib_query_us.is_some(), "{text}");
     // The model drives a soft run.
     let run =
         occlude(&["bench", "--frames", "2", "--resolution", "160x120", "--gpu-model", toml.to_str().unwrap()], &[]);

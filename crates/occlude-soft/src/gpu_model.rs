@@ -21,6 +21,13 @@ pub struct GpuModel {
     pub cpu_state_change_us: f64,
     /// CPU time to issue one occlusion query (begin, boxes, end), µs.
     pub cpu_query_us: f64,
+    /// CPU time to record one query's boxes in an item-buffer batch
+    /// (`--queries hib`: no begin and end, the boxes appended to the
+    /// batch), µs, as `occlude calibrate` measures it; `None` (the presets,
+    /// and model files that predate it): `cpu_query_us`, as a hardware
+    /// query ([`GpuModel::hib_query_us`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_hib_query_us: Option<f64>,
     /// CPU time of one non-blocking "is the result available?" check, µs.
     pub cpu_query_poll_us: f64,
     /// CPU time to visit one hierarchy node (frustum test, queue work), µs.
@@ -154,6 +161,7 @@ impl GpuModel {
             cpu_draw_call_us: 4.0,
             cpu_state_change_us: 2.0,
             cpu_query_us: 2.0,
+            cpu_hib_query_us: None,
             cpu_query_poll_us: 0.5,
             cpu_node_us: 0.3,
             gpu_draw_call_us: 3.0,
@@ -189,6 +197,7 @@ impl GpuModel {
             cpu_draw_call_us: 1.0,
             cpu_state_change_us: 1.5,
             cpu_query_us: 0.5,
+            cpu_hib_query_us: None,
             cpu_query_poll_us: 0.1,
             cpu_node_us: 0.05,
             gpu_draw_call_us: 0.5,
@@ -221,6 +230,12 @@ impl GpuModel {
     /// soft backend and the `--paper gvq` experiments charge draws by it.
     pub fn draw_us(&self, call_us: f64, triangles: u64) -> f64 {
         call_us + triangles as f64 * self.gpu_triangle_ns * 1e-3
+    }
+
+    /// CPU time to record one query in an item-buffer batch, µs:
+    /// `cpu_hib_query_us` where measured, else `cpu_query_us`.
+    pub fn hib_query_us(&self) -> f64 {
+        self.cpu_hib_query_us.unwrap_or(self.cpu_query_us)
     }
 
     /// GPU time of `fragments` drawn fragments, `gpu_fragment_ns` each, µs.
@@ -296,6 +311,7 @@ impl GpuModel {
             ("cpu_draw_call_us", self.cpu_draw_call_us),
             ("cpu_state_change_us", self.cpu_state_change_us),
             ("cpu_query_us", self.cpu_query_us),
+            ("cpu_hib_query_us", self.hib_query_us()),
             ("cpu_query_poll_us", self.cpu_query_poll_us),
             ("cpu_node_us", self.cpu_node_us),
             ("gpu_draw_call_us", self.gpu_draw_call_us),
@@ -370,6 +386,22 @@ mod tests {
         for m in [bounded, GpuModel::gpu_2004(), GpuModel::modern()] {
             assert_eq!(GpuModel::from_toml(&toml::to_string(&m).unwrap()).unwrap(), m);
         }
+    }
+
+    /// A model file without `cpu_hib_query_us` (older than it) loads, and
+    /// records a batched query at `cpu_query_us`; one with it, at its value.
+    #[test]
+    fn the_item_buffers_query_cost_defaults_to_a_hardware_querys() {
+        let old = GpuModel::from_toml("preset = \"gpu-2004\"\ncpu_query_us = 3.0").unwrap();
+        assert_eq!((old.cpu_hib_query_us, old.hib_query_us()), (None, 3.0));
+        assert!(!toml::to_string(&old).unwrap().contains("cpu_hib_query_us"));
+        let new = GpuModel::from_toml("cpu_query_us = 3.0\ncpu_hib_query_us = 0.25").unwrap();
+        assert_eq!((new.cpu_hib_query_us, new.hib_query_us()), (Some(0.25), 0.25));
+        assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new);
+        for preset in [GpuModel::modern(), GpuModel::gpu_2004()] {
+            assert_eq!(preset.hib_query_us(), preset.cpu_query_us, "{}", preset.name);
+        }
+        assert!(GpuModel::from_toml("cpu_hib_query_us = -1.0").unwrap_err().contains("cpu_hib_query_us"));
     }
 
     #[test]

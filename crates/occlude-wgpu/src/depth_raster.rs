@@ -1,7 +1,10 @@
 //! [`DepthRaster`]: bare depth rasterization on the GPU, the counterpart of the soft
 //! backend's `Rasterizer` for benchmarks: clip-space triangles drawn depth-only
-//! (depth test LESS with depth write, two-sided) and occlusion queries over groups
-//! of them (back faces culled, no depth write), with no scene, camera or colour.
+//! (depth test LESS with depth write, two-sided), occlusion queries over groups
+//! of them (back faces culled, no depth write; or two-sided with depth test
+//! EQUAL, an object's own triangles against the depth pass that drew them), and
+//! groups drawn depth-tested without writing (the fragments a shadow volume's
+//! stencil pass rasterizes), with no scene, camera or colour.
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -25,6 +28,10 @@ pub struct DepthRaster {
     ctx: Arc<GpuContext>,
     draw: wgpu::RenderPipeline,
     query: wgpu::RenderPipeline,
+    /// Queries two-sided at depth test EQUAL.
+    equal_query: wgpu::RenderPipeline,
+    /// Draws two-sided at depth test LESS without depth write.
+    tested: wgpu::RenderPipeline,
     /// The depth texture's view and size.
     depth: Option<(wgpu::TextureView, u32, u32)>,
     /// The uploaded triangles' vertices, and the buffer's capacity in bytes.
@@ -44,7 +51,7 @@ impl DepthRaster {
             bind_group_layouts: &[],
             immediate_size: 0,
         });
-        let pipeline = |label: &str, depth_write: bool, cull_mode: Option<wgpu::Face>| {
+        let pipeline = |label: &str, depth_write: bool, cull_mode: Option<wgpu::Face>, compare| {
             ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
@@ -67,7 +74,7 @@ impl DepthRaster {
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(depth_write),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    depth_compare: Some(compare),
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
@@ -77,9 +84,12 @@ impl DepthRaster {
                 cache: None,
             })
         };
-        let draw = pipeline("depth draw", true, None);
-        let query = pipeline("depth query", false, Some(wgpu::Face::Back));
-        Self { ctx, draw, query, depth: None, vertices: None, queries: QueryPool::default() }
+        let less = wgpu::CompareFunction::Less;
+        let draw = pipeline("depth draw", true, None, less);
+        let query = pipeline("depth query", false, Some(wgpu::Face::Back), less);
+        let equal_query = pipeline("depth query at equal depth", false, None, wgpu::CompareFunction::Equal);
+        let tested = pipeline("depth-tested draw", false, None, less);
+        Self { ctx, draw, query, equal_query, tested, depth: None, vertices: None, queries: QueryPool::default() }
     }
 
     /// Clears the depth buffer to the far plane (1.0), first making it `width` x
@@ -131,6 +141,38 @@ impl DepthRaster {
     /// per range of uploaded triangles, in one render pass, and returns each one's
     /// count of passing samples once read back.
     pub fn queries(&mut self, groups: &[Range<u32>]) -> Result<Vec<u64>, String> {
+        let pipeline = self.query.clone();
+        self.run_queries(&pipeline, groups)
+    }
+
+    /// Runs one occlusion query (depth test EQUAL, no depth write, two-sided) per
+    /// range of uploaded triangles, in one render pass, and returns each one's
+    /// count of passing samples once read back: after a [`Self::draw`] of the same
+    /// triangles, a group's samples that no other triangle hides (the same
+    /// vertices give the same depths), an object's visible samples.
+    pub fn queries_at_equal_depth(&mut self, groups: &[Range<u32>]) -> Result<Vec<u64>, String> {
+        let pipeline = self.equal_query.clone();
+        self.run_queries(&pipeline, groups)
+    }
+
+    /// Draws each range of uploaded triangles in `groups` by its own draw call in
+    /// one render pass (depth test LESS, no depth write, two-sided), and waits
+    /// until the GPU has finished: what a shadow volume's stencil pass rasterizes
+    /// and tests, without the stencil (nothing is written).
+    pub fn draw_tested(&mut self, groups: &[Range<u32>]) -> Result<(), String> {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = self.begin_pass(&mut encoder, wgpu::LoadOp::Load, None)?;
+            pass.set_pipeline(&self.tested);
+            for g in groups {
+                pass.draw(g.start * 3..g.end * 3, 0..1);
+            }
+        }
+        self.submit_and_wait(encoder)
+    }
+
+    /// One occlusion query per group drawn by `pipeline`, batched in query sets.
+    fn run_queries(&mut self, pipeline: &wgpu::RenderPipeline, groups: &[Range<u32>]) -> Result<Vec<u64>, String> {
         let mut values = Vec::with_capacity(groups.len());
         for batch in groups.chunks(QUERIES_PER_SET as usize) {
             let set = self.queries.set(&self.ctx, 0).clone();
@@ -138,7 +180,7 @@ impl DepthRaster {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             {
                 let mut pass = self.begin_pass(&mut encoder, wgpu::LoadOp::Load, Some(&set))?;
-                pass.set_pipeline(&self.query);
+                pass.set_pipeline(pipeline);
                 for (i, g) in batch.iter().enumerate() {
                     pass.begin_occlusion_query(i as u32);
                     pass.draw(g.start * 3..g.end * 3, 0..1);

@@ -2,9 +2,9 @@
 //! Tables 1 to 3. Table 1 (section 4.1, shadow-volume culling) is
 //! [`super::gvq_shadows`]'s and Table 3 (section 4.2, culling parts of one
 //! heavy object) [`super::gvq_parts`]'s, both on the soft backend's
-//! simulated clock (with `--backend wgpu`, Table 3 runs on the GPU and is
-//! timed there, [`super::gvq_parts_gpu`]), printed and written after
-//! Table 2. Table 2
+//! simulated clock (with `--backend wgpu`, both run on the GPU and are
+//! timed there, [`super::gvq_shadows_gpu`] and [`super::gvq_parts_gpu`]),
+//! printed and written after Table 2. Table 2
 //! (section 4.1): summed-area-table queries of 100 to 500 randomly
 //! placed objects of 606 triangles (`occlude_scenes::scattered`), the CPU
 //! time of the overlap test, the colouring and split and merge, the
@@ -22,6 +22,7 @@ use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::gvq_parts::{self, PartsRow};
 use super::gvq_parts_gpu;
 use super::gvq_shadows::{self, ShadowRow};
+use super::gvq_shadows_gpu;
 use super::paper_tables::{PaperTables, Table};
 use super::published::{self, PublishedTable};
 use super::runner::far_plane;
@@ -209,33 +210,39 @@ impl Counter {
 /// Runs Table 2 with the seed, frames, resolution and backend of `base`,
 /// Table 3 at its resolution with its GPU model (or on its backend's GPU,
 /// at most [`gvq_parts_gpu::FRAMES`] of its frames), and Table 1 with its
-/// seed, resolution and GPU model on at most [`gvq_shadows::FRAMES`] of
-/// its frames (module documentation); returns the printed tables and
-/// their JSON, in that order.
+/// seed, resolution and GPU model (or on its backend's GPU) on at most
+/// [`gvq_shadows::FRAMES`] of its frames (module documentation); returns
+/// the printed tables and their JSON, in that order.
 pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
     let (mut text, table_2) = table_2(base, &OBJECTS, progress)?;
     progress.set_message("gvq: Table 3");
     let (w, h) = base.resolution;
     let published = published::table("gvq", "Table 3");
-    let (parts, clock) = match base.backend {
-        BackendKind::Soft => (
-            gvq_parts::table_3(w, h, &base.gpu_model, published),
-            format!("soft backend, simulated clock, GPU model {}", base.gpu_model.name),
-        ),
-        BackendKind::Wgpu => {
-            let ctx = Arc::new(GpuContext::new()?);
-            let clock = format!("wgpu backend on {}, measured wall-clock ms", ctx.adapter_name());
+    let ctx = match base.backend {
+        BackendKind::Soft => None,
+        BackendKind::Wgpu => Some(Arc::new(GpuContext::new()?)),
+    };
+    let clock = match &ctx {
+        None => format!("soft backend, simulated clock, GPU model {}", base.gpu_model.name),
+        Some(ctx) => format!("wgpu backend on {}, measured wall-clock ms", ctx.adapter_name()),
+    };
+    let parts = match &ctx {
+        None => gvq_parts::table_3(w, h, &base.gpu_model, published),
+        Some(ctx) => {
             let frames = base.frames.clamp(1, gvq_parts_gpu::FRAMES);
-            (gvq_parts_gpu::table_3(ctx, w, h, frames, published)?, clock)
+            gvq_parts_gpu::table_3(Arc::clone(ctx), w, h, frames, published)?
         }
     };
     text.push('\n');
     text.push_str(&gvq_parts::print(&parts, w, h, &clock));
     let table_3 = Table::unordered("Table 3", published, GvqRows::Table3(parts));
     let published = published::table("gvq", "Table 1");
-    let shadows = gvq_shadows::table_1(base, &OBJECTS, published, progress);
+    let shadows = match ctx {
+        None => gvq_shadows::table_1(base, &OBJECTS, published, progress),
+        Some(ctx) => gvq_shadows_gpu::table_1(ctx, base, &OBJECTS, published, progress)?,
+    };
     text.push('\n');
-    text.push_str(&gvq_shadows::print(&shadows, w, h, &base.gpu_model));
+    text.push_str(&gvq_shadows::print(&shadows, w, h, &clock));
     let table_1 = Table::unordered("Table 1", published, GvqRows::Table1(shadows));
     Ok((text, GvqTables { paper: "gvq".into(), tables: vec![table_2, table_3, table_1], reports: Vec::new() }))
 }

@@ -72,9 +72,10 @@ use super::config::{BenchConfig, NEAR_PLANE};
 use super::published::PublishedTable;
 use super::runner::far_plane;
 use super::sim_gpu::SimFrame;
+use anyhow::Result;
 use glam::{Mat4, Vec3, Vec4};
 use indicatif::ProgressBar;
-use occlude_core::gvq::{RegionMode, SatConfig};
+use occlude_core::gvq::{RegionMode, RegionPlan, SatConfig};
 use occlude_core::{Camera, ItemLayout, Mesh, Sampling, Scene};
 use occlude_scenes::scattered::scattered;
 use occlude_soft::raster::{Command, CommandKind, DepthBuffer, DepthTest, Rasterizer};
@@ -142,8 +143,17 @@ pub struct ShadowRow {
     pub objects: u32,
     /// Culling method ([`METHODS`]).
     pub method: String,
-    /// Simulated frame time, ms.
+    /// The backend that ran it: `soft` (simulated clock) or `wgpu`
+    /// (measured on the device, [`super::gvq_shadows_gpu`]).
+    #[serde(default)]
+    pub backend: String,
+    /// Frame time, ms: the soft backend's simulated clock, or the wgpu
+    /// backend's measured wall-clock time.
     pub frame_ms: f64,
+    /// Objects per frame whose volume's decision differs from the soft
+    /// backend's by the same method (0 on the soft backend).
+    #[serde(default)]
+    pub differing_from_soft: f64,
     /// Shadow volumes drawn.
     pub volumes: f64,
     /// Objects with a pixel in the light's view (what an exact test draws).
@@ -285,8 +295,9 @@ fn object_triangles(scene: &Scene, vp: &Mat4) -> (Vec<[Vec4; 3]>, Vec<Range<u32>
 }
 
 /// What one frame's passes found, from which every method's culling and
-/// cost follow.
-struct FramePasses {
+/// cost follow, and the clip-space triangles they drew (which the wgpu
+/// backend's rows, [`super::gvq_shadows_gpu`], draw again on the device).
+pub(super) struct FramePasses {
     /// Pixels of the light's view.
     light_pixels: u64,
     /// Per object, its fragments in the light's view.
@@ -297,6 +308,8 @@ struct FramePasses {
     /// Per region mode (conservative, approximate): per object its
     /// summed-area-table count, the lookups and the plan's CPU ms.
     sat: Vec<(Vec<u64>, u64, f64)>,
+    /// Per region mode, the plan (region sets and colouring) counted.
+    pub(super) plans: Vec<RegionPlan>,
     /// Per object, its count in the item buffer.
     hib: Vec<u64>,
     /// Per object, its occlusion query's count.
@@ -307,6 +320,17 @@ struct FramePasses {
     camera_fragments: u64,
     /// Per object, its shadow volume's triangles and camera-view fragments.
     volumes: Vec<(u64, u64)>,
+    /// Every object's triangles in the light's clip space.
+    pub(super) light_triangles: Vec<[Vec4; 3]>,
+    /// Per object, its range of `light_triangles`.
+    pub(super) light_ranges: Vec<Range<u32>>,
+    /// In the camera's clip space, every object's triangles
+    /// (`camera_objects`), then every object's shadow volume's.
+    pub(super) camera_triangles: Vec<[Vec4; 3]>,
+    /// The objects' range of `camera_triangles`.
+    pub(super) camera_objects: Range<u32>,
+    /// Per object, its volume's range of `camera_triangles`.
+    pub(super) volume_ranges: Vec<Range<u32>>,
 }
 
 /// The per-scene state of Table 1's passes, reused frame after frame.
@@ -324,7 +348,7 @@ struct Passes<'s> {
 }
 
 /// The region sets of the two SAT methods.
-fn sat_configs() -> [SatConfig; 2] {
+pub(super) fn sat_configs() -> [SatConfig; 2] {
     [RegionMode::Conservative, RegionMode::Approximate].map(|mode| SatConfig { mode, ..SatConfig::default() })
 }
 
@@ -362,13 +386,14 @@ impl<'s> Passes<'s> {
         let n = self.scene.instances.len();
         let frames = self.sat.query(self.scene, light_cam, &sat_configs());
         let exact = frames[0].exact.clone();
-        let sat = frames
+        let (sat, plans) = frames
             .into_iter()
             .map(|f| {
                 let t = f.plan.timings;
-                (f.counts, u64::from(f.plan.lookups), t.overlap_ms + t.colouring_ms + t.split_merge_ms)
+                let cpu_ms = t.overlap_ms + t.colouring_ms + t.split_merge_ms;
+                ((f.counts, u64::from(f.plan.lookups), cpu_ms), f.plan)
             })
-            .collect();
+            .unzip();
 
         let items = self.hib.item_buffer(light_cam, &self.layout);
         let mut hib = vec![0u64; n];
@@ -376,25 +401,26 @@ impl<'s> Passes<'s> {
             hib[instance as usize] = items.instances[slot];
         }
 
-        let (triangles, ranges) = object_triangles(self.scene, &light_cam.view_projection());
+        let (light_triangles, light_ranges) = object_triangles(self.scene, &light_cam.view_projection());
         let draw = |r: &Range<u32>| Command { kind: CommandKind::Draw, triangles: r.clone(), cull_back: false };
         let query = |r: &Range<u32>| Command {
             kind: CommandKind::Query(DepthTest::Equal),
             triangles: r.clone(),
             cull_back: false,
         };
-        let commands: Vec<Command> = ranges.iter().map(draw).chain(ranges.iter().map(query)).collect();
+        let commands: Vec<Command> = light_ranges.iter().map(draw).chain(light_ranges.iter().map(query)).collect();
         self.light_depth.clear();
-        let results = self.rasterizer.execute(&mut self.light_depth, &triangles, &commands);
+        let results = self.rasterizer.execute(&mut self.light_depth, &light_triangles, &commands);
         let light_fragments = results[..n].iter().map(|r| r.fragments).collect();
         let hardware = results[n..].iter().map(|r| r.passed).collect();
-        let per_object = ranges.iter().map(|r| u64::from(r.end - r.start)).collect();
+        let per_object = light_ranges.iter().map(|r| u64::from(r.end - r.start)).collect();
 
         let vp = camera.view_projection();
         let (mut triangles, _) = object_triangles(self.scene, &vp);
+        let camera_objects = 0..triangles.len() as u32;
         let volumes = self.volumes(light);
         let mut commands =
-            vec![Command { kind: CommandKind::Draw, triangles: 0..triangles.len() as u32, cull_back: false }];
+            vec![Command { kind: CommandKind::Draw, triangles: camera_objects.clone(), cull_back: false }];
         for v in &volumes {
             let start = triangles.len() as u32;
             clip(&vp, &v.triangles, &mut triangles);
@@ -407,6 +433,7 @@ impl<'s> Passes<'s> {
         self.camera_depth.clear();
         let results = self.rasterizer.execute(&mut self.camera_depth, &triangles, &commands);
         let volumes = volumes.iter().zip(&results[1..]).map(|(v, r)| (v.triangles.len() as u64, r.fragments)).collect();
+        let volume_ranges = commands[1..].iter().map(|c| c.triangles.clone()).collect();
         FramePasses {
             light_pixels: u64::from(self.light_depth.width()) * u64::from(self.light_depth.height()),
             light_fragments,
@@ -417,27 +444,48 @@ impl<'s> Passes<'s> {
             object_triangles: per_object,
             camera_fragments: results[0].fragments,
             volumes,
+            plans,
+            light_triangles,
+            light_ranges,
+            camera_triangles: triangles,
+            camera_objects,
+            volume_ranges,
         }
     }
 }
 
+/// Per object, whether its count keeps its volume (a visible pixel).
+pub(super) fn keep(counts: &[u64]) -> Vec<bool> {
+    counts.iter().map(|&c| c > 0).collect()
+}
+
 impl Method {
+    /// Per object of `p`, whether this method draws its volume on the soft
+    /// backend.
+    pub(super) fn drawn(self, p: &FramePasses) -> Vec<bool> {
+        match self {
+            Self::None => vec![true; p.volumes.len()],
+            Self::Sat(mode) => keep(&p.sat[usize::from(mode == RegionMode::Approximate)].0),
+            Self::Hib => keep(&p.hib),
+            Self::Hardware => keep(&p.hardware),
+        }
+    }
+
     /// This method's frame of `p`: its simulated time, ms, and per object
     /// whether its volume is drawn (module documentation).
     fn frame(self, p: &FramePasses, model: &GpuModel) -> (f64, Vec<bool>) {
         let all_triangles: u64 = p.object_triangles.iter().sum();
         let light_fragments: u64 = p.light_fragments.iter().sum();
-        let keep = |counts: &[u64]| counts.iter().map(|&c| c > 0).collect::<Vec<bool>>();
+        let drawn = self.drawn(p);
         let mut f = SimFrame::new(model);
         f.draw(all_triangles, p.camera_fragments);
-        let drawn = match self {
+        match self {
             Self::Hardware => {
                 f.draw(all_triangles, light_fragments);
                 for (&t, &frags) in p.object_triangles.iter().zip(&p.light_fragments) {
                     f.cpu_work(model.cpu_query_us);
                     f.gpu(model.draw_us(model.gpu_query_box_us, t) + frags as f64 * model.gpu_query_fragment_ns * 1e-3);
                 }
-                let drawn = keep(&p.hardware);
                 for ((&d, &(t, frags)), &input) in drawn.iter().zip(&p.volumes).zip(&p.object_triangles) {
                     if d {
                         f.draw(input + t, frags);
@@ -445,32 +493,30 @@ impl Method {
                         f.cpu_work(model.cpu_draw_call_us);
                     }
                 }
-                drawn
             }
             gs => {
-                let (drawn, reads) = match gs {
+                let reads = match gs {
                     Self::Sat(mode) => {
-                        let (counts, lookups, cpu_ms) = &p.sat[usize::from(mode == RegionMode::Approximate)];
+                        let (_, lookups, cpu_ms) = &p.sat[usize::from(mode == RegionMode::Approximate)];
                         f.cpu_work(cpu_ms * 1e3);
                         f.draw(all_triangles, light_fragments);
                         f.dispatch(p.light_pixels);
                         f.dispatch(p.light_pixels);
-                        (keep(counts), 4 * lookups)
+                        4 * lookups
                     }
                     Self::Hib => {
                         f.draw(all_triangles, light_fragments);
                         f.dispatch(p.light_pixels);
-                        (keep(&p.hib), p.hib.len() as u64)
+                        p.hib.len() as u64
                     }
-                    _ => (vec![true; p.volumes.len()], 0),
+                    _ => 0,
                 };
                 f.texel_reads(reads);
                 let (t, frags) =
                     p.volumes.iter().zip(&drawn).filter(|(_, &d)| d).fold((0, 0), |(t, g), (v, _)| (t + v.0, g + v.1));
                 f.draw(all_triangles + t, frags);
-                drawn
             }
-        };
+        }
         f.draw(all_triangles, p.camera_fragments);
         (f.ms(), drawn)
     }
@@ -485,56 +531,103 @@ struct Sums {
     lit_culled: f64,
     volume_triangles: f64,
     volume_fragments: f64,
+    differing: f64,
+}
+
+/// One method's frame on a backend: its time, ms, per object whether its
+/// volume is drawn, and how many of those decisions differ from the soft
+/// backend's.
+pub(super) struct MethodFrame {
+    /// Frame time, ms.
+    pub ms: f64,
+    /// Per object, whether its volume is drawn.
+    pub drawn: Vec<bool>,
+    /// Objects whose decision differs from the soft backend's.
+    pub differing: u32,
 }
 
 /// Table 1 over scenes of `counts` objects with `base`'s seed, frames (at
-/// most [`FRAMES`]), resolution and GPU model, beside `published`.
+/// most [`FRAMES`]), resolution and GPU model, beside `published`, on the
+/// soft backend's simulated clock.
 pub fn table_1(
     base: &BenchConfig,
     counts: &[u32],
     published: Option<&PublishedTable>,
     progress: &ProgressBar,
 ) -> Vec<ShadowRow> {
-    let (w, h) = base.resolution;
-    let aspect = w as f32 / h as f32;
     let mut rows = Vec::new();
     for &objects in counts {
         let scene = scattered(objects, base.seed);
-        let cameras =
-            scene.path.sample_with(Sampling::Spread(base.frames.min(FRAMES)), aspect, NEAR_PLANE, far_plane(&scene));
-        progress.set_message(format!("gvq: Table 1, {objects} objects"));
-        progress.inc_length(cameras.len() as u64);
-        let mut passes = Passes::new(&scene, (w, h), (w, h), &base.gpu_model);
-        let mut sums: Vec<Sums> = METHODS.iter().map(|_| Sums::default()).collect();
-        for (k, camera) in cameras.iter().enumerate() {
-            let light = light_position(&scene, k as f32 / (cameras.len() - 1).max(1) as f32);
-            let p = passes.frame(light, &light_camera(&scene, light, aspect), camera);
-            let lit: Vec<bool> = p.exact.iter().map(|&c| c > 0).collect();
-            let lit_count = lit.iter().filter(|&&l| l).count() as f64;
-            for (method, sum) in METHODS.iter().zip(&mut sums) {
-                let (ms, drawn) = method.frame(&p, &base.gpu_model);
-                sum.frame_ms += ms;
-                sum.lit += lit_count;
-                for ((&d, &l), &(t, frags)) in drawn.iter().zip(&lit).zip(&p.volumes) {
-                    if d {
-                        sum.volumes += 1.0;
-                        sum.volume_triangles += t as f64;
-                        sum.volume_fragments += frags as f64;
-                    } else if l {
-                        sum.lit_culled += 1.0;
-                    }
+        let soft = |_: &Camera, p: &FramePasses| -> Result<Vec<MethodFrame>> {
+            Ok(METHODS
+                .iter()
+                .map(|m| {
+                    let (ms, drawn) = m.frame(p, &base.gpu_model);
+                    MethodFrame { ms, drawn, differing: 0 }
+                })
+                .collect())
+        };
+        rows.extend(scene_rows(base, &scene, "soft", published, progress, soft).expect("the soft rows cannot fail"));
+    }
+    rows
+}
+
+/// Table 1's rows of `scene` on `backend`: per frame (at most [`FRAMES`]
+/// of `base`'s) the soft backend's passes ([`Passes`]), then `methods`,
+/// given the light's camera and those passes, answers every method of
+/// [`METHODS`] in order; rows of the means, beside `published`.
+pub(super) fn scene_rows(
+    base: &BenchConfig,
+    scene: &Scene,
+    backend: &str,
+    published: Option<&PublishedTable>,
+    progress: &ProgressBar,
+    mut methods: impl FnMut(&Camera, &FramePasses) -> Result<Vec<MethodFrame>>,
+) -> Result<Vec<ShadowRow>> {
+    let (w, h) = base.resolution;
+    let aspect = w as f32 / h as f32;
+    let objects = scene.instances.len() as u32;
+    let cameras =
+        scene.path.sample_with(Sampling::Spread(base.frames.min(FRAMES)), aspect, NEAR_PLANE, far_plane(scene));
+    progress.set_message(format!("gvq: Table 1, {objects} objects"));
+    progress.inc_length(cameras.len() as u64);
+    let mut passes = Passes::new(scene, (w, h), (w, h), &base.gpu_model);
+    let mut sums: Vec<Sums> = METHODS.iter().map(|_| Sums::default()).collect();
+    for (k, camera) in cameras.iter().enumerate() {
+        let light = light_position(scene, k as f32 / (cameras.len() - 1).max(1) as f32);
+        let light_cam = light_camera(scene, light, aspect);
+        let p = passes.frame(light, &light_cam, camera);
+        let lit = keep(&p.exact);
+        let lit_count = lit.iter().filter(|&&l| l).count() as f64;
+        for (m, sum) in methods(&light_cam, &p)?.into_iter().zip(&mut sums) {
+            sum.frame_ms += m.ms;
+            sum.lit += lit_count;
+            sum.differing += f64::from(m.differing);
+            for ((&d, &l), &(t, frags)) in m.drawn.iter().zip(&lit).zip(&p.volumes) {
+                if d {
+                    sum.volumes += 1.0;
+                    sum.volume_triangles += t as f64;
+                    sum.volume_fragments += frags as f64;
+                } else if l {
+                    sum.lit_culled += 1.0;
                 }
             }
-            progress.inc(1);
         }
-        let frames = cameras.len().max(1) as f64;
-        for (method, s) in METHODS.iter().zip(&sums) {
+        progress.inc(1);
+    }
+    let frames = cameras.len().max(1) as f64;
+    Ok(METHODS
+        .iter()
+        .zip(&sums)
+        .map(|(method, s)| {
             let p = published
                 .and_then(|t| t.rows.iter().find(|r| r.objects == Some(objects) && r.method == method.published()));
-            rows.push(ShadowRow {
+            ShadowRow {
                 objects,
                 method: method.name().to_string(),
+                backend: backend.to_string(),
                 frame_ms: s.frame_ms / frames,
+                differing_from_soft: s.differing / frames,
                 volumes: s.volumes / frames,
                 lit: s.lit / frames,
                 lit_culled: s.lit_culled / frames,
@@ -544,22 +637,20 @@ pub fn table_1(
                 published_fps_gtx280: p.and_then(|r| r.fps_gtx280),
                 published_fps_hd4870x2: p.and_then(|r| r.fps_hd4870x2),
                 frames: cameras.len(),
-            });
-        }
-    }
-    rows
+            }
+        })
+        .collect())
 }
 
-/// Table 1's printed form.
-pub fn print(rows: &[ShadowRow], width: u32, height: u32, model: &GpuModel) -> String {
+/// Table 1's printed form, its frame times those of `clock` (which
+/// backend, and how timed).
+pub fn print(rows: &[ShadowRow], width: u32, height: u32, clock: &str) -> String {
     let frames = rows.first().map_or(0, |r| r.frames);
     let mut text = format!(
         "Granular visibility queries — Table 1: shadow-volume culling, per frame ({width}x{height} light and camera \
-         views, {frames} frames, soft backend, simulated clock, GPU model {}; paper's ms and fps on NVIDIA 280GTX / \
-         ATI HD4870X2 beside)\n\
+         views, {frames} frames, {clock}; paper's ms and fps on NVIDIA 280GTX / ATI HD4870X2 beside)\n\
          objects  method             frame ms  (paper ms)  volumes     lit  lit culled  volume tris  volume frags  \
-         (paper fps)\n",
-        model.name
+         differ from soft  (paper fps)\n"
     );
     for r in rows {
         let paper_ms = r.published_frame_ms.map_or_else(|| "-".into(), |v| format!("{v:.2}"));
@@ -569,7 +660,7 @@ pub fn print(rows: &[ShadowRow], width: u32, height: u32, model: &GpuModel) -> S
         };
         let _ = writeln!(
             text,
-            "{:>7}  {:<17} {:>9.3} {:>11} {:>8.1} {:>7.1} {:>11.1} {:>12.0} {:>13.0}  {}",
+            "{:>7}  {:<17} {:>9.3} {:>11} {:>8.1} {:>7.1} {:>11.1} {:>12.0} {:>13.0} {:>17.1}  {}",
             r.objects,
             r.method,
             r.frame_ms,
@@ -579,6 +670,7 @@ pub fn print(rows: &[ShadowRow], width: u32, height: u32, model: &GpuModel) -> S
             r.lit_culled,
             r.volume_triangles,
             r.volume_fragments,
+            r.differing_from_soft,
             fps
         );
     }
@@ -714,7 +806,11 @@ mod tests {
         for (_, _, p) in small_frames(&scene) {
             let hidden: Vec<bool> = p.exact.iter().map(|&c| c == 0).collect();
             assert!(hidden.iter().any(|&h| h), "no object hidden from the light: nothing to cull");
-            let culled = |m: Method| m.frame(&p, &model).1.iter().map(|&d| !d).collect::<Vec<bool>>();
+            let culled = |m: Method| {
+                let drawn = m.frame(&p, &model).1;
+                assert_eq!(drawn, m.drawn(&p), "{m:?}: the frame's decisions are the method's");
+                drawn.iter().map(|&d| !d).collect::<Vec<bool>>()
+            };
             assert!(culled(Method::None).iter().all(|&c| !c), "none culled a volume");
             assert_eq!(culled(Method::Hib), hidden, "item buffer");
             assert_eq!(culled(Method::Hardware), hidden, "occlusion queries");
@@ -798,6 +894,7 @@ mod tests {
         for key in ["objects", "method", "frame_ms", "published_frame_ms"] {
             assert!(json.get(key).is_some(), "{key}");
         }
-        assert!(print(&rows, 48, 48, &GpuModel::modern()).contains("Table 1"));
+        assert!(rows.iter().all(|r| r.backend == "soft" && r.differing_from_soft == 0.0));
+        assert!(print(&rows, 48, 48, "soft backend").contains("Table 1"));
     }
 }

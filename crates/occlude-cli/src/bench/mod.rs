@@ -8,6 +8,7 @@ pub mod gvq;
 pub mod gvq_parts;
 pub mod gvq_parts_gpu;
 pub mod gvq_shadows;
+pub mod gvq_shadows_gpu;
 pub mod ideal;
 pub mod output;
 pub mod paper;

@@ -14,7 +14,8 @@
 //! they cost. `Hardware`: per query `cpu_query_us`, `gpu_query_box_us` per
 //! box, the result readable `query_latency_us` after its query ends. `Hib`
 //! (the queries between two submissions counted as one batch in one pass,
-//! as the wgpu backend does): per query `cpu_query_us`, per box `gpu_box_us`
+//! as the wgpu backend does): per query `GpuModel::hib_query_us`
+//! (`cpu_hib_query_us` where measured, else `cpu_query_us`), per box `gpu_box_us`
 //! (a box of an instanced draw, no query around it), per passing fragment
 //! `gpu_box_fragment_ns` on top of the depth test (the counting atomic); per
 //! batch `cpu_dispatch_us`, `gpu_draw_call_us` and `gpu_dispatch_us` (its
@@ -340,7 +341,10 @@ impl Backend for SoftBackend<'_> {
         let camera = self.camera.expect("issue_query outside a frame");
         let changed = self.count.query(boxes.len());
         self.charge_state_change(changed);
-        self.clock.cpu_work(self.model.cpu_query_us);
+        self.clock.cpu_work(match self.query_mode {
+            QueryMode::Hardware => self.model.cpu_query_us,
+            QueryMode::Hib => self.model.hib_query_us(),
+        });
         let handle = self.queries.len() as u32;
         let padded = query_boxes(&camera, boxes);
         let forced_visible = padded.is_none();
@@ -515,6 +519,28 @@ mod tests {
         assert!((bounded.wait_ms - query_round_trip_ms).abs() < 1e-9, "{bounded:?}");
         assert!((bounded.wait_ms + bounded.submit_wait_ms - free.wait_ms).abs() < 1e-9);
         assert_eq!((bounded.frame_ms, bounded.gpu_ms, bounded.cpu_ms), (free.frame_ms, free.gpu_ms, free.cpu_ms));
+    }
+
+    /// A batched (`Hib`) query costs the CPU `cpu_hib_query_us` where the
+    /// model has it and `cpu_query_us` where not; a hardware query
+    /// `cpu_query_us` either way.
+    #[test]
+    fn a_batched_query_costs_the_cpu_the_item_buffers_cost() {
+        let scene = quads();
+        let (camera, hidden) = view_and_hidden_box();
+        let cpu_ms = |mode: QueryMode, cpu_hib_query_us: Option<f64>| {
+            let model = GpuModel { cpu_query_us: 2.0, cpu_hib_query_us, ..GpuModel::modern() };
+            let mut backend = SoftBackend::new(&scene, 97, 71, model);
+            backend.set_query_mode(mode);
+            backend.begin_frame(&camera);
+            let queries: Vec<QueryHandle> = (0..10).map(|_| backend.issue_query(&[hidden])).collect();
+            queries.into_iter().for_each(|q| assert!(backend.result(q) > 0, "the box is in view"));
+            backend.end_frame().cpu_ms
+        };
+        let unmeasured = cpu_ms(QueryMode::Hib, None);
+        let measured = cpu_ms(QueryMode::Hib, Some(0.5));
+        assert!((unmeasured - measured - 10.0 * 1.5e-3).abs() < 1e-9, "{unmeasured} ms, {measured} ms");
+        assert_eq!(cpu_ms(QueryMode::Hardware, Some(0.5)), cpu_ms(QueryMode::Hardware, None));
     }
 
     /// A query's result is readable 30 µs after it runs; two draws of
