@@ -18,9 +18,12 @@
 //! (`cpu_hib_query_us` where measured, else `cpu_query_us`), per box `gpu_box_us`
 //! (a box of an instanced draw, no query around it), per passing fragment
 //! `gpu_box_fragment_ns` on top of the depth test (the counting atomic); per
-//! batch `cpu_dispatch_us`, `gpu_draw_call_us` and `gpu_dispatch_us` (its
-//! draw and the clearing of its counts); every result of the batch readable
-//! `readback_us` after the batch's last box.
+//! batch `GpuModel::hib_batch_cpu_us` and `GpuModel::hib_batch_gpu_us` (its
+//! pass and the clearing of its counts: `cpu_hib_batch_us` and
+//! `gpu_hib_batch_us` where measured, else `cpu_dispatch_us`, and
+//! `gpu_draw_call_us` + `gpu_dispatch_us`); every result of the batch
+//! readable `GpuModel::hib_batch_readback_us` (`hib_readback_us`, else
+//! `readback_us`) after the batch's last box.
 //!
 //! Draws are recorded until `FLUSH_TRIANGLES` (2^20) triangles wait (outside a
 //! `Hib` batch) and then rasterized, so that a frame drawing tens of millions
@@ -269,7 +272,7 @@ impl<'s> SoftBackend<'s> {
             }
         }
         for handle in batch {
-            self.queries[handle as usize].available_at_us = batch_end + self.model.readback_us;
+            self.queries[handle as usize].available_at_us = batch_end + self.model.hib_batch_readback_us();
         }
         self.batch_open = false;
         self.triangles.clear();
@@ -360,8 +363,8 @@ impl Backend for SoftBackend<'_> {
             QueryMode::Hib => (m.gpu_box_us * boxes.len() as f64, m.gpu_box_fragment_ns),
         };
         if batched && !std::mem::replace(&mut self.batch_open, true) {
-            fixed_us += m.gpu_draw_call_us + m.gpu_dispatch_us;
-            self.clock.cpu_work(self.model.cpu_dispatch_us);
+            fixed_us += m.hib_batch_gpu_us();
+            self.clock.cpu_work(self.model.hib_batch_cpu_us());
         }
         let op = GpuOp {
             issued_us: self.clock.cpu,
@@ -541,6 +544,44 @@ mod tests {
         let measured = cpu_ms(QueryMode::Hib, Some(0.5));
         assert!((unmeasured - measured - 10.0 * 1.5e-3).abs() < 1e-9, "{unmeasured} ms, {measured} ms");
         assert_eq!(cpu_ms(QueryMode::Hardware, Some(0.5)), cpu_ms(QueryMode::Hardware, None));
+    }
+
+    /// A batch (`Hib`) costs the CPU `cpu_hib_batch_us`, the GPU
+    /// `gpu_hib_batch_us` and its counts are readable `hib_readback_us`
+    /// after its last box where the model has them; where not, a
+    /// dispatch, a draw call and a dispatch, and a read-back: two batches
+    /// read at once move each clock by twice the difference.
+    #[test]
+    fn a_batch_costs_the_item_buffers_batch_costs() {
+        let scene = quads();
+        let (camera, hidden) = view_and_hidden_box();
+        let frame = |batch: Option<(f64, f64, f64)>| {
+            let model = GpuModel {
+                cpu_hib_batch_us: batch.map(|b| b.0),
+                gpu_hib_batch_us: batch.map(|b| b.1),
+                hib_readback_us: batch.map(|b| b.2),
+                ..GpuModel::modern()
+            };
+            let mut backend = SoftBackend::new(&scene, 97, 71, model);
+            backend.set_query_mode(QueryMode::Hib);
+            backend.begin_frame(&camera);
+            for _ in 0..2 {
+                let queries: Vec<QueryHandle> = (0..5).map(|_| backend.issue_query(&[hidden])).collect();
+                queries.into_iter().for_each(|q| assert!(backend.result(q) > 0, "the box is in view"));
+            }
+            backend.end_frame()
+        };
+        let m = GpuModel::modern();
+        let (cpu, gpu, readback) = (11.0, 22.0, 33.0);
+        let (old, new) = (frame(None), frame(Some((cpu, gpu, readback))));
+        let cpu_more = 2.0 * (cpu - m.cpu_dispatch_us) * 1e-3;
+        let gpu_more = 2.0 * (gpu - m.gpu_draw_call_us - m.gpu_dispatch_us) * 1e-3;
+        let readback_more = 2.0 * (readback - m.readback_us) * 1e-3;
+        assert!((new.cpu_ms - old.cpu_ms - cpu_more).abs() < 1e-9, "{old:?}\n{new:?}");
+        assert!((new.gpu_ms - old.gpu_ms - gpu_more).abs() < 1e-9, "{old:?}\n{new:?}");
+        // Each read waits for its batch: the batch's three costs in turn.
+        let frame_more = cpu_more + gpu_more + readback_more;
+        assert!((new.frame_ms - old.frame_ms - frame_more).abs() < 1e-9, "{old:?}\n{new:?}");
     }
 
     /// A query's result is readable 30 µs after it runs; two draws of
