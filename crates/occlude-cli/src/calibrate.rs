@@ -11,7 +11,8 @@
 //! flags, batched tests of tiny and of screen-covering boxes, a list draw of
 //! off-screen triangles, a read-back; queries counted in an item-buffer
 //! batch), minus an empty frame's time, as the
-//! median of several repeats. On an adapter without GPU-resident culling the
+//! median of several repeats; an item-buffer batch's own costs from a line
+//! fitted through frames of the same queries in more and fewer batches. On an adapter without GPU-resident culling the
 //! GPU-driven costs stay those of `modern`, and the TOML says so.
 
 use crate::bench::config::BackendKind;
@@ -20,7 +21,8 @@ use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use indicatif::ProgressBar;
 use occlude_core::{
-    Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, QueryMode, Scene,
+    Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, QueryHandle,
+    QueryMode, Scene,
 };
 use occlude_soft::GpuModel;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -124,6 +126,9 @@ const TEST_BOXES: u32 = 10_000;
 const SCREEN_TEST_BOXES: u32 = 50;
 /// Frames of the latency measurement.
 const LATENCY_FRAMES: usize = 30;
+/// Item-buffer batches the [`SMALL_QUERIES`] queries of the batch frames
+/// are split into, one frame per count.
+const HIB_BATCHES: [usize; 4] = [1, 10, 50, 100];
 /// Most availability checks of a query in flight per latency frame, to time
 /// the check.
 const LATENCY_CHECKS: u32 = 8;
@@ -366,12 +371,11 @@ fn measure_culling(
     Ok(())
 }
 
-/// Sets `model`'s `cpu_hib_query_us` from a frame of [`SMALL_QUERIES`]
-/// queries of `small_box` counted in one item-buffer batch
-/// (`QueryMode::Hib`), as `cpu_query_us` from hardware queries: its CPU
-/// time beyond an empty frame's, per query (the batch's one submission at
-/// the frame's end shared among them). Needs the compute shaders of
-/// GPU-resident culling.
+/// Sets `model`'s item-buffer costs (`QueryMode::Hib`): `cpu_hib_query_us`
+/// from a frame of [`SMALL_QUERIES`] queries of `small_box` counted in one
+/// batch, as `cpu_query_us` from hardware queries (its CPU time beyond an
+/// empty frame's, per query); the batch's own costs from
+/// [`measure_hib_batch`]. Needs the compute shaders of GPU-resident culling.
 fn measure_hib_query(
     backend: &mut WgpuBackend<'_>,
     camera: &Camera,
@@ -382,9 +386,79 @@ fn measure_hib_query(
     backend.set_query_mode(QueryMode::Hib)?;
     let (cpu0, _) = timed(backend, camera, repeats, |_| {});
     let (cpu_queries, _) = timed(backend, camera, repeats, |b| issue_queries(b, SMALL_QUERIES, small_box));
-    backend.set_query_mode(QueryMode::Hardware)?;
     model.cpu_hib_query_us = Some(per(cpu_queries, cpu0, SMALL_QUERIES as f64) * 1e3);
+    measure_hib_batch(backend, camera, repeats, small_box, model);
+    backend.set_query_mode(QueryMode::Hardware)?;
     Ok(())
+}
+
+/// Sets `model`'s per-batch item-buffer costs, the backend in
+/// `QueryMode::Hib`. `cpu_hib_batch_us` and `gpu_hib_batch_us`: the slopes
+/// of a least-squares line through the median CPU and GPU times of frames
+/// that split the same [`SMALL_QUERIES`] queries into each of
+/// [`HIB_BATCHES`] batches, each batch ended as a method ends one, by a
+/// check of its last query (which submits it; the CPU's slope less
+/// `cpu_query_poll_us`, that check's own cost). `hib_readback_us`: from
+/// recording one query to holding its count, timed on the CPU, less what
+/// the soft clock charges before the batch's last box ends (the query's and
+/// the batch's CPU costs, the batch's GPU cost and one box, `gpu_box_us`); the frame's first batch,
+/// which also clears the target, is left out. Medians over
+/// [`LATENCY_FRAMES`] frames, in µs.
+fn measure_hib_batch(
+    backend: &mut WgpuBackend<'_>,
+    camera: &Camera,
+    repeats: usize,
+    small_box: Aabb,
+    model: &mut GpuModel,
+) {
+    let frames: Vec<(f64, f64, f64)> = HIB_BATCHES
+        .iter()
+        .map(|&batches| {
+            let (cpu, gpu) = timed(backend, camera, repeats, |b| {
+                for _ in 0..batches {
+                    let queries: Vec<QueryHandle> =
+                        (0..SMALL_QUERIES / batches).map(|_| b.issue_query(&[small_box])).collect();
+                    if let Some(&last) = queries.last() {
+                        b.is_available(last);
+                    }
+                }
+            });
+            (batches as f64, cpu, gpu)
+        })
+        .collect();
+    let cpu_us = slope(frames.iter().map(|f| (f.0, f.1))) * 1e3 - model.cpu_query_poll_us;
+    let gpu_us = slope(frames.iter().map(|f| (f.0, f.2))) * 1e3;
+    let (cpu_us, gpu_us) = (cpu_us.max(0.0), gpu_us.max(0.0));
+    let waits: Vec<f64> = (0..LATENCY_FRAMES)
+        .map(|_| {
+            backend.begin_frame(camera);
+            let clearing = backend.issue_query(&[small_box]);
+            backend.result(clearing);
+            let start = Instant::now();
+            let query = backend.issue_query(&[small_box]);
+            backend.result(query);
+            let us = start.elapsed().as_secs_f64() * 1e6;
+            backend.end_frame();
+            us
+        })
+        .collect();
+    let charged_us = model.hib_query_us() + cpu_us + gpu_us + model.gpu_box_us;
+    model.cpu_hib_batch_us = Some(cpu_us);
+    model.gpu_hib_batch_us = Some(gpu_us);
+    model.hib_readback_us = Some((median(waits) - charged_us).max(0.0));
+}
+
+/// Slope of the least-squares line through the points (x, y); 0 for fewer
+/// than two distinct x.
+fn slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
+    let n = points.clone().count() as f64;
+    let (mx, my) = points.clone().fold((0.0, 0.0), |(sx, sy), (x, y)| (sx + x / n, sy + y / n));
+    let (sxy, sxx) = points.fold((0.0, 0.0), |(sxy, sxx), (x, y)| (sxy + (x - mx) * (y - my), sxx + (x - mx).powi(2)));
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        0.0
+    }
 }
 
 /// Time from a query's submission until its result is read, waiting for it as
@@ -457,4 +531,20 @@ pub fn predict(check: &BenchConfig, model: &GpuModel, progress: &ProgressBar) ->
             predicted_ms: s.mean_frame_ms,
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fit recovers a line's slope, and gives 0 where no slope exists.
+    #[test]
+    fn slope_fits_a_line() {
+        let line = [1.0, 10.0, 50.0, 100.0].map(|x| (x, 0.25 * x + 3.0));
+        assert!((slope(line.into_iter()) - 0.25).abs() < 1e-12);
+        let noisy = [(1.0, 1.0), (2.0, 3.0), (3.0, 2.0)];
+        assert!((slope(noisy.into_iter()) - 0.5).abs() < 1e-12);
+        assert_eq!(slope([(2.0, 1.0), (2.0, 5.0)].into_iter()), 0.0);
+        assert_eq!(slope(std::iter::empty()), 0.0);
+    }
 }
