@@ -296,11 +296,10 @@ fn calibrate_writes_a_model_the_soft_backend_loads() {
     assert!(model.gpu_dispatch_us > 0.0 && model.cpu_dispatch_us > 0.0, "{model:?}");
     // And so is the CPU cost of a query recorded in an item-buffer batch.
     assert!(text.contains("cpu_hib_query_us") && model.cpu_hib_query_us.is_some(), "{text}");
-    // And the item-buffer batch's own costs, fitted over frames of more and
-    // fewer batches (each may fit 0 at this size, clamped, never below).
-    let batch = [model.cpu_hib_batch_us, model.gpu_hib_batch_us, model.hib_readback_us];
-    assert!(batch.iter().all(|c| c.is_some_and(|us| us.is_finite() && us >= 0.0)), "{text}");
-    assert!(["cpu_hib_batch_us", "gpu_hib_batch_us", "hib_readback_us"].iter().all(|k| text.contains(k)), "{text}");
+    // And the GPU cost of an item-buffer batch, fitted over frames of more
+    // and fewer batches (it may fit 0 at this size, clamped, never below).
+    let batch_us = model.gpu_hib_batch_us;
+    assert!(text.contains("gpu_hib_batch_us") && batch_us.is_some_and(|us| us.is_finite() && us >= 0.0), "{text}");
     // The model drives a soft run.
     let run =
         occlude(&["bench", "--frames", "2", "--resolution", "160x120", "--gpu-model", toml.to_str().unwrap()], &[]);

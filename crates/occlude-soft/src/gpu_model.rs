@@ -84,25 +84,13 @@ pub struct GpuModel {
     /// Time from the GPU finishing the commands before a read-back until
     /// the CPU can read the buffer, µs.
     pub readback_us: f64,
-    /// CPU time of one item-buffer batch (`--queries hib`: the queries
-    /// between two submissions) beyond its queries' own: encoding and
-    /// submitting its pass, clearing and copying its counts, µs, as
-    /// `occlude calibrate` measures it; `None` (the presets, and model
-    /// files that predate it): `cpu_dispatch_us`
-    /// ([`GpuModel::hib_batch_cpu_us`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cpu_hib_batch_us: Option<f64>,
-    /// GPU time of one item-buffer batch beyond its boxes' (its pass, the
-    /// clearing of its counts), µs, as `occlude calibrate` measures it;
-    /// `None`: `gpu_draw_call_us` + `gpu_dispatch_us`
-    /// ([`GpuModel::hib_batch_gpu_us`]).
+    /// GPU time of one item-buffer batch (`--queries hib`: the queries
+    /// between two submissions) beyond its boxes' (its pass, the clearing
+    /// of its counts), µs, as `occlude calibrate` measures it; `None` (the
+    /// presets, and model files that predate it): `gpu_draw_call_us` +
+    /// `gpu_dispatch_us` ([`GpuModel::hib_batch_gpu_us`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gpu_hib_batch_us: Option<f64>,
-    /// Time from an item-buffer batch's last box until the CPU can read
-    /// its counts, µs, as `occlude calibrate` measures it; `None`:
-    /// `readback_us` ([`GpuModel::hib_batch_readback_us`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hib_readback_us: Option<f64>,
     /// CPU time to set up one occluder triangle in the masked occlusion
     /// buffer (`moc`: transform, near-plane clip, projection, edges), ns.
     #[serde(default = "MocCosts::triangle_ns")]
@@ -201,9 +189,7 @@ impl GpuModel {
             gpu_hiz_texel_ns: 0.6,
             gpu_indirect_draw_us: 1.5,
             readback_us: 12.0,
-            cpu_hib_batch_us: None,
             gpu_hib_batch_us: None,
-            hib_readback_us: None,
             cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
             cpu_moc_tile_ns: MOC_TILE_NS,
             cpu_moc_box_ns: MOC_BOX_NS,
@@ -240,9 +226,7 @@ impl GpuModel {
             gpu_hiz_texel_ns: 0.02,
             gpu_indirect_draw_us: 0.1,
             readback_us: 30.0,
-            cpu_hib_batch_us: None,
             gpu_hib_batch_us: None,
-            hib_readback_us: None,
             cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
             cpu_moc_tile_ns: MOC_TILE_NS,
             cpu_moc_box_ns: MOC_BOX_NS,
@@ -263,24 +247,12 @@ impl GpuModel {
         self.cpu_hib_query_us.unwrap_or(self.cpu_query_us)
     }
 
-    /// CPU time of one item-buffer batch beyond its queries', µs:
-    /// `cpu_hib_batch_us` where measured, else `cpu_dispatch_us`.
-    pub fn hib_batch_cpu_us(&self) -> f64 {
-        self.cpu_hib_batch_us.unwrap_or(self.cpu_dispatch_us)
-    }
-
     /// GPU time of one item-buffer batch beyond its boxes', µs:
     /// `gpu_hib_batch_us` where measured, else a draw call and a dispatch
     /// (`gpu_draw_call_us` + `gpu_dispatch_us`: its draw and the clearing
     /// of its counts).
     pub fn hib_batch_gpu_us(&self) -> f64 {
         self.gpu_hib_batch_us.unwrap_or(self.gpu_draw_call_us + self.gpu_dispatch_us)
-    }
-
-    /// Time from an item-buffer batch's last box until its counts are
-    /// readable, µs: `hib_readback_us` where measured, else `readback_us`.
-    pub fn hib_batch_readback_us(&self) -> f64 {
-        self.hib_readback_us.unwrap_or(self.readback_us)
     }
 
     /// GPU time of `fragments` drawn fragments, `gpu_fragment_ns` each, µs.
@@ -376,9 +348,7 @@ impl GpuModel {
             ("gpu_hiz_texel_ns", self.gpu_hiz_texel_ns),
             ("gpu_indirect_draw_us", self.gpu_indirect_draw_us),
             ("readback_us", self.readback_us),
-            ("cpu_hib_batch_us", self.hib_batch_cpu_us()),
             ("gpu_hib_batch_us", self.hib_batch_gpu_us()),
-            ("hib_readback_us", self.hib_batch_readback_us()),
             ("cpu_moc_triangle_ns", self.cpu_moc_triangle_ns),
             ("cpu_moc_tile_ns", self.cpu_moc_tile_ns),
             ("cpu_moc_box_ns", self.cpu_moc_box_ns),
@@ -452,23 +422,21 @@ mod tests {
         assert!(GpuModel::from_toml("cpu_hib_query_us = -1.0").unwrap_err().contains("cpu_hib_query_us"));
     }
 
-    /// A model file without the item buffer's batch costs (older than
-    /// them) loads with none and charges a batch a dispatch, a draw call,
-    /// and a read-back; one with them, their values.
+    /// A model file without `gpu_hib_batch_us` (older than it) loads with
+    /// none and charges a batch a draw call and a dispatch; one with it,
+    /// its value.
     #[test]
-    fn the_item_buffers_batch_costs_default_to_a_dispatch_a_draw_and_a_readback() {
-        let old = GpuModel::from_toml("preset = \"gpu-2004\"\nreadback_us = 7.0").unwrap();
-        assert_eq!((old.cpu_hib_batch_us, old.gpu_hib_batch_us, old.hib_readback_us), (None, None, None));
-        assert_eq!((old.hib_batch_cpu_us(), old.hib_batch_gpu_us(), old.hib_batch_readback_us()), (4.0, 13.0, 7.0));
-        let text = toml::to_string(&old).unwrap();
-        assert!(!text.contains("hib_batch") && !text.contains("hib_readback"), "{text}");
-        let new =
-            GpuModel::from_toml("cpu_hib_batch_us = 11.0\ngpu_hib_batch_us = 22.0\nhib_readback_us = 33.0").unwrap();
-        assert_eq!((new.hib_batch_cpu_us(), new.hib_batch_gpu_us(), new.hib_batch_readback_us()), (11.0, 22.0, 33.0));
+    fn the_item_buffers_batch_cost_defaults_to_a_draw_and_a_dispatch() {
+        let old = GpuModel::from_toml("preset = \"gpu-2004\"\ngpu_dispatch_us = 7.0").unwrap();
+        assert_eq!((old.gpu_hib_batch_us, old.hib_batch_gpu_us()), (None, 10.0));
+        assert!(!toml::to_string(&old).unwrap().contains("gpu_hib_batch_us"));
+        let new = GpuModel::from_toml("gpu_hib_batch_us = 22.0").unwrap();
+        assert_eq!((new.gpu_hib_batch_us, new.hib_batch_gpu_us()), (Some(22.0), 22.0));
         assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new);
-        for key in ["cpu_hib_batch_us", "gpu_hib_batch_us", "hib_readback_us"] {
-            assert!(GpuModel::from_toml(&format!("{key} = -1.0")).unwrap_err().contains(key), "{key}");
+        for preset in [GpuModel::modern(), GpuModel::gpu_2004()] {
+            assert_eq!(preset.hib_batch_gpu_us(), preset.gpu_draw_call_us + preset.gpu_dispatch_us, "{}", preset.name);
         }
+        assert!(GpuModel::from_toml("gpu_hib_batch_us = -1.0").unwrap_err().contains("gpu_hib_batch_us"));
     }
 
     #[test]
