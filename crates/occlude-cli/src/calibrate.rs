@@ -12,8 +12,9 @@
 //! off-screen triangles, a read-back; queries counted in an item-buffer
 //! batch), minus an empty frame's time, as the
 //! median of several repeats; an item-buffer batch's GPU cost from a line
-//! fitted through frames of the same queries in more and fewer batches. On an adapter without GPU-resident culling the
-//! GPU-driven costs stay those of `modern`, and the TOML says so.
+//! fitted through frames of the same queries in more and fewer batches. On
+//! an adapter without GPU-resident culling the GPU-driven costs stay those
+//! of `modern`, and the TOML says so.
 
 use crate::bench::config::BackendKind;
 use crate::bench::{runner, BenchConfig};
@@ -376,7 +377,8 @@ fn measure_culling(
 /// from a frame of [`SMALL_QUERIES`] queries of `small_box` counted in one
 /// batch, as `cpu_query_us` from hardware queries (its CPU time beyond an
 /// empty frame's, per query, the batch's one submission at the frame's end
-/// shared among them); `gpu_hib_batch_us` from [`measure_hib_batch`]. Needs the compute shaders of GPU-resident culling.
+/// shared among them); `gpu_hib_batch_us` from [`measure_hib_batch`].
+/// Needs the compute shaders of GPU-resident culling.
 fn measure_hib_query(
     backend: &mut WgpuBackend<'_>,
     camera: &Camera,
@@ -398,11 +400,10 @@ fn measure_hib_query(
 /// frames that split the same [`SMALL_QUERIES`] queries into each of
 /// [`HIB_BATCHES`] batches (the counts taking turns, `repeats` frames
 /// each), each batch ended as a method ends one, by a check of its last
-/// query (which submits it). The CPU's times of the same
-/// frames give no batch cost of the CPU's own on lavapipe: from the first
-/// frame with a submission before the frame's end they hold the GPU's
-/// time, the CPU blocked behind the rasterizer's threads
-/// (`docs/benchmarks.md`), so the CPU keeps `cpu_dispatch_us` per batch.
+/// query (which submits it). The CPU's times of such frames give no batch
+/// cost of the CPU's own on lavapipe: once a frame submits before its end
+/// they hold the GPU's time, the CPU blocked behind the rasterizer's
+/// threads (`docs/benchmarks.md`), so a batch keeps `cpu_dispatch_us`.
 fn measure_hib_batch(
     backend: &mut WgpuBackend<'_>,
     camera: &Camera,
