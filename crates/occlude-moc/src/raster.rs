@@ -411,7 +411,9 @@ struct Band<'a> {
 impl Band<'_> {
     /// Rasterizes the triangle's subtile rows within the band: per subtile row,
     /// the four pixel rows' spans ([`Lanes::edge_spans`], the intercepts
-    /// stepped from the band's first row, [`exact_spans`]), then per [`LANES`] subtiles
+    /// stepped from the band's first row, [`exact_spans`]; the next row's
+    /// taken before this row's groups, so that the processor overlaps them),
+    /// then per [`LANES`] subtiles
     /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
     /// triangle is one call, so that the steps inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
@@ -427,11 +429,19 @@ impl Band<'_> {
         let (r0, r1) = tri.subtile_rows();
         let first = r0.max(self.first);
         let mut intercepts = lanes.first_intercepts(tri, (first * 4) as i32);
-        for sy in first..r1.min(self.end) {
-            let y = (sy * 4) as i32;
-            let mut spans = lanes.edge_spans(tri, y, &mut intercepts);
+        let row_spans = |y: i32, intercepts: &mut L::Intercepts| {
+            let mut spans = lanes.edge_spans(tri, y, intercepts);
             if spans.exact != 0 {
                 exact_spans(tri, y, &mut spans);
+            }
+            spans
+        };
+        let end = r1.min(self.end);
+        let mut next = row_spans((first * 4) as i32, &mut intercepts);
+        for sy in first..end {
+            let spans = next;
+            if sy + 1 < end {
+                next = row_spans((sy * 4 + 4) as i32, &mut intercepts);
             }
             let Some((left, right)) = lanes.reach(&spans) else { continue };
             let row = ((sy - self.first) * self.cols) as usize / LANES;
