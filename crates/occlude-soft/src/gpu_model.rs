@@ -124,11 +124,11 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 136.0;
+const MOC_TRIANGLE_NS: f64 = 122.0;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 14.0;
+const MOC_TILE_NS: f64 = 9.0;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 1318.0;
+const MOC_BOX_NS: f64 = 1159.0;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
