@@ -23,7 +23,7 @@ mod avx2;
 mod lanes;
 mod setup;
 
-use avx2::Avx2;
+pub(crate) use avx2::Avx2;
 use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
 use setup::{LaneState, SETUP_LANES};
 
@@ -395,7 +395,7 @@ impl ScreenTriangle {
 
 /// Subtile rows `first..first + groups.len() * 8 / cols` of a buffer, which a
 /// thread rasterizes on its own.
-struct Band<'a> {
+pub(crate) struct Band<'a> {
     groups: &'a mut [Group],
     first: u32,
     /// One past the band's last subtile row.
