@@ -143,6 +143,9 @@ pub struct CpuCullingWork {
     pub tiles: u64,
     /// Boxes tested against the buffer.
     pub boxes: u64,
+    /// Subtiles (8x4 pixels) those box tests read: a test's time beyond its
+    /// fixed part follows them (`occlude_moc::MaskedBuffer::test_aabb_counted`).
+    pub subtiles_read: u64,
 }
 
 impl std::ops::AddAssign for CpuCullingWork {
@@ -150,6 +153,7 @@ impl std::ops::AddAssign for CpuCullingWork {
         self.triangles += other.triangles;
         self.tiles += other.tiles;
         self.boxes += other.boxes;
+        self.subtiles_read += other.subtiles_read;
     }
 }
 

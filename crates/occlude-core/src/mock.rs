@@ -479,7 +479,7 @@ pub fn assert_forwards_every_call<D: Backend>(wrap: impl FnOnce(MockBackend) -> 
     decorator.result(query);
     decorator.traverse(1);
     decorator.resolution();
-    decorator.cpu_culling(CpuCullingWork { triangles: 1, tiles: 1, boxes: 1 });
+    decorator.cpu_culling(CpuCullingWork { triangles: 1, tiles: 1, boxes: 1, subtiles_read: 1 });
     decorator.end_frame();
     decorator.failure();
     if let Err(e) = decorator.gpu_culling() {

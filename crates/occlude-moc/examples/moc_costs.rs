@@ -1,9 +1,10 @@
 //! Measures the masked buffer's CPU costs that the soft backend's simulated
 //! clock charges for `moc` (`cpu_moc_triangle_ns`, `cpu_moc_tile_ns`,
-//! `cpu_moc_box_ns` in docs/gpu-models.md): occluder triangles of several
-//! sizes are rendered and the time per call is fitted as
-//! `a * triangles + b * tiles` by least squares; boxes of several sizes are
-//! tested against a filled buffer and the mean time per box is printed.
+//! `cpu_moc_box_ns`, `cpu_moc_subtile_read_ns` in docs/gpu-models.md):
+//! occluder triangles of several sizes are rendered and the time per call is
+//! fitted as `a * triangles + b * tiles` by least squares; boxes of several
+//! sizes and depths are tested against a filled buffer and the time per batch
+//! is fitted as `a * boxes + b * subtiles read` the same way.
 //!
 //! `cargo run --release -p occlude-moc --example moc_costs`
 
@@ -58,6 +59,21 @@ fn per_call_ns(runs: usize, mut f: impl FnMut()) -> f64 {
     (0..runs).map(|_| batch(calls) / calls as f64).fold(f64::INFINITY, f64::min)
 }
 
+/// Least squares for `y = a * u + b * v` over rows `(u, v, y)` (normal
+/// equations).
+fn fit(rows: &[(f64, f64, f64)]) -> (f64, f64) {
+    let (mut uu, mut uv, mut vv, mut uy, mut vy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(u, v, y) in rows {
+        uu += u * u;
+        uv += u * v;
+        vv += v * v;
+        uy += u * y;
+        vy += v * y;
+    }
+    let det = uu * vv - uv * uv;
+    ((uy * vv - vy * uv) / det, (vy * uu - uy * uv) / det)
+}
+
 fn main() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let mut buffer = MaskedBuffer::new(WIDTH, HEIGHT).unwrap();
@@ -82,26 +98,16 @@ fn main() {
         );
         rows.push((work.triangles as f64, work.tiles as f64, ns));
     }
-    // Least squares for ns = a * triangles + b * tiles (normal equations).
-    let (mut tt, mut tl, mut ll, mut ty, mut ly) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(t, l, y) in &rows {
-        tt += t * t;
-        tl += t * l;
-        ll += l * l;
-        ty += t * y;
-        ly += l * y;
-    }
-    let det = tt * ll - tl * tl;
-    let a = (ty * ll - ly * tl) / det;
-    let b = (ly * tt - ty * tl) / det;
+    let (a, b) = fit(&rows);
     println!("fit: {a:.1} ns per triangle + {b:.1} ns per 32x8 tile");
 
     // Boxes against a buffer full of mid-sized occluders at mid depth.
     let (positions, indices) = triangles(20_000, 50.0, &mut rng);
     buffer.clear();
     buffer.render_triangles(&positions, &indices, Mat4::IDENTITY, CullMode::Back);
-    println!("box px  ns/box (hidden)  ns/box (in front)");
-    let mut all = Vec::new();
+    // Rows of (boxes, subtiles read, ns) per batch of boxes.
+    let mut rows = Vec::new();
+    println!("box px  depth  reads/box  ns/box");
     for size in [4.0, 16.0, 64.0, 256.0] {
         let (dx, dy) = (2.0 * size / WIDTH as f32, 2.0 * size / HEIGHT as f32);
         let boxes: Vec<(Vec3, Vec3)> = (0..2000)
@@ -110,21 +116,22 @@ fn main() {
                 (Vec3::new(x, y, 0.0), Vec3::new(x + dx, y + dy, 0.0))
             })
             .collect();
-        let mut per_depth = [0.0; 2];
-        for (k, z) in [0.95f32, 0.05].into_iter().enumerate() {
+        // Behind every occluder, among them, and in front of them.
+        for z in [0.95f32, 0.5, 0.05] {
+            let test = |lo: &Vec3, hi: &Vec3| {
+                buffer.test_aabb_counted(Vec3::new(lo.x, lo.y, z), Vec3::new(hi.x, hi.y, z + 0.01), Mat4::IDENTITY)
+            };
+            let reads: u64 = boxes.iter().map(|(lo, hi)| test(lo, hi).1).sum();
             let ns = per_call_ns(5, || {
                 for (lo, hi) in &boxes {
-                    std::hint::black_box(buffer.test_aabb(
-                        Vec3::new(lo.x, lo.y, z),
-                        Vec3::new(hi.x, hi.y, z + 0.01),
-                        Mat4::IDENTITY,
-                    ));
+                    std::hint::black_box(test(lo, hi));
                 }
             });
-            per_depth[k] = ns / boxes.len() as f64;
-            all.push(per_depth[k]);
+            let n = boxes.len() as f64;
+            println!("{size:6}  {z:5}  {:9.1}  {:6.1}", reads as f64 / n, ns / n);
+            rows.push((n, reads as f64, ns));
         }
-        println!("{size:6}  {:15.1}  {:17.1}", per_depth[0], per_depth[1]);
     }
-    println!("mean over these boxes: {:.1} ns per box", all.iter().sum::<f64>() / all.len() as f64);
+    let (a, b) = fit(&rows);
+    println!("fit: {a:.1} ns per box + {b:.2} ns per subtile read");
 }

@@ -99,10 +99,14 @@ pub struct GpuModel {
     /// overlaps in the masked buffer (coverage masks and merges), ns.
     #[serde(default = "MocCosts::tile_ns")]
     pub cpu_moc_tile_ns: f64,
-    /// CPU time to test one box against the masked buffer (corners,
-    /// projection, the subtiles of its rectangle), ns.
+    /// CPU time to test one box against the masked buffer beyond the
+    /// subtiles it reads (corners, projection, the screen rectangle), ns.
     #[serde(default = "MocCosts::box_ns")]
     pub cpu_moc_box_ns: f64,
+    /// CPU time per subtile (8x4 pixels) a box test reads from the masked
+    /// buffer (compared a group of eight at a time), ns.
+    #[serde(default = "MocCosts::subtile_read_ns")]
+    pub cpu_moc_subtile_read_ns: f64,
 }
 
 /// The masked occlusion buffer's CPU costs, the same in every preset (the
@@ -121,6 +125,9 @@ impl MocCosts {
     fn box_ns() -> f64 {
         MOC_BOX_NS
     }
+    fn subtile_read_ns() -> f64 {
+        MOC_SUBTILE_READ_NS
+    }
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
@@ -128,7 +135,9 @@ const MOC_TRIANGLE_NS: f64 = 122.0;
 /// See [`GpuModel::cpu_moc_tile_ns`].
 const MOC_TILE_NS: f64 = 9.0;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 1159.0;
+const MOC_BOX_NS: f64 = 59.5;
+/// See [`GpuModel::cpu_moc_subtile_read_ns`].
+const MOC_SUBTILE_READ_NS: f64 = 0.24;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
@@ -193,6 +202,7 @@ impl GpuModel {
             cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
             cpu_moc_tile_ns: MOC_TILE_NS,
             cpu_moc_box_ns: MOC_BOX_NS,
+            cpu_moc_subtile_read_ns: MOC_SUBTILE_READ_NS,
         }
     }
 
@@ -230,6 +240,7 @@ impl GpuModel {
             cpu_moc_triangle_ns: MOC_TRIANGLE_NS,
             cpu_moc_tile_ns: MOC_TILE_NS,
             cpu_moc_box_ns: MOC_BOX_NS,
+            cpu_moc_subtile_read_ns: MOC_SUBTILE_READ_NS,
         }
     }
 
@@ -352,6 +363,7 @@ impl GpuModel {
             ("cpu_moc_triangle_ns", self.cpu_moc_triangle_ns),
             ("cpu_moc_tile_ns", self.cpu_moc_tile_ns),
             ("cpu_moc_box_ns", self.cpu_moc_box_ns),
+            ("cpu_moc_subtile_read_ns", self.cpu_moc_subtile_read_ns),
         ];
         if let Some((name, v)) = costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
             return Err(format!("{name} = {v}: costs must be finite and >= 0"));
@@ -437,6 +449,25 @@ mod tests {
             assert_eq!(preset.hib_batch_gpu_us(), preset.gpu_draw_call_us + preset.gpu_dispatch_us, "{}", preset.name);
         }
         assert!(GpuModel::from_toml("gpu_hib_batch_us = -1.0").unwrap_err().contains("gpu_hib_batch_us"));
+    }
+
+    /// A model file without `cpu_moc_subtile_read_ns` (older than it) loads
+    /// with the preset's per-read cost; one with it, its value; a negative
+    /// one is refused by name.
+    #[test]
+    fn the_box_tests_per_read_cost_loads_defaults_and_validates() {
+        let old = GpuModel::from_toml("preset = \"gpu-2004\"\ncpu_moc_box_ns = 500.0").unwrap();
+        assert_eq!((old.cpu_moc_box_ns, old.cpu_moc_subtile_read_ns), (500.0, MOC_SUBTILE_READ_NS));
+        let new = GpuModel::from_toml("cpu_moc_subtile_read_ns = 2.5").unwrap();
+        assert_eq!(new.cpu_moc_subtile_read_ns, 2.5);
+        assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new);
+        // A whole model written before the field deserializes with the default.
+        let mut table = toml::Table::try_from(GpuModel::modern()).unwrap();
+        table.remove("cpu_moc_subtile_read_ns");
+        let model: GpuModel = table.try_into().unwrap();
+        assert_eq!(model.cpu_moc_subtile_read_ns, MOC_SUBTILE_READ_NS);
+        let err = GpuModel::from_toml("cpu_moc_subtile_read_ns = -1.0").unwrap_err();
+        assert!(err.contains("cpu_moc_subtile_read_ns"), "{err}");
     }
 
     #[test]

@@ -321,7 +321,7 @@ fn render_occluders(
                 buffer.render_triangles(&mesh.positions, &mesh.indices, to_clip, CullMode::Back)
             }
         };
-        work += CpuCullingWork { triangles: done.triangles, tiles: done.tiles, boxes: 0 };
+        work += CpuCullingWork { triangles: done.triangles, tiles: done.tiles, ..CpuCullingWork::default() };
     }
     (work, proxied)
 }
@@ -332,9 +332,6 @@ fn charge(total: &mut CpuCullingWork, backend: &mut dyn Backend, work: CpuCullin
     backend.cpu_culling(work);
     *total += work;
 }
-
-/// The work of testing one box against the buffer.
-const ONE_BOX: CpuCullingWork = CpuCullingWork { triangles: 0, tiles: 0, boxes: 1 };
 
 /// `view_projection` with clip-space depth pulled towards the eye by
 /// [`QUERY_DEPTH_BIAS`] (`z - bias * w`), as query boxes are drawn.
@@ -384,8 +381,8 @@ impl CullingMethod for MaskedOcclusion {
         let mut candidates = Vec::new();
         while let Some(node) = queue.pop() {
             backend.traverse(1);
-            let visible = box_may_be_visible(buffer, ctx, box_projection, h.bounds(node));
-            charge(&mut self.work, backend, ONE_BOX);
+            let (visible, work) = test_box(buffer, ctx, box_projection, h.bounds(node));
+            charge(&mut self.work, backend, work);
             if !visible {
                 continue;
             }
@@ -397,12 +394,14 @@ impl CullingMethod for MaskedOcclusion {
                     if ctx.was_drawn(i) {
                         continue;
                     }
-                    if alone || box_may_be_visible(buffer, ctx, box_projection, &ctx.scene.instances[i as usize].bounds)
-                    {
+                    let visible = alone || {
+                        let (visible, work) =
+                            test_box(buffer, ctx, box_projection, &ctx.scene.instances[i as usize].bounds);
+                        charge(&mut self.work, backend, work);
+                        visible
+                    };
+                    if visible {
                         candidates.push(i);
-                    }
-                    if !alone {
-                        charge(&mut self.work, backend, ONE_BOX);
                     }
                 }
                 let drawn = ctx.draw_instances(backend, &candidates);
@@ -425,6 +424,7 @@ impl CullingMethod for MaskedOcclusion {
             ("occluder_triangles", self.work.triangles as f64),
             ("occluder_tiles", self.work.tiles as f64),
             ("tested_boxes", self.work.boxes as f64),
+            ("box_subtiles_read", self.work.subtiles_read as f64),
             ("proxy_occluders", self.proxied as f64),
             ("meshes_with_proxy", self.proxies.meshes_with_box() as f64),
         ]
@@ -433,10 +433,22 @@ impl CullingMethod for MaskedOcclusion {
 
 /// Whether something inside `bounds` may have a visible pixel: its padded box
 /// touches the near region or the buffer does not answer occluded for it (a
-/// box wholly outside a frustum plane counts as hidden).
-fn box_may_be_visible(buffer: &MaskedBuffer, ctx: &FrameContext<'_>, box_projection: Mat4, bounds: &Aabb) -> bool {
+/// box wholly outside a frustum plane counts as hidden); and the work of that
+/// test (one box, and the subtiles the buffer read for it).
+fn test_box(
+    buffer: &MaskedBuffer,
+    ctx: &FrameContext<'_>,
+    box_projection: Mat4,
+    bounds: &Aabb,
+) -> (bool, CpuCullingWork) {
     let b = padded(bounds);
-    ctx.camera.box_touches_near_region(&b) || buffer.test_aabb(b.min, b.max, box_projection) == Visibility::Visible
+    let (visible, subtiles_read) = if ctx.camera.box_touches_near_region(&b) {
+        (true, 0)
+    } else {
+        let (v, reads) = buffer.test_aabb_counted(b.min, b.max, box_projection);
+        (v == Visibility::Visible, reads)
+    };
+    (visible, CpuCullingWork { boxes: 1, subtiles_read, ..CpuCullingWork::default() })
 }
 
 #[cfg(test)]

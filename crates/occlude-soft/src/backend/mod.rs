@@ -400,7 +400,8 @@ impl Backend for SoftBackend<'_> {
         let m = &self.model;
         let ns = work.triangles as f64 * m.cpu_moc_triangle_ns
             + work.tiles as f64 * m.cpu_moc_tile_ns
-            + work.boxes as f64 * m.cpu_moc_box_ns;
+            + work.boxes as f64 * m.cpu_moc_box_ns
+            + work.subtiles_read as f64 * m.cpu_moc_subtile_read_ns;
         self.clock.cpu_work(ns * 1e-3);
     }
 
