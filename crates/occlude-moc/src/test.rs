@@ -203,16 +203,17 @@ mod tests {
     }
 
     /// A buffer of `width` x `height` whose subtiles hold the given states
-    /// (cycled), each with the working layer no farther than the reference,
-    /// as renders keep them.
+    /// (mask, working, reference; cycled). Renders keep the working layer no
+    /// farther than the reference; these need not, so that every term of the
+    /// bound is tested.
     fn filled(width: u32, height: u32, states: &[(u32, f32, f32)]) -> MaskedBuffer {
         let mut b = MaskedBuffer::new(width, height).unwrap();
         let mut k = 0;
         for sy in 0..b.rows {
             for sx in 0..b.cols {
-                let (mask, d0, d1) = states[k % states.len()];
+                let (mask, working, reference) = states[k % states.len()];
                 k += 1;
-                let s = Subtile { mask, working: d0.min(d1), reference: d0.max(d1) };
+                let s = Subtile { mask, working, reference };
                 b.groups[(sy * b.cols / 8 + sx / 8) as usize].set((sx % 8) as usize, s);
             }
         }
@@ -261,7 +262,7 @@ mod tests {
     }
 
     fn state() -> impl Strategy<Value = (u32, f32, f32)> {
-        let depth = prop_oneof![Just(0.0f32), Just(0.5), Just(1.0), 0.0f32..1.0];
+        let depth = prop_oneof![Just(0.0f32), Just(0.5), Just(1.0), Just(f32::NAN), 0.0f32..1.0];
         (prop_oneof![Just(0u32), Just(u32::MAX >> 1), any::<u32>()], depth.clone(), depth)
     }
 
