@@ -458,17 +458,27 @@ mod tests {
 
     /// Behind a drawn wall, a cube is culled on the CPU although the mock
     /// would answer any query about it "visible": no query is issued, and
-    /// the buffer's work is reported to the backend. Without occluders
-    /// (`last` on the first frame) nothing is culled.
+    /// the buffer's work is reported to the backend, the subtiles the box
+    /// tests read included (the cube's hidden box reads its whole rectangle).
+    /// Without occluders (`last` on the first frame) nothing is culled.
     #[test]
     fn culls_what_the_drawn_wall_hides_without_a_query() {
         let rig = Rig::wall();
         for options in [&[][..], &["moc.merge=quick"]] {
-            let calls = &rig.run(&mut method("moc", options), &mut rig.mock(), 1)[0];
+            let mut moc = method("moc", options);
+            let calls = &rig.run(&mut moc, &mut rig.mock(), 1)[0];
             assert_draws_exactly(calls, &[WALL, SIDE]);
             assert!(queries(calls).is_empty(), "{options:?}");
-            let work: u64 = calls.iter().map(|c| if let Call::CpuCulling(w) = c { w.triangles } else { 0 }).sum();
-            assert!(work >= 12, "{options:?}: the wall's triangles were not reported ({work})");
+            let mut work = crate::backend::CpuCullingWork::default();
+            for c in calls {
+                if let Call::CpuCulling(w) = c {
+                    work += *w;
+                }
+            }
+            assert!(work.triangles >= 12, "{options:?}: the wall's triangles were not reported ({work:?})");
+            assert!(work.subtiles_read >= 1, "{options:?}: no subtile read was reported ({work:?})");
+            let counter = moc.method.counters().iter().find(|c| c.0 == "box_subtiles_read").map(|c| c.1);
+            assert_eq!(counter, Some(work.subtiles_read as f64), "{options:?}");
         }
         let first = &rig.run(&mut method("moc", &["moc.occluders=last"]), &mut rig.mock(), 1)[0];
         assert_draws_exactly(first, &[WALL, BEHIND, SIDE]);
