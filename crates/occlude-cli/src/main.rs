@@ -62,9 +62,10 @@ enum Command {
 #[derive(clap::Args)]
 struct SceneArgs {
     /// Scene: teapots, city, plant, figures, rooms, downtown or swarm, or a model file (.gltf, .glb, .obj;
-    /// y-up, metres).
-    #[arg(long, default_value = "city")]
-    scene: String,
+    /// y-up, metres) [default: city]. With bench --paper: some of the paper's scenes, comma-separated
+    /// [default: all of them].
+    #[arg(long)]
+    scene: Option<String>,
     /// Split imported meshes of more triangles than this into several objects
     /// (0: never).
     #[arg(long, default_value_t = ImportOptions::DEFAULT_SPLIT_TRIANGLES)]
@@ -96,12 +97,17 @@ struct SceneArgs {
 
 impl SceneArgs {
     /// A configuration with these settings checked and every other one at
-    /// its default; a bad value is the user's (exit code 2).
-    fn config(&self) -> Result<BenchConfig, Failure> {
+    /// its default; a bad value is the user's (exit code 2). `--scene` is
+    /// not read with `--paper` (`paper_scenes`).
+    fn config(&self, paper: bool) -> Result<BenchConfig, Failure> {
         let usage = Failure::Usage;
-        SceneSource::resolve(&self.scene).map_err(|e| usage(e.into()))?;
+        let scene = match &self.scene {
+            Some(scene) if !paper => scene.clone(),
+            _ => BenchConfig::default().scene,
+        };
+        SceneSource::resolve(&scene).map_err(|e| usage(e.into()))?;
         Ok(BenchConfig {
-            scene: self.scene.clone(),
+            scene,
             size: self.size.as_deref().unwrap_or("small").parse::<Size>().map_err(|e| usage(e.into()))?,
             seed: self.seed,
             hierarchy: self.hierarchy,
@@ -316,7 +322,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
         parallel_lanes: !args.serial_lanes,
-        ..args.scene.config()?
+        ..args.scene.config(args.paper.is_some())?
     };
     let config = match (&args.paper, &args.scene.size) {
         (Some(_), None) => BenchConfig { size: bench::paper::DEFAULT_SIZE, ..config },
@@ -333,6 +339,9 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
                 bench::paper::PAPERS.join(", ")
             )));
         }
+        if args.scene.scene.is_some() {
+            bench::paper::check_scenes(paper, &paper_scenes(args)).map_err(usage)?;
+        }
         let per_frame = [(&args.plot, "--plot"), (&args.plot_queries, "--plot-queries"), (&args.csv, "--csv")];
         for (_, option) in per_frame.iter().filter(|(path, _)| path.is_some()) {
             bench::paper::check_walkthroughs(paper, option).map_err(usage)?;
@@ -345,6 +354,12 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         return Err(usage(anyhow::anyhow!("--threads must be at least 1")));
     }
     Ok(config)
+}
+
+/// The scenes `--scene` picks from a paper's (empty: all of them).
+fn paper_scenes(args: &BenchArgs) -> Vec<String> {
+    let list = args.scene.scene.as_deref().unwrap_or_default();
+    list.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect()
 }
 
 /// `occlude bench`, on a pool of `--threads` threads (default: rayon's), whose
@@ -360,7 +375,7 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
 fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     let progress = occlude_cli::progress::bar(0, "frames");
     if let Some(paper) = &args.paper {
-        let result = bench::paper::run(paper, config, &progress)?;
+        let result = bench::paper::run(paper, config, &paper_scenes(args), &progress)?;
         progress.finish_and_clear();
         print!("{}", result.text);
         if let Some(path) = &args.json {
@@ -472,7 +487,7 @@ fn view(args: &ViewArgs) -> Result<(), Failure> {
             frames: args.frames,
             resolution: args.resolution,
             backend: BackendKind::Wgpu,
-            ..args.scene.config()?
+            ..args.scene.config(false)?
         },
         method: args.method.trim().to_string(),
         play: args.play,

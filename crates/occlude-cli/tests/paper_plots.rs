@@ -1,8 +1,8 @@
 //! `occlude bench --paper P --plot PATH` as a user runs it: one plot per
 //! scene, named after PATH, one line per compared method, titled with the
 //! paper's figure; `--csv` beside it writes every run's frames; a bad
-//! extension or a paper without a walkthrough is a usage error before
-//! anything runs.
+//! extension, a paper without a walkthrough or a scene the paper does not
+//! have (`--scene`) is a usage error before anything runs.
 
 use std::path::Path;
 use std::process::Command;
@@ -108,6 +108,25 @@ fn a_bad_plot_is_refused_before_anything_runs() {
         (&["bench", "--paper", "chcpp", "--plot-queries", "q.gif"], "q.gif"),
         (&["bench", "--paper", "gvq", "--plot", "gvq.svg"], "--paper gvq"),
         (&["bench", "--paper", "gvq", "--csv", "gvq.csv"], "--csv cannot be combined with --paper gvq"),
+    ] {
+        let out = occlude(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(out.stdout.is_empty(), "{args:?}: nothing should run");
+    }
+}
+
+#[test]
+fn a_bad_scene_choice_is_refused_before_anything_runs() {
+    for (args, needle) in [
+        (
+            &["bench", "--paper", "chc", "--scene", "city,moon"][..],
+            "--paper chc has no scene 'moon': its scenes are teapots, city, plant",
+        ),
+        (&["bench", "--paper", "om", "--scene", "teapots"], "--paper om has no scene 'teapots'"),
+        (&["bench", "--paper", "chcpp", "--scene", ","], "--scene names no scene"),
+        (&["bench", "--paper", "gvq", "--scene", "city"], "--scene cannot be combined with --paper gvq"),
     ] {
         let out = occlude(args);
         let stderr = String::from_utf8_lossy(&out.stderr);

@@ -418,37 +418,35 @@ mod tests {
         }
     }
 
-    /// A model file without `cpu_hib_query_us` (older than it) loads, and
-    /// records a batched query at `cpu_query_us`; one with it, at its value.
+    /// The item buffer's optional costs: a model file without one (older
+    /// than it) loads with none and charges what the cost stood in for
+    /// before (a batched query at `cpu_query_us`; a batch, a draw call and a
+    /// dispatch); one with it, its value; the presets have none.
     #[test]
-    fn the_item_buffers_query_cost_defaults_to_a_hardware_querys() {
-        let old = GpuModel::from_toml("preset = \"gpu-2004\"\ncpu_query_us = 3.0").unwrap();
-        assert_eq!((old.cpu_hib_query_us, old.hib_query_us()), (None, 3.0));
-        assert!(!toml::to_string(&old).unwrap().contains("cpu_hib_query_us"));
-        let new = GpuModel::from_toml("cpu_query_us = 3.0\ncpu_hib_query_us = 0.25").unwrap();
-        assert_eq!((new.cpu_hib_query_us, new.hib_query_us()), (Some(0.25), 0.25));
-        assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new);
-        for preset in [GpuModel::modern(), GpuModel::gpu_2004()] {
-            assert_eq!(preset.hib_query_us(), preset.cpu_query_us, "{}", preset.name);
+    fn the_item_buffers_optional_costs_default_to_what_they_replace() {
+        type Field = fn(&GpuModel) -> Option<f64>;
+        type Charge = fn(&GpuModel) -> f64;
+        let costs: [(&str, Field, Charge, Charge); 2] = [
+            ("cpu_hib_query_us", |m| m.cpu_hib_query_us, GpuModel::hib_query_us, |m| m.cpu_query_us),
+            (
+                "gpu_hib_batch_us",
+                |m| m.gpu_hib_batch_us,
+                GpuModel::hib_batch_gpu_us,
+                |m| m.gpu_draw_call_us + m.gpu_dispatch_us,
+            ),
+        ];
+        for (name, field, charge, fallback) in costs {
+            let old = GpuModel::from_toml("preset = \"gpu-2004\"\ncpu_query_us = 3.0\ngpu_dispatch_us = 7.0").unwrap();
+            assert_eq!((field(&old), charge(&old)), (None, fallback(&old)), "{name}");
+            assert!(!toml::to_string(&old).unwrap().contains(name), "{name}");
+            let new = GpuModel::from_toml(&format!("{name} = 0.25")).unwrap();
+            assert_eq!((field(&new), charge(&new)), (Some(0.25), 0.25), "{name}");
+            assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new, "{name}");
+            for preset in [GpuModel::modern(), GpuModel::gpu_2004()] {
+                assert_eq!(charge(&preset), fallback(&preset), "{name}: {}", preset.name);
+            }
+            assert!(GpuModel::from_toml(&format!("{name} = -1.0")).unwrap_err().contains(name));
         }
-        assert!(GpuModel::from_toml("cpu_hib_query_us = -1.0").unwrap_err().contains("cpu_hib_query_us"));
-    }
-
-    /// A model file without `gpu_hib_batch_us` (older than it) loads with
-    /// none and charges a batch a draw call and a dispatch; one with it,
-    /// its value.
-    #[test]
-    fn the_item_buffers_batch_cost_defaults_to_a_draw_and_a_dispatch() {
-        let old = GpuModel::from_toml("preset = \"gpu-2004\"\ngpu_dispatch_us = 7.0").unwrap();
-        assert_eq!((old.gpu_hib_batch_us, old.hib_batch_gpu_us()), (None, 10.0));
-        assert!(!toml::to_string(&old).unwrap().contains("gpu_hib_batch_us"));
-        let new = GpuModel::from_toml("gpu_hib_batch_us = 22.0").unwrap();
-        assert_eq!((new.gpu_hib_batch_us, new.hib_batch_gpu_us()), (Some(22.0), 22.0));
-        assert_eq!(GpuModel::from_toml(&toml::to_string(&new).unwrap()).unwrap(), new);
-        for preset in [GpuModel::modern(), GpuModel::gpu_2004()] {
-            assert_eq!(preset.hib_batch_gpu_us(), preset.gpu_draw_call_us + preset.gpu_dispatch_us, "{}", preset.name);
-        }
-        assert!(GpuModel::from_toml("gpu_hib_batch_us = -1.0").unwrap_err().contains("gpu_hib_batch_us"));
     }
 
     /// A model file without `cpu_moc_subtile_read_ns` (older than it) loads

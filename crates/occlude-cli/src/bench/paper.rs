@@ -26,6 +26,11 @@
 //! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
 //!   to 3, in [`super::gvq`], [`super::gvq_shadows`] and
 //!   [`super::gvq_parts`].
+//!
+//! A run can be restricted to some of a paper's scenes (`--scene city,plant`,
+//! [`check_scenes`]): a whole paper-size run of `chcpp` takes hours on two
+//! cores, and a simulated table's rows do not depend on which other scenes
+//! ran, so scenes run apart give the same rows as one whole run.
 
 use super::config::BenchConfig;
 use super::ideal::IDEAL;
@@ -186,6 +191,40 @@ pub fn check_walkthroughs(paper: &str, option: &str) -> Result<()> {
     Ok(())
 }
 
+/// The scenes `paper`'s tables run, in the paper's order; `None` for
+/// `gvq`, whose tables generate scenes of their own.
+pub fn paper_scenes(paper: &str) -> Option<Vec<&'static str>> {
+    match paper {
+        "chc" => Some(CHC.scenes.to_vec()),
+        "chcpp" => Some(CHCPP.scenes.to_vec()),
+        "om" => Some(OM.scenes.to_vec()),
+        "ioc" => Some(IOC_SCENES.iter().map(|&(scene, _)| scene).collect()),
+        _ => None,
+    }
+}
+
+/// An error unless `only` names some of `paper`'s scenes and nothing else
+/// (and `paper` has scenes to choose from).
+pub fn check_scenes(paper: &str, only: &[String]) -> Result<()> {
+    let Some(scenes) = paper_scenes(paper) else {
+        anyhow::bail!("--scene cannot be combined with --paper {paper}: its tables generate their own scenes");
+    };
+    if only.is_empty() {
+        anyhow::bail!("--scene names no scene: --paper {paper}'s are {}", scenes.join(", "));
+    }
+    for scene in only {
+        if !scenes.contains(&scene.as_str()) {
+            anyhow::bail!("--paper {paper} has no scene '{scene}': its scenes are {}", scenes.join(", "));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `scene` is run when `only` lists the scenes to run (empty: all).
+fn chosen(only: &[String], scene: &str) -> bool {
+    only.is_empty() || only.iter().any(|s| s == scene)
+}
+
 /// The size `--paper` runs at unless told otherwise: the papers' scenes
 /// have millions of triangles.
 pub const DEFAULT_SIZE: Size = Size::Paper;
@@ -204,13 +243,17 @@ pub fn default_resolution(paper: &str) -> Option<(u32, u32)> {
 
 /// Runs the experiments of `paper` with the size, seed, frames and
 /// resolution of `base`; scenes, methods, hierarchy and GPU model are the
-/// paper's.
-pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
+/// paper's. `only` names the paper's scenes to run (empty: all of them; see
+/// [`check_scenes`]).
+pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
+    if !only.is_empty() {
+        check_scenes(paper, only)?;
+    }
     let experiment = match paper {
         "chc" => &CHC,
         "chcpp" => &CHCPP,
         "om" => &OM,
-        "ioc" => return run_ioc(base, progress),
+        "ioc" => return run_ioc(base, only, progress),
         "gvq" => {
             let (text, gvq) = super::gvq::run(base, progress)?;
             return Ok(PaperResult {
@@ -222,10 +265,10 @@ pub fn run(paper: &str, base: &BenchConfig, progress: &ProgressBar) -> Result<Pa
         }
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
     };
-    run_experiment(experiment, base, progress)
+    run_experiment(experiment, base, only, progress)
 }
 
-fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
+fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
     let published = published::table(e.paper, e.compared);
     let mut compared = Vec::new();
     let mut varied: Vec<Vec<Row>> = e.variant_tables.iter().map(|_| Vec::new()).collect();
@@ -238,7 +281,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, progress: &ProgressBar) ->
     }
     let mut reports = Vec::new();
     let mut compared_runs = Vec::new();
-    for &scene_name in e.scenes {
+    for &scene_name in e.scenes.iter().filter(|s| chosen(only, s)) {
         let config = BenchConfig {
             scene: scene_name.into(),
             methods: e.methods.iter().map(|m| m.to_string()).collect(),
@@ -309,7 +352,7 @@ const IOC_TABLE_1: [[(f64, f64); 2]; 3] =
     [[(0.41, 0.40), (0.61, 0.40)], [(3.47, 3.50), (0.78, 3.58)], [(7.96, 7.81), (1.05, 8.04)]];
 
 /// `--paper ioc` (module documentation).
-fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
+fn run_ioc(base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
     let times = match base.backend {
         super::config::BackendKind::Soft => format!("GPU model {}, times simulated", base.gpu_model.name),
         super::config::BackendKind::Wgpu => "times measured".to_string(),
@@ -323,7 +366,8 @@ fn run_ioc(base: &BenchConfig, progress: &ProgressBar) -> Result<PaperResult> {
          scene          method  frame ms  speedup vs vfc  rendered triangles  missing px\n",
     );
     let mut reports = Vec::new();
-    for (&(scene_name, label), published) in IOC_SCENES.iter().zip(IOC_TABLE_1) {
+    let scenes = IOC_SCENES.iter().zip(IOC_TABLE_1).filter(|((scene, _), _)| chosen(only, scene));
+    for (&(scene_name, label), published) in scenes {
         let config = BenchConfig {
             scene: scene_name.into(),
             methods: ["vfc", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
@@ -388,7 +432,7 @@ mod tests {
     #[test]
     fn the_chc_tables_set_every_row_beside_the_papers_and_write_its_json_shape() {
         let base = BenchConfig { frames: 4, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("chc", &base, &ProgressBar::hidden()).unwrap();
+        let result = run("chc", &base, &[], &ProgressBar::hidden()).unwrap();
         let [t1, t2] = &result.tables.tables[..] else { panic!("two tables: {:?}", result.tables.tables) };
         assert_eq!((t1.name.as_str(), t1.rows.len()), ("Table 1", 15), "3 scenes x vfc, sw, chc, ideal, opt");
         assert_eq!((t2.name.as_str(), t2.rows.len()), ("Table 2", 9), "3 scenes x the paper's 3 rows");
@@ -424,6 +468,13 @@ mod tests {
             assert!(t.ordering_agrees.flatten().is_some(), "{} has published figures to order", t.name);
             assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
         }
+        // A scene run apart gives the whole run's rows for it.
+        let plant = run("chc", &base, &["plant".into()], &ProgressBar::hidden()).unwrap();
+        assert_eq!((plant.tables.reports.len(), &plant.compared_runs[..]), (3, &[0][..]));
+        for (alone, whole) in plant.tables.tables.iter().zip(&result.tables.tables) {
+            let whole: Vec<&Row> = whole.rows.iter().filter(|r| r.scene == "plant").collect();
+            assert_eq!(format!("{:?}", alone.rows.iter().collect::<Vec<_>>()), format!("{whole:?}"), "{}", alone.name);
+        }
         assert!(result.text.contains("310.42") && result.text.contains("order of methods"), "{}", result.text);
 
         let v = serde_json::to_value(&result.tables).unwrap();
@@ -444,7 +495,7 @@ mod tests {
     #[test]
     fn the_chcpp_tables_compare_nohc_and_add_the_optimisations_one_at_a_time() {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("chcpp", &base, &ProgressBar::hidden()).unwrap();
+        let result = run("chcpp", &base, &[], &ProgressBar::hidden()).unwrap();
         let names: Vec<&str> = result.tables.tables.iter().map(|t| t.name.as_str()).collect();
         assert_eq!(names, ["methods compared", "ablation", "Figure 8"]);
         let [compared, ablation, figure8] = &result.tables.tables[..] else { unreachable!() };
@@ -478,7 +529,7 @@ mod tests {
     #[test]
     fn the_ioc_tables_set_every_scene_beside_the_posters_figures() {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("ioc", &base, &ProgressBar::hidden()).unwrap();
+        let result = run("ioc", &base, &[], &ProgressBar::hidden()).unwrap();
         assert_eq!(result.tables.reports.len(), 3);
         assert_eq!(result.compared_runs, [0, 1, 2]);
         for (report, (scene, label)) in result.tables.reports.iter().zip(IOC_SCENES) {
