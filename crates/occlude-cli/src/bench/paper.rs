@@ -191,15 +191,24 @@ pub fn check_walkthroughs(paper: &str, option: &str) -> Result<()> {
     Ok(())
 }
 
+/// The setting of `paper` if its tables are [`run_experiment`]'s (not
+/// `ioc`'s or `gvq`'s own).
+fn experiment(paper: &str) -> Option<&'static Experiment> {
+    match paper {
+        "chc" => Some(&CHC),
+        "chcpp" => Some(&CHCPP),
+        "om" => Some(&OM),
+        _ => None,
+    }
+}
+
 /// The scenes `paper`'s tables run, in the paper's order; `None` for
 /// `gvq`, whose tables generate scenes of their own.
 pub fn paper_scenes(paper: &str) -> Option<Vec<&'static str>> {
-    match paper {
-        "chc" => Some(CHC.scenes.to_vec()),
-        "chcpp" => Some(CHCPP.scenes.to_vec()),
-        "om" => Some(OM.scenes.to_vec()),
-        "ioc" => Some(IOC_SCENES.iter().map(|&(scene, _)| scene).collect()),
-        _ => None,
+    match experiment(paper) {
+        Some(e) => Some(e.scenes.to_vec()),
+        None if paper == "ioc" => Some(IOC_SCENES.iter().map(|&(scene, _)| scene).collect()),
+        None => None,
     }
 }
 
@@ -249,23 +258,22 @@ pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &Progress
     if !only.is_empty() {
         check_scenes(paper, only)?;
     }
-    let experiment = match paper {
-        "chc" => &CHC,
-        "chcpp" => &CHCPP,
-        "om" => &OM,
-        "ioc" => return run_ioc(base, only, progress),
+    if let Some(experiment) = experiment(paper) {
+        return run_experiment(experiment, base, only, progress);
+    }
+    match paper {
+        "ioc" => run_ioc(base, only, progress),
         "gvq" => {
             let (text, gvq) = super::gvq::run(base, progress)?;
-            return Ok(PaperResult {
+            Ok(PaperResult {
                 text,
                 tables: PaperTables { paper: "gvq".into(), ..PaperTables::default() },
                 gvq: Some(gvq),
                 compared_runs: Vec::new(),
-            });
+            })
         }
         _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
-    };
-    run_experiment(experiment, base, only, progress)
+    }
 }
 
 fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
