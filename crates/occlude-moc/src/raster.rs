@@ -429,10 +429,14 @@ impl Band<'_> {
         let (r0, r1) = tri.subtile_rows();
         let first = r0.max(self.first);
         let mut intercepts = lanes.first_intercepts(tri, (first * 4) as i32);
+        let height = self.height as i32;
         let row_spans = |y: i32, intercepts: &mut L::Intercepts| {
-            let mut spans = lanes.edge_spans(tri, y, intercepts);
+            let mut spans = lanes.edge_spans(tri, intercepts);
             if spans.exact != 0 {
                 exact_spans(tri, y, &mut spans);
+            }
+            if y + 4 > height {
+                below_screen(tri, y, height, &mut spans);
             }
             spans
         };
@@ -455,6 +459,17 @@ impl Band<'_> {
                 let step = GroupStep { tri, spans: &spans, sx, sy, outside };
                 lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
             }
+        }
+    }
+}
+
+/// Empties the rows from `y` of `spans` that lie below a screen `height`
+/// rows high (padding of the last subtile row, in the last one only).
+#[cold]
+fn below_screen(tri: &ScreenTriangle, y: i32, height: i32, spans: &mut Spans) {
+    for r in 0..4 {
+        if y + r as i32 >= height {
+            (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
         }
     }
 }

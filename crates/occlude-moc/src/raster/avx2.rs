@@ -80,9 +80,9 @@ impl Lanes for Avx2 {
     }
 
     #[inline(always)]
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut [__m256d; 3]) -> Spans {
+    fn edge_spans(self, tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spans {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { edge_spans(tri, y, intercepts) }
+        unsafe { edge_spans(tri, intercepts) }
     }
 
     #[inline(always)]
@@ -150,14 +150,10 @@ unsafe fn first_intercepts(tri: &ScreenTriangle, y: i32) -> [__m256d; 3] {
 /// (rare) the per-edge [`Spans::exact`] bits.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn edge_spans(tri: &ScreenTriangle, y: i32, intercepts: &mut [__m256d; 3]) -> Spans {
-    let rows = _mm_add_epi32(_mm_set1_epi32(y), _mm_setr_epi32(0, 1, 2, 3));
+unsafe fn edge_spans(tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spans {
     let (t_min, t_max) = (_mm256_set1_pd(tri.t_min), _mm256_set1_pd(tri.t_max));
     let one = _mm256_set1_pd(1.0);
-    let inside =
-        _mm_andnot_si128(_mm_cmpgt_epi32(_mm_set1_epi32(tri.y0), rows), _mm_cmpgt_epi32(_mm_set1_epi32(tri.y1), rows));
-    let (x0, x1) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
-    let (mut lo, mut hi) = (_mm_blendv_epi8(x1, x0, inside), _mm_blendv_epi8(x0, x1, inside));
+    let (mut lo, mut hi) = (_mm_set1_epi32(tri.x0), _mm_set1_epi32(tri.x1));
     // Per edge: the floor of its four intercepts, and which of them lie
     // farther than the band from a pixel boundary.
     let mut intercept = |i: usize| {
@@ -165,11 +161,11 @@ unsafe fn edge_spans(tri: &ScreenTriangle, y: i32, intercepts: &mut [__m256d; 3]
         let t = intercepts[i];
         intercepts[i] = _mm256_add_pd(t, _mm256_set1_pd(edge.slope * 4.0));
         // A NaN intercept becomes `t_max` (as in the portable clamp). On a
-        // row of the triangle that leaves the edge to the exact rule all the
+        // row of the screen that leaves the edge to the exact rule all the
         // same: an intercept there is NaN or infinite only where the slope, the
         // offset or their terms' sum bounded by `|slope| y_max + |offset|` is,
         // so the band ([`Edge::band`](super::Edge)) is infinite or NaN too,
-        // and no fraction exceeds it. Rows beyond the triangle stay empty.
+        // and no fraction exceeds it.
         let t = _mm256_max_pd(_mm256_min_pd(t, t_max), t_min);
         let k = _mm256_floor_pd(t);
         let fraction = _mm256_sub_pd(t, k);

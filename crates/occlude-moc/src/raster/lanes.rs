@@ -26,6 +26,17 @@
 //! edges are applied does not matter. Masks are therefore exactly the per-pixel
 //! definition.
 //!
+//! # Rows outside the triangle
+//! A subtile row may hold pixel rows of the screen above or below the
+//! triangle's rows `y0..y1` (the pixel centres within its vertices' `y`
+//! range). They are not emptied by a test of their own: a pixel centre there
+//! lies outside the closed triangle, so one of its edge functions is negative
+//! there (exactly, in `f64`), and the edges' half-lines, decided exactly as
+//! above, leave the row empty. The intercepts' bands hold on every row of the
+//! screen, inside the triangle or not (the band bounds the intercept over
+//! `0..y_max`). Only the padding rows below the screen, where the band is not
+//! proven and pixels are not the triangle's, are emptied by the traversal.
+//!
 //! # Stepped intercepts
 //! An edge's intercepts `t = slope py + offset - 0.5` are evaluated so on the
 //! first subtile row a triangle draws ([`first_intercepts`]), then carried to
@@ -89,17 +100,14 @@ pub(crate) fn first_intercepts(tri: &ScreenTriangle, y: i32) -> Intercepts {
     })
 }
 
-/// Portable [`Spans`] of the four pixel rows from `y` of `tri`, each row
-/// starting as the triangle's window `x0..x1` (rows outside `y0..y1` empty:
-/// `x1..x0`), from the edges' `intercepts` on these rows, which it then steps
-/// to the next subtile row's.
-pub(crate) fn edge_spans(tri: &ScreenTriangle, y: i32, intercepts: &mut Intercepts) -> Spans {
-    let mut spans = Spans { lo: [tri.x1; 4], hi: [tri.x0; 4], exact: 0 };
-    for r in 0..4 {
-        if (tri.y0..tri.y1).contains(&(y + r as i32)) {
-            (spans.lo[r], spans.hi[r]) = (tri.x0, tri.x1);
-        }
-    }
+/// Portable [`Spans`] of four pixel rows of `tri`, each row starting as the
+/// triangle's window `x0..x1`, from the edges' `intercepts` on these rows,
+/// which it then steps to the next subtile row's. A row of the screen outside
+/// the triangle's rows `y0..y1` needs no test of its own: no pixel centre of
+/// it is inside the triangle, so its edges leave it empty ("Rows outside the
+/// triangle" above); rows below the screen are the caller's.
+pub(crate) fn edge_spans(tri: &ScreenTriangle, intercepts: &mut Intercepts) -> Spans {
+    let mut spans = Spans { lo: [tri.x0; 4], hi: [tri.x1; 4], exact: 0 };
     let rows = *intercepts;
     for (t, edge) in intercepts.iter_mut().zip(&tri.edges) {
         *t = t.map(|t| t + edge.slope * 4.0);
@@ -189,9 +197,9 @@ pub(crate) trait Lanes: Copy {
     /// The [`Intercepts`] of the four pixel rows from `y`
     /// ([`first_intercepts`]).
     fn first_intercepts(self, tri: &ScreenTriangle, y: i32) -> Self::Intercepts;
-    /// The [`Spans`] of the four pixel rows from `y`, whose `intercepts` it
-    /// steps to the next subtile row's ([`edge_spans`]).
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut Self::Intercepts) -> Spans;
+    /// The [`Spans`] of the four pixel rows of `intercepts`, which it steps
+    /// to the next subtile row's ([`edge_spans`]).
+    fn edge_spans(self, tri: &ScreenTriangle, intercepts: &mut Self::Intercepts) -> Spans;
     /// [`Spans::reach`].
     fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
         spans.reach()
@@ -214,8 +222,8 @@ impl Lanes for Portable {
     }
 
     #[inline]
-    fn edge_spans(self, tri: &ScreenTriangle, y: i32, intercepts: &mut Intercepts) -> Spans {
-        edge_spans(tri, y, intercepts)
+    fn edge_spans(self, tri: &ScreenTriangle, intercepts: &mut Intercepts) -> Spans {
+        edge_spans(tri, intercepts)
     }
 
     #[inline]
@@ -331,9 +339,8 @@ mod tests {
             let (mut stepped, mut avx2_stepped) =
                 (first_intercepts(&tri, r0 as i32 * 4), avx2.first_intercepts(&tri, r0 as i32 * 4));
             for sy in r0..r1 {
-                let y = (sy * 4) as i32;
-                let spans = edge_spans(&tri, y, &mut stepped);
-                assert_eq!(avx2.edge_spans(&tri, y, &mut avx2_stepped), spans, "{:?} row {sy}", tri.edges);
+                let spans = edge_spans(&tri, &mut stepped);
+                assert_eq!(avx2.edge_spans(&tri, &mut avx2_stepped), spans, "{:?} row {sy}", tri.edges);
                 for sx in (tri.x0 / 8) as u32..=((tri.x1 - 1) / 8) as u32 {
                     let (c, d) = subtile_lanes(&tri, &spans, sx, sy);
                     let (ac, ad) = avx2.subtile_lanes(&tri, &spans, sx, sy);
@@ -390,7 +397,7 @@ mod tests {
                         rows += 1;
                     }
                 }
-                let _ = edge_spans(&tri, y, &mut stepped);
+                let _ = edge_spans(&tri, &mut stepped);
             }
         }
         // Stepping does round (the test is not vacuous), well within the allowance.
