@@ -323,8 +323,10 @@ pub(crate) struct ScreenTriangle {
     y1: i32,
     /// Intercept bands of the edges ([`Edge::band`]).
     bands: [f64; 3],
-    /// The range `x0 - 2.5 ..= x1 + 2.5` intercepts are clamped to: pixels of
-    /// the window keep their side, and no pixel boundary is near a clamped end.
+    /// The range `x0 - 1.5 ..= x1 + 3.5` the lanes' intercepts (`raster::lanes`,
+    /// one past the pixel index whose centre the edge crosses) are clamped
+    /// to: pixels of the window keep their side, and no whole number is near
+    /// a clamped end.
     t_min: f64,
     t_max: f64,
 }
@@ -374,7 +376,7 @@ impl ScreenTriangle {
         let m = tolerance.edge;
         let edges = [Edge::new(t[0], t[1], m), Edge::new(t[1], t[2], m), Edge::new(t[2], t[0], m)];
         let bands = edges.map(|e| e.band(w, h));
-        let (t_min, t_max) = (f64::from(x0) - 2.5, f64::from(x1) + 2.5);
+        let (t_min, t_max) = (f64::from(x0) - 1.5, f64::from(x1) + 3.5);
         Some(ScreenTriangle { edges, plane: DepthPlane::new(&t, tolerance.depth), x0, x1, y0, y1, bands, t_min, t_max })
     }
 

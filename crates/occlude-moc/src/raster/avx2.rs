@@ -140,7 +140,7 @@ unsafe fn first_intercepts(tri: &ScreenTriangle, y: i32) -> [__m256d; 3] {
     std::array::from_fn(|i| {
         let edge = &tri.edges[i];
         let t = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(edge.slope), py), _mm256_set1_pd(edge.offset));
-        _mm256_sub_pd(t, _mm256_set1_pd(0.5))
+        _mm256_add_pd(t, _mm256_set1_pd(0.5))
     })
 }
 
@@ -187,7 +187,7 @@ unsafe fn edge_spans(tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spa
     }
     for (i, (k, _)) in edges.iter().enumerate() {
         if exact >> i & 1 == 0 {
-            let bound = _mm_add_epi32(_mm256_cvttpd_epi32(*k), _mm_set1_epi32(1));
+            let bound = _mm256_cvttpd_epi32(*k);
             if tri.edges[i].a > 0.0 {
                 lo = _mm_max_epi32(lo, bound);
             } else {

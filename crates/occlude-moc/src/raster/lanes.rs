@@ -14,11 +14,14 @@
 //! random triangles.
 //!
 //! # Exactness
-//! An edge's intercept `t` on row `y` decides its covered pixels without testing
-//! them when `t`'s distance to the nearest pixel boundary exceeds the edge's
+//! An edge's intercept `t = slope py + offset + 0.5` on row `y` (the edge
+//! crosses the row at `x = t - 0.5`, so pixel `x`'s centre `x + 0.5` lies on
+//! its right exactly when `x >= t`) decides its covered pixels without testing
+//! them when `t`'s distance to the nearest whole number exceeds the edge's
 //! proven error band ([`Edge::band`](super::Edge)): then the pixels up to
-//! `floor(t)` lie on one side and those from `floor(t) + 1` on the other, exactly
-//! as [`Edge::covers`](super::Edge) decides them. When any of the four rows is
+//! `floor(t) - 1` lie on one side and those from `floor(t)` on the other, exactly
+//! as [`Edge::covers`](super::Edge) decides them. The floor itself is then the
+//! end of the row's span the edge sets. When any of the four rows is
 //! within the band (rare), or the edge is horizontal (band infinite), the edge is
 //! reported in [`Spans::exact`] and the caller decides its rows with the scalar,
 //! pixel-exact [`Edge::span`](super::Edge). A row's span is the intersection of
@@ -38,7 +41,7 @@
 //! proven and pixels are not the triangle's, are emptied by the traversal.
 //!
 //! # Stepped intercepts
-//! An edge's intercepts `t = slope py + offset - 0.5` are evaluated so on the
+//! An edge's intercepts `t = slope py + offset + 0.5` are evaluated so on the
 //! first subtile row a triangle draws ([`first_intercepts`]), then carried to
 //! each next subtile row by one rounded addition of `4 slope` (exact: a
 //! product by a power of two) in [`edge_spans`]. In exact arithmetic the sum
@@ -86,17 +89,18 @@ impl Spans {
     }
 }
 
-/// Each edge's intercepts `slope py + offset - 0.5` (the pixel index whose
-/// centre the edge crosses) on the four pixel rows of a subtile row: evaluated
-/// on the first subtile row drawn ([`first_intercepts`]), then stepped down by
-/// `4 slope` per subtile row ([`edge_spans`]).
+/// Each edge's intercepts `slope py + offset + 0.5` (one past the pixel index
+/// whose centre the edge crosses: the floor is the span's end it sets) on the
+/// four pixel rows of a subtile row: evaluated on the first subtile row drawn
+/// ([`first_intercepts`]), then stepped down by `4 slope` per subtile row
+/// ([`edge_spans`]).
 pub(crate) type Intercepts = [[f64; 4]; 3];
 
 /// Portable [`Intercepts`] of the four pixel rows from `y`, evaluated.
 pub(crate) fn first_intercepts(tri: &ScreenTriangle, y: i32) -> Intercepts {
     std::array::from_fn(|i| {
         let edge = &tri.edges[i];
-        std::array::from_fn(|r| edge.slope * (f64::from(y + r as i32) + 0.5) + edge.offset - 0.5)
+        std::array::from_fn(|r| edge.slope * (f64::from(y + r as i32) + 0.5) + edge.offset + 0.5)
     })
 }
 
@@ -124,7 +128,7 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, intercepts: &mut Intercepts) -> S
                 spans.exact |= 1 << i;
                 continue 'edges;
             }
-            *b = k + 1;
+            *b = k;
         }
         let right = edge.a > 0.0;
         let ends = if right { &mut spans.lo } else { &mut spans.hi };

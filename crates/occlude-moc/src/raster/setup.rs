@@ -84,8 +84,8 @@ impl Batch {
             y0: v[2][l],
             y1: v[3][l],
             bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
-            t_min: f64::from(x0) - 2.5,
-            t_max: f64::from(x1) + 2.5,
+            t_min: f64::from(x0) - 1.5,
+            t_max: f64::from(x1) + 3.5,
         }
     }
 }
