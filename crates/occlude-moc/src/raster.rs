@@ -601,9 +601,10 @@ impl MaskedBuffer {
             if let Some(avx2) = avx2 {
                 while i + SETUP_LANES <= range.end {
                     let batch: [_; SETUP_LANES] = std::array::from_fn(|l| clip(i + l));
-                    if let [Some(a), Some(b), Some(c), Some(d)] = batch {
-                        let set_up = avx2.setup4(&[a, b, c, d], cull, width, height, bits);
-                        for (l, c) in batch.into_iter().enumerate() {
+                    if let [Some(a), Some(b), Some(c), Some(d)] = &batch {
+                        let tris = [*a, *b, *c, *d];
+                        let set_up = avx2.setup4(&tris, cull, width, height, bits);
+                        for (l, c) in tris.iter().enumerate() {
                             match set_up.lane(l) {
                                 LaneState::Drawn => {
                                     let tri = set_up.triangle(l);
@@ -612,7 +613,7 @@ impl MaskedBuffer {
                                 }
                                 LaneState::Rejected => {}
                                 LaneState::Scalar => {
-                                    one(c, work, out);
+                                    one(Some(*c), work, out);
                                     continue;
                                 }
                             }
