@@ -87,7 +87,10 @@
 //! subtiles (in `f64`, then a step per subtile in `f32`)
 //! (the `raster::lanes` module: only rows whose intercept lies within its proven
 //! rounding band of a pixel boundary are decided pixel by pixel, so masks are
-//! exactly the per-pixel definition above), and merged into them in lanes: the
+//! exactly the per-pixel definition above; pixel rows of a subtile row above
+//! or below the triangle are left empty by its edges, decided so, and only
+//! the padding rows below the screen by a test of their own), and merged into
+//! them in lanes: the
 //! subtiles are stored in groups of eight (64x4 pixels), field by field, and
 //! each lane applies the merge rule above. These steps run in AVX2 where the
 //! CPU has it (detected at run time) and in portable code otherwise, with
