@@ -331,11 +331,6 @@ pub(crate) struct ScreenTriangle {
     y1: i32,
     /// Intercept bands of the edges ([`Edge::band`]).
     bands: [f64; 3],
-    /// Bit `i` set: edge `i` covers the pixels to the right of its intercept
-    /// (`a > 0`), so it sets the start of a row's span, else its end: read by
-    /// the traversal on every row, where a bit test is cheaper than a
-    /// comparison of `a`.
-    right: u8,
     /// The range `x0 - 1.5 ..= x1 + 3.5` the lanes' intercepts (`raster::lanes`,
     /// one past the pixel index whose centre the edge crosses) are clamped
     /// to: pixels of the window keep their side, and no whole number is near
@@ -390,9 +385,7 @@ impl ScreenTriangle {
         let edges = [Edge::new(t[0], t[1], m), Edge::new(t[1], t[2], m), Edge::new(t[2], t[0], m)];
         let bands = edges.map(|e| e.band(w, h));
         let (t_min, t_max) = (f64::from(x0) - 1.5, f64::from(x1) + 3.5);
-        let right = edges.iter().enumerate().fold(0, |bits, (i, e)| bits | u8::from(e.a > 0.0) << i);
-        let plane = DepthPlane::new(&t, tolerance.depth);
-        Some(ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, right, t_min, t_max })
+        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t, tolerance.depth), x0, x1, y0, y1, bands, t_min, t_max })
     }
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.

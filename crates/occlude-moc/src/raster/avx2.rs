@@ -188,7 +188,7 @@ unsafe fn edge_spans(tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spa
     for (i, (k, _)) in edges.iter().enumerate() {
         if exact >> i & 1 == 0 {
             let bound = _mm256_cvttpd_epi32(*k);
-            if tri.right >> i & 1 == 1 {
+            if tri.edges[i].a > 0.0 {
                 lo = _mm_max_epi32(lo, bound);
             } else {
                 hi = _mm_min_epi32(hi, bound);

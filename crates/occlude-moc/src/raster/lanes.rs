@@ -116,7 +116,7 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, intercepts: &mut Intercepts) -> S
     for (t, edge) in intercepts.iter_mut().zip(&tri.edges) {
         *t = t.map(|t| t + edge.slope * 4.0);
     }
-    'edges: for (i, (&band, rows)) in tri.bands.iter().zip(rows).enumerate() {
+    'edges: for (i, ((edge, &band), rows)) in tri.edges.iter().zip(&tri.bands).zip(rows).enumerate() {
         let mut bound = [0i32; 4];
         for (b, t) in bound.iter_mut().zip(rows) {
             // Clamped as the AVX2 `min` and `max` clamp (a NaN intercept
@@ -130,7 +130,7 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, intercepts: &mut Intercepts) -> S
             }
             *b = k;
         }
-        let right = tri.right >> i & 1 == 1;
+        let right = edge.a > 0.0;
         let ends = if right { &mut spans.lo } else { &mut spans.hi };
         for (end, b) in ends.iter_mut().zip(bound) {
             *end = if right { (*end).max(b) } else { (*end).min(b) };

@@ -84,7 +84,6 @@ impl Batch {
             y0: v[2][l],
             y1: v[3][l],
             bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
-            right: (0..3).fold(0, |bits, i| bits | u8::from(self.edges[i][0][l] > 0.0) << i),
             t_min: f64::from(x0) - 1.5,
             t_max: f64::from(x1) + 3.5,
         }
@@ -299,7 +298,6 @@ mod tests {
         out.extend([p.zx, p.zy, p.z0, p.zmax, t.t_min, t.t_max].map(f64::to_bits));
         out.extend(t.bands.map(f64::to_bits));
         out.extend([t.x0, t.x1, t.y0, t.y1].map(|v| v as u64));
-        out.push(u64::from(t.right));
         out
     }
 
