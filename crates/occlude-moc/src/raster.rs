@@ -235,21 +235,13 @@ impl DepthPlane {
     }
 
     /// The column of the corner whose bound a subtile from column `bx` takes:
-    /// its right edge where the plane rises to the right ([`Self::corner_dx`]).
+    /// its right edge where the plane rises to the right.
     #[inline]
     pub(crate) fn corner_x(&self, bx: f64) -> f64 {
-        bx + f64::from(self.corner_dx())
-    }
-
-    /// The columns from a subtile's left edge to the corner whose bound it
-    /// takes: 8 where the plane rises to the right, else 0. The same for all
-    /// of a triangle's subtiles, so the traversal takes it once.
-    #[inline]
-    pub(crate) fn corner_dx(&self) -> u32 {
         if self.zx > 0.0 {
-            8
+            bx + 8.0
         } else {
-            0
+            bx
         }
     }
 
@@ -451,7 +443,6 @@ impl Band<'_> {
             spans
         };
         let end = r1.min(self.end);
-        let corner = tri.plane.corner_dx();
         let mut next = row_spans((first * 4) as i32, &mut intercepts);
         for sy in first..end {
             let spans = next;
@@ -467,7 +458,7 @@ impl Band<'_> {
                 let sx = g * LANES as u32;
                 let padded = bottom || (sx + LANES as u32) * 8 > self.width;
                 let outside = padded.then_some((self.width, self.height));
-                let step = GroupStep { tri, spans: &spans, sx, sy, corner, outside };
+                let step = GroupStep { tri, spans: &spans, sx, sy, outside };
                 lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
             }
         }

@@ -38,7 +38,7 @@ impl Avx2 {
         sy: u32,
     ) -> ([u32; LANES], [f32; LANES]) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { subtile_lanes(tri, spans, sx, sy, tri.plane.corner_dx()) }
+        unsafe { subtile_lanes(tri, spans, sx, sy) }
     }
 
     /// [`Band::draw`](super::Band) of one triangle in one AVX2 function, so
@@ -123,7 +123,7 @@ unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn draw_group(group: &mut Group, step: &GroupStep<'_>, mode: MergeMode) {
-    let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy, step.corner);
+    let (mut cover, depth) = subtile_lanes(step.tri, step.spans, step.sx, step.sy);
     if let Some(screen) = step.outside {
         add_outside(&mut cover, &outside(screen, step.sx, step.sy));
     }
@@ -203,30 +203,22 @@ unsafe fn edge_spans(tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spa
 
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn subtile_lanes(
-    tri: &ScreenTriangle,
-    spans: &Spans,
-    sx: u32,
-    sy: u32,
-    corner: u32,
-) -> ([u32; LANES], [f32; LANES]) {
+unsafe fn subtile_lanes(tri: &ScreenTriangle, spans: &Spans, sx: u32, sy: u32) -> ([u32; LANES], [f32; LANES]) {
     let cover = group_cover(spans, sx);
     let mut out = ([0u32; LANES], [0f32; LANES]);
     _mm256_storeu_si256(out.0.as_mut_ptr().cast(), cover);
-    _mm256_storeu_ps(out.1.as_mut_ptr(), depth_bounds(&tri.plane, sx, sy, corner));
+    _mm256_storeu_ps(out.1.as_mut_ptr(), depth_bounds(&tri.plane, sx, sy));
     out
 }
 
 /// [`DepthPlane::subtile_bound`](super::DepthPlane) of the eight subtiles of
-/// the group from subtile column `sx` of row `sy`, its corner `corner`
-/// columns from the group's left edge ([`DepthPlane::corner_dx`]): the group's base in `f64`
+/// the group from subtile column `sx` of row `sy`: the group's base in `f64`
 /// (scalar), then its lanes' steps added and the cap taken in `f32` lanes,
 /// with the portable version's operations in its order.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn depth_bounds(plane: &DepthPlane, sx: u32, sy: u32, corner: u32) -> __m256 {
-    // `sx * 8 + corner` is `corner_x` of the group's column, exactly.
-    let base = plane.far_at(f64::from(sx * 8 + corner), plane.row_term(f64::from(sy * 4)));
+unsafe fn depth_bounds(plane: &DepthPlane, sx: u32, sy: u32) -> __m256 {
+    let base = plane.far_at(plane.corner_x(f64::from(sx * 8)), plane.row_term(f64::from(sy * 4)));
     let steps =
         _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     // `far_sum` on eight lanes.

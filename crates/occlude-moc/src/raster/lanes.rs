@@ -167,8 +167,6 @@ pub(crate) struct GroupStep<'a> {
     /// The group's first subtile.
     pub sx: u32,
     pub sy: u32,
-    /// The triangle's [`DepthPlane::corner_dx`](super::DepthPlane::corner_dx).
-    pub corner: u32,
     /// The screen's width and height where the group reaches beyond it (its
     /// lanes' padding pixels are [`outside`]); `None` where it lies wholly on
     /// screen.
