@@ -1,18 +1,87 @@
 //! The progress bar of the long-running commands (`bench`, `raster-bench`),
-//! on standard error and hidden when that is not a terminal.
+//! on standard error. Where that is not a terminal (a log file, CI) the bar
+//! is not drawn; a line of its state is written every [`LOG_EVERY`]
+//! instead, so that a run of an hour still shows where it is.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{HumanDuration, ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::time::Duration;
 
 /// How often a bar is redrawn while a [`stage`] runs.
 const STAGE_TICK: Duration = Duration::from_millis(250);
 
+/// How often a bar that is not drawn writes its state as a line.
+const LOG_EVERY: Duration = Duration::from_secs(60);
+
 /// A bar of `len` steps named `unit` ("frames", "rows"), with the elapsed
 /// time and an estimate of the time left.
 pub fn bar(len: u64, unit: &str) -> ProgressBar {
     let template = format!("{{msg}} [{{bar:40}}] {{pos}}/{{len}} {unit}, {{elapsed}} (eta {{eta}})");
-    ProgressBar::new(len)
-        .with_style(ProgressStyle::with_template(&template).expect("valid template").progress_chars("=> "))
+    let bar = ProgressBar::new(len)
+        .with_style(ProgressStyle::with_template(&template).expect("valid template").progress_chars("=> "));
+    if !std::io::stderr().is_terminal() {
+        log_lines(&bar, unit);
+    }
+    bar
+}
+
+/// Writes `line` to standard error above `bar`, or on its own where the
+/// bar is not drawn (indicatif drops what is printed through a hidden bar).
+pub fn println(bar: &ProgressBar, line: &str) {
+    if bar.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        bar.println(line);
+    }
+}
+
+/// Starts a thread that writes `bar`'s state to standard error every
+/// [`LOG_EVERY`] while it moves, and ends once the bar is finished or
+/// dropped.
+fn log_lines(bar: &ProgressBar, unit: &str) {
+    let weak = bar.downgrade();
+    let mut log = LogLines::new(unit);
+    std::thread::spawn(move || loop {
+        std::thread::sleep(LOG_EVERY);
+        let Some(bar) = weak.upgrade() else { return };
+        if bar.is_finished() {
+            return;
+        }
+        if let Some(line) = log.line(&bar) {
+            eprintln!("{line}");
+        }
+    });
+}
+
+/// The lines of a bar that is not drawn: one only when the bar moved (its
+/// position, length or message changed) since the last, so that a long
+/// stage does not repeat itself.
+struct LogLines {
+    unit: String,
+    last: Option<(u64, Option<u64>, String)>,
+}
+
+impl LogLines {
+    fn new(unit: &str) -> Self {
+        Self { unit: unit.to_string(), last: None }
+    }
+
+    /// `bar`'s state as a line, or `None` when it has not moved.
+    fn line(&mut self, bar: &ProgressBar) -> Option<String> {
+        let state = (bar.position(), bar.length(), bar.message());
+        if self.last.as_ref() == Some(&state) {
+            return None;
+        }
+        let (pos, len, message) = state.clone();
+        self.last = Some(state);
+        let elapsed = HumanDuration(bar.elapsed());
+        Some(match len {
+            Some(len) if len > 0 => {
+                format!("{message}: {pos}/{len} {}, {elapsed} (eta {})", self.unit, HumanDuration(bar.eta()))
+            }
+            _ => format!("{message}: {elapsed}"),
+        })
+    }
 }
 
 /// Runs `work` with `what` ("generating swarm", "building the bvh") after
@@ -43,5 +112,25 @@ mod tests {
         let plain = ProgressBar::hidden();
         assert_eq!(stage(&plain, "generating", || plain.message()), "generating");
         assert_eq!(plain.message(), "");
+    }
+
+    #[test]
+    fn a_bar_that_is_not_drawn_logs_a_line_only_when_it_moved() {
+        let bar = ProgressBar::hidden();
+        bar.set_length(10);
+        bar.set_message("city paper");
+        let mut log = LogLines::new("frames");
+        let first = log.line(&bar).expect("a first line");
+        assert!(first.starts_with("city paper: 0/10 frames, "), "{first}");
+        assert_eq!(log.line(&bar), None);
+        bar.inc(3);
+        let moved = log.line(&bar).expect("a line after moving");
+        assert!(moved.starts_with("city paper: 3/10 frames, "), "{moved}");
+        assert!(moved.contains("(eta "), "{moved}");
+        bar.set_length(0);
+        bar.set_message("plant paper: building the kd-tree");
+        let stage = log.line(&bar).expect("a line for a stage");
+        assert!(stage.starts_with("plant paper: building the kd-tree: "), "{stage}");
+        assert!(!stage.contains("frames"), "{stage}");
     }
 }

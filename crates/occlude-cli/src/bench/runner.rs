@@ -359,7 +359,7 @@ fn run_scene_here(
             lane.frames.push(stats);
             for w in lane.built.method.take_warnings() {
                 let w = format!("{}: {w}", lane.built.method.name());
-                progress.println(format!("warning: {w}"));
+                crate::progress::println(progress, &format!("warning: {w}"));
                 warnings.push(w);
             }
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
