@@ -178,9 +178,10 @@ const UNCOVERED_MARGIN: f64 = 1.0;
 /// instead of three and no edges, depth plane or raster form. Bit `i` for
 /// triangle `i`.
 ///
-/// A lane is reported only when its coordinates are finite and inside every
-/// clipping plane (`setup4`'s usual-case tests, exactly), so that
-/// `clip_triangle` hands it whole to the projection; if that projection fails
+/// A lane is reported only when its vertices are inside every clipping plane
+/// (`setup4`'s test, exactly) or one of its coordinates is not finite (which
+/// `clip_triangle` drops), so that a finite one is handed whole to the
+/// projection; if that projection fails
 /// (out of range, non-finite depth) the triangle is dropped whatever its box. Else
 /// `setup4` snaps each vertex to `round(s * ONE)` for its screen coordinate `s =
 /// (x / w + 1) * W / 2` (and `(1 - y / w) * H / 2`); this estimates `s` as `(x *
@@ -199,9 +200,6 @@ pub(super) unsafe fn uncovered4(tris: &[[Vec4; 3]; 4], viewport: Viewport) -> u8
     let zero = _mm256_setzero_pd();
     let mut usual = _mm256_cmp_pd::<_CMP_TRUE_UQ>(zero, zero);
     for v in &verts {
-        for c in [v.x, v.y, v.z, v.w] {
-            usual = _mm256_and_pd(usual, abs_below::<_CMP_LT_OQ>(c, f64::INFINITY));
-        }
         usual = _mm256_and_pd(usual, inside(v, viewport));
     }
     let (one, half, fixed) = (_mm256_set1_pd(1.0), _mm256_set1_pd(0.5), _mm256_set1_pd(ONE as f64));
