@@ -60,8 +60,8 @@ const RASTER_TRIANGLES: usize = 1 << 16;
 /// Triangles per rasterizer call of the oracle pass: 3 MiB in clip space, so
 /// that they are still in the caches when the rasterizer sets them up
 /// (`FLUSH_TRIANGLES`' 48 MiB are not; docs/benchmarks.md has the figures).
-/// The oracle's image and counts do not depend on
-/// it, and it has no time line to replay.
+/// The oracle's image and counts do not depend on it, and it has no time
+/// line to replay.
 const ORACLE_PART: usize = 1 << 16;
 
 /// A recorded command's place on the simulated GPU time line.
