@@ -27,7 +27,11 @@
 //! `Hib` batch) and then rasterized, so that a frame drawing tens of millions
 //! of triangles (view-frustum culling of the million-instance `swarm`) holds
 //! a bounded number of them: commands run in order either way, so images,
-//! counts and the replayed time line are the same.
+//! counts and the replayed time line are the same. For the same reason the
+//! recorded commands are rasterized ahead of that, every `RASTER_TRIANGLES`
+//! (2^16) triangles, their counts kept until the time line is replayed at the
+//! flush: the triangles are then still in the caches when the rasterizer sets
+//! them up.
 
 mod culling;
 mod item_buffer;
@@ -47,6 +51,18 @@ use std::time::Instant;
 /// Recorded triangles (48 bytes each in clip space) past which a draw
 /// rasterizes what is recorded first (module documentation).
 const FLUSH_TRIANGLES: usize = 1 << 20;
+
+/// Recorded triangles past which a draw rasterizes the commands recorded so
+/// far, keeping their counts for the flush (module documentation): 3 MiB in
+/// clip space, still in the caches when the rasterizer sets them up.
+const RASTER_TRIANGLES: usize = 1 << 16;
+
+/// Triangles per rasterizer call of the oracle pass: 3 MiB in clip space, so
+/// that they are still in the caches when the rasterizer sets them up
+/// (`FLUSH_TRIANGLES`' 48 MiB are not; docs/benchmarks.md has the figures).
+/// The oracle's image and counts do not depend on it, and it has no time
+/// line to replay.
+const ORACLE_PART: usize = 1 << 16;
 
 /// A recorded command's place on the simulated GPU time line.
 #[derive(Clone, Copy, Debug)]
@@ -96,9 +112,19 @@ pub struct SoftBackend<'s> {
     clock: SimClock,
     count: FrameCounter,
     pending_state_us: f64,
+    /// The triangles of the commands not yet rasterized.
     triangles: Vec<[Vec4; 3]>,
     clip_scratch: Vec<Vec4>,
+    /// The commands recorded since the last flush; the first `rasterized.len()`
+    /// have been rasterized (their triangle ranges are spent).
     commands: Vec<Command>,
+    /// The counts of the commands rasterized ahead of the flush, in order.
+    rasterized: Vec<CommandResult>,
+    /// Triangles recorded since the last flush, rasterized or not.
+    recorded: usize,
+    /// Recorded triangles past which a draw rasterizes ahead of the flush:
+    /// `RASTER_TRIANGLES`, or fewer in tests.
+    raster_triangles: usize,
     ops: Vec<GpuOp>,
     queries: Vec<QueryState>,
     frame_start: Instant,
@@ -130,6 +156,9 @@ impl<'s> SoftBackend<'s> {
             triangles: Vec::new(),
             clip_scratch: Vec::new(),
             commands: Vec::new(),
+            rasterized: Vec::new(),
+            recorded: 0,
+            raster_triangles: RASTER_TRIANGLES,
             ops: Vec::new(),
             queries: Vec::new(),
             frame_start: Instant::now(),
@@ -224,7 +253,17 @@ impl<'s> SoftBackend<'s> {
     fn record(&mut self, kind: CommandKind, first_triangle: usize, cull_back: bool, mut op: GpuOp) {
         op.fixed_us += std::mem::take(&mut self.pending_state_us);
         self.commands.push(Command { kind, triangles: first_triangle as u32..self.triangles.len() as u32, cull_back });
+        self.recorded += self.triangles.len() - first_triangle;
         self.ops.push(op);
+    }
+
+    /// Rasterizes the commands recorded and not yet rasterized, keeping their
+    /// counts for the flush, whose time line they do not change.
+    fn rasterize_recorded(&mut self) {
+        let pending = &self.commands[self.rasterized.len()..];
+        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, pending);
+        self.rasterized.extend(results);
+        self.triangles.clear();
     }
 
     /// Rasterizes everything recorded and replays the GPU time line.
@@ -237,7 +276,8 @@ impl<'s> SoftBackend<'s> {
         if self.commands.is_empty() {
             return Vec::new();
         }
-        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &self.commands);
+        self.rasterize_recorded();
+        let results = std::mem::take(&mut self.rasterized);
         let (mut batch, mut batch_end) = (Vec::new(), 0.0);
         // CPU time the replayed submissions blocked (a bounded driver
         // queue): every command recorded after a blocked one was issued
@@ -273,7 +313,7 @@ impl<'s> SoftBackend<'s> {
             self.queries[handle as usize].available_at_us = batch_end + self.model.readback_us;
         }
         self.batch_open = false;
-        self.triangles.clear();
+        self.recorded = 0;
         self.commands.clear();
         self.ops.clear();
         results
@@ -282,8 +322,10 @@ impl<'s> SoftBackend<'s> {
     /// Draws instance `i` as one draw costing `fixed_us` of GPU time before
     /// its triangles and fragments; counts it.
     fn draw_instance(&mut self, i: u32, fixed_us: f64) {
-        if self.triangles.len() >= FLUSH_TRIANGLES && !self.batch_open {
+        if self.recorded >= FLUSH_TRIANGLES && !self.batch_open {
             self.flush();
+        } else if self.triangles.len() >= self.raster_triangles {
+            self.rasterize_recorded();
         }
         let triangles = self.scene.instance_triangles(i as usize);
         self.count.draw(i, triangles);
@@ -440,7 +482,7 @@ impl Instruments for SoftBackend<'_> {
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.oracle_in_parts(camera, candidates, FLUSH_TRIANGLES)
+        self.oracle_in_parts(camera, candidates, ORACLE_PART)
     }
 }
 
@@ -482,6 +524,38 @@ mod tests {
         let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
         let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
         (camera, Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9)))
+    }
+
+    /// Rasterizing ahead of the flush (after every draw, every few, never)
+    /// gives the same image, query counts and frame statistics, bit for bit,
+    /// in a frame of draws and queries with a bounded driver queue (so that
+    /// submissions block and move the CPU clock) and checks between them.
+    #[test]
+    fn rasterizing_ahead_of_the_flush_changes_no_figure() {
+        let scene = quads();
+        let (camera, hidden) = view_and_hidden_box();
+        let model = GpuModel { gpu_draw_call_us: 40.0, driver_queue_us: 60.0, ..GpuModel::modern() };
+        let frame = |raster_triangles: usize| {
+            let mut backend = SoftBackend::new(&scene, 97, 71, model.clone());
+            backend.raster_triangles = raster_triangles;
+            backend.begin_frame(&camera);
+            backend.draw(&[3, 1, 12]);
+            let early = backend.issue_query(&[hidden]);
+            backend.draw(&[0, 2, 4, 5]);
+            let available = backend.is_available(early);
+            let late = backend.issue_query(&[Aabb::new(Vec3::new(-0.2, -0.2, -2.3), Vec3::new(0.3, 0.3, -1.0))]);
+            backend.draw(&[6, 7, 8, 9, 10, 11]);
+            let pixels = [backend.result(early), backend.result(late)];
+            let mut depth = Vec::new();
+            backend.depth_image(&mut depth);
+            let stats = FrameStats { wall_ms: 0.0, ..backend.end_frame() };
+            (stats, available, pixels, depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
+        };
+        let never = frame(usize::MAX);
+        assert!(never.2[1] > 0 && never.0.submit_wait_ms > 0.0, "{never:?}");
+        for raster_triangles in [1, 2, 5, 13] {
+            assert_eq!(frame(raster_triangles), never, "ahead every {raster_triangles} triangles");
+        }
     }
 
     /// A frame of GPU-bound draws, then one query read at once: with an

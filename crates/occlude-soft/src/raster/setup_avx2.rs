@@ -165,6 +165,67 @@ unsafe fn ints(v: __m256d) -> __m128i {
     _mm256_cvtpd_epi32(v)
 }
 
+/// Margin, in fixed-point units, by which [`uncovered4`] widens its estimate of
+/// the vertices' bounds: the snapped coordinate is within half a unit of the
+/// unrounded one, and the estimate within far less than that of the unrounded
+/// one (see [`uncovered4`]).
+const UNCOVERED_MARGIN: f64 = 1.0;
+
+/// The lanes of the four triangles `tris` that [`setup4`] and the scalar set-up
+/// are sure to drop because their bounding box holds no pixel centre of the
+/// viewport (sub-pixel triangles between the centres, triangles off the
+/// screen), found at a fraction of [`setup4`]'s cost: one division per vertex
+/// instead of three and no edges, depth plane or raster form. Bit `i` for
+/// triangle `i`.
+///
+/// A lane is reported only when its vertices are inside every clipping plane
+/// (`setup4`'s test, exactly) or one of its coordinates is not finite (which
+/// `clip_triangle` drops), so that a finite one is handed whole to the
+/// projection; if that projection fails
+/// (out of range, non-finite depth) the triangle is dropped whatever its box. Else
+/// `setup4` snaps each vertex to `round(s * ONE)` for its screen coordinate `s =
+/// (x / w + 1) * W / 2` (and `(1 - y / w) * H / 2`); this estimates `s` as `(x *
+/// (1 / w) + 1) * W / 2`, which differs from it by a few rounding errors of
+/// numbers below `2^15` pixels (the guard band's reach), under `10^-7` units, so every
+/// snapped coordinate lies within [`UNCOVERED_MARGIN`] of the estimate. The
+/// pixel columns whose centres lie within the estimated bounds widened by the
+/// margin therefore include the set-up's `x0..=x1`, and likewise for rows: none
+/// (within the viewport) means the set-up finds none.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn uncovered4(tris: &[[Vec4; 3]; 4], viewport: Viewport) -> u8 {
+    let verts = [load(tris, 0), load(tris, 1), load(tris, 2)];
+    let zero = _mm256_setzero_pd();
+    let mut usual = _mm256_cmp_pd::<_CMP_TRUE_UQ>(zero, zero);
+    for v in &verts {
+        usual = _mm256_and_pd(usual, inside(v, viewport));
+    }
+    let (one, half, fixed) = (_mm256_set1_pd(1.0), _mm256_set1_pd(0.5), _mm256_set1_pd(ONE as f64));
+    let (width, height) = (_mm256_set1_pd(f64::from(viewport.width)), _mm256_set1_pd(f64::from(viewport.height)));
+    // The estimated fixed-point coordinates of each vertex.
+    let screen = |v: &Vertices| {
+        let r = _mm256_div_pd(one, v.w);
+        let sx = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(v.x, r), one), half), width);
+        let sy = _mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(one, _mm256_mul_pd(v.y, r)), half), height);
+        (_mm256_mul_pd(sx, fixed), _mm256_mul_pd(sy, fixed))
+    };
+    let [(x0, y0), (x1, y1), (x2, y2)] = [screen(&verts[0]), screen(&verts[1]), screen(&verts[2])];
+    let (margin, inv_one) = (_mm256_set1_pd(UNCOVERED_MARGIN + HALF as f64), _mm256_set1_pd(1.0 / ONE as f64));
+    // No centre `p * ONE + HALF` within `[lo - margin, hi + margin]` inside the
+    // viewport's `0..size`; with NaN the comparison is false (not reported).
+    let empty = |a, b, c, size: __m256d| {
+        let lo = _mm256_sub_pd(_mm256_min_pd(_mm256_min_pd(a, b), c), margin);
+        let hi = _mm256_sub_pd(_mm256_max_pd(_mm256_max_pd(a, b), c), _mm256_set1_pd(HALF as f64 - UNCOVERED_MARGIN));
+        let first = _mm256_max_pd(_mm256_ceil_pd(_mm256_mul_pd(lo, inv_one)), zero);
+        let last = _mm256_min_pd(_mm256_floor_pd(_mm256_mul_pd(hi, inv_one)), _mm256_sub_pd(size, one));
+        _mm256_cmp_pd::<_CMP_GT_OQ>(first, last)
+    };
+    let none = _mm256_or_pd(empty(x0, x1, x2, width), empty(y0, y1, y2, height));
+    bits(_mm256_and_pd(usual, none)) as u8
+}
+
 /// Sets up the four triangles `tris` of command `cmd` as `setup::setup_triangle`
 /// and [`RasterTri::new`] would, for the triangles of the usual case, writing the
 /// raster forms of the [`Lanes::ready`] ones to `out`; the others come back as

@@ -94,6 +94,51 @@ fn check_four_at_a_time_setup(tris: &[[Vec4; 3]; 4], size: (u32, u32), cull_back
     Ok(())
 }
 
+/// The pre-test of the four-at-a-time set-up against the full set-up, lane by lane:
+/// a lane it reports (no pixel centre in its box) must be one that `setup4` does
+/// not set up and the scalar set-up drops; and a triangle inside every clipping
+/// plane whose snapped vertices' box misses every pixel centre of the viewport by
+/// more than two fixed-point units on one axis must be reported (the pre-test is
+/// that tight).
+#[cfg(target_arch = "x86_64")]
+fn check_uncovered_lanes(tris: &[[Vec4; 3]; 4], size: (u32, u32), cull_back: bool) -> Result<(), TestCaseError> {
+    use super::super::clip::{clip_triangle, Clipped};
+    use super::super::setup::ONE;
+    use super::super::setup_avx2::{setup4, uncovered4};
+    if !is_x86_feature_detected!("avx2") {
+        return Ok(());
+    }
+    let viewport = Viewport::new(size.0, size.1);
+    let mut four = [RasterTri::PLACEHOLDER; 4];
+    // SAFETY: the CPU supports AVX2 (checked above).
+    let (uncovered, lanes) = unsafe { (uncovered4(tris, viewport), setup4(tris, cull_back, 7, viewport, &mut four)) };
+    for (i, tri) in tris.iter().enumerate() {
+        let mut scalar = Vec::new();
+        setup_triangle(tri, cull_back, 7, viewport, &mut Polygon::new(), |t| scalar.push(t));
+        if uncovered & (1 << i) != 0 {
+            prop_assert!(lanes.ready & (1 << i) == 0 && scalar.is_empty(), "{:?} reported, but set up", tri);
+            continue;
+        }
+        let Clipped::Inside(v) = clip_triangle(tri, viewport.guard, &mut Polygon::new()) else { continue };
+        // The snapped coordinates, as `setup::project` computes them.
+        let snap = |s: f64| round(s * ONE as f64);
+        let xs = v.map(|p| snap((p.x / p.w + 1.0) * 0.5 * f64::from(size.0)));
+        let ys = v.map(|p| snap((1.0 - p.y / p.w) * 0.5 * f64::from(size.1)));
+        if !v.iter().all(|p| (p.z / p.w).is_finite()) {
+            continue;
+        }
+        // Whether the centres `k * ONE + ONE / 2` of `0..n` all miss `[lo - 2, hi + 2]`.
+        let misses = |c: [i64; 3], n: u32| {
+            let (lo, hi) = (c.iter().min().unwrap() - 2 - ONE / 2, c.iter().max().unwrap() + 2 - ONE / 2);
+            let first = (-(-lo).div_euclid(ONE)).max(0);
+            let last = hi.div_euclid(ONE).min(i64::from(n) - 1);
+            first > last
+        };
+        prop_assert!(!misses(xs, size.0) && !misses(ys, size.1), "{:?} covers no centre, not reported", tri);
+    }
+    Ok(())
+}
+
 /// A buffer size, triangles, and the commands of a few `execute` calls.
 type Scene = ((u32, u32), Vec<[Vec4; 3]>, Vec<Vec<Command>>);
 
@@ -152,6 +197,23 @@ proptest! {
         cull_back in any::<bool>(),
     ) {
         check_four_at_a_time_setup(&tris, size, cull_back)?;
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn uncovered_lanes_are_those_the_setup_drops(
+        tris in prop::array::uniform4(prop_oneof![
+            4 => triangle(),
+            // Below a pixel at these sizes: mostly between the centres.
+            4 => (-1.1f32..1.1, -1.1f32..1.1, 0.0f32..1.0, 0.3f32..3.0, prop::array::uniform3((-0.004f32..0.004, -0.004f32..0.004)))
+                .prop_map(|(x, y, z, w, d)| d.map(|(dx, dy)| clip(x + dx, y + dy, z, w))),
+            1 => (triangle(), 0..12usize, prop_oneof![Just(f32::NAN), Just(f32::INFINITY), Just(-0.0), Just(0.0)])
+                .prop_map(|(mut t, at, v)| { t[at / 4][at % 4] = v; t }),
+        ]),
+        size in (1u32..1100, 1u32..800),
+        cull_back in any::<bool>(),
+    ) {
+        check_uncovered_lanes(&tris, size, cull_back)?;
     }
 
     #[test]
