@@ -1,6 +1,6 @@
 //! The progress bar of the long-running commands (`bench`, `raster-bench`),
 //! on standard error. Where that is not a terminal (a log file, CI) the bar
-//! is not drawn; a line of its state is written every [`LOG_EVERY`]
+//! is not drawn; a line of its state is written every minute
 //! instead, so that a run of an hour still shows where it is.
 
 use indicatif::{HumanDuration, ProgressBar, ProgressStyle};
