@@ -35,6 +35,7 @@
 
 mod culling;
 mod item_buffer;
+mod oracle;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
@@ -194,35 +195,6 @@ impl<'s> SoftBackend<'s> {
         for (i, &d) in depth.iter().enumerate() {
             self.depth.set(i as u32 % width, i as u32 / width, d);
         }
-    }
-
-    /// The oracle pass ([`Instruments::oracle`]): every candidate drawn,
-    /// then an equal-depth query of each counting its pixels in the image.
-    /// Each pass runs in rasterizer calls of about `part` triangles (at
-    /// least one candidate each), in order, so that a view of tens of
-    /// millions of triangles holds a bounded number of them at once, as
-    /// draws are flushed; images and counts are the same whatever `part`.
-    fn oracle_in_parts(&mut self, camera: &Camera, candidates: &[u32], part: usize) -> OracleView {
-        self.view_projection = camera.view_projection();
-        self.depth.clear();
-        let mut pixels = Vec::with_capacity(candidates.len());
-        for kind in [CommandKind::Draw, CommandKind::Query(DepthTest::Equal)] {
-            let mut commands = Vec::new();
-            for (k, &i) in candidates.iter().enumerate() {
-                let first = self.triangles.len() as u32;
-                self.push_instance_triangles(i);
-                commands.push(Command { kind, triangles: first..self.triangles.len() as u32, cull_back: false });
-                if self.triangles.len() >= part || k + 1 == candidates.len() {
-                    let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
-                    if kind != CommandKind::Draw {
-                        pixels.extend(results.iter().map(|r| r.passed));
-                    }
-                    self.triangles.clear();
-                    commands.clear();
-                }
-            }
-        }
-        OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
     }
 
     /// Charges a render-state change's costs when `changed` (what
@@ -482,7 +454,7 @@ impl Instruments for SoftBackend<'_> {
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.oracle_in_parts(camera, candidates, ORACLE_PART)
+        self.oracle_in_parts(camera, candidates, ORACLE_PART, true)
     }
 }
 
@@ -671,24 +643,27 @@ mod tests {
         assert!(blocked && blocked_ms > 0.09, "the second draw waits for the first: {blocked_ms} ms");
     }
 
-    /// The oracle in calls of one candidate each, or of a few, gives the
-    /// image and every count of the oracle in one call per pass.
+    /// The oracle in calls of one candidate each, or of a few, culled or
+    /// not, gives the image and every count of the unculled oracle in one
+    /// call per pass.
     #[test]
     fn the_oracle_in_parts_gives_the_image_and_counts_of_one_call() {
         let scene = quads();
         let key = Keyframe { time: 0.0, position: Vec3::ZERO, target: -Vec3::Z, fov_y_deg: 60.0 };
         let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
         let candidates: Vec<u32> = (0..scene.instances.len() as u32).rev().collect();
-        let view = |part: usize| {
+        let view = |part: usize, cull: bool| {
             let mut backend = SoftBackend::new(&scene, 97, 71, GpuModel::modern());
-            let v = backend.oracle_in_parts(&camera, &candidates, part);
+            let v = backend.oracle_in_parts(&camera, &candidates, part, cull);
             (v.pixels, v.visible, v.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
         };
-        let whole = view(usize::MAX);
+        let whole = view(usize::MAX, false);
         // Some seen, some hidden (the small quad behind the first among them).
         assert!(whole.1.len() >= 5 && whole.1.len() < candidates.len() && whole.0[0] == 0, "{:?}", whole.0);
-        for part in [1, 5, 13] {
-            assert_eq!(view(part), whole, "parts of {part} triangles");
+        for part in [1, 5, 13, usize::MAX] {
+            for cull in [false, true] {
+                assert_eq!(view(part, cull), whole, "parts of {part} triangles, culled: {cull}");
+            }
         }
     }
 }
