@@ -9,7 +9,9 @@
 //! replays them in the same frame on its own backend: the same objects, in
 //! the same order and the same calls, with no query and no traversal. It is
 //! the paper's ideal, not the pixel-exact set of `opt`, which is kept beside
-//! it.
+//! it. On the soft backend, `ideal`'s backend takes the counts and image of
+//! `sw`'s instead of rasterizing the same draws again
+//! ([`occlude_soft::DrawReplay`], wired by the runner).
 
 use occlude_core::{
     Aabb, Backend, Camera, CostModel, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling,

@@ -15,7 +15,7 @@ use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
 use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene};
-use occlude_soft::SoftBackend;
+use occlude_soft::{DrawReplay, SoftBackend};
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -69,12 +69,24 @@ impl Renderer {
         })
     }
 
-    fn backend<'s>(&self, scene: &'s Scene, config: &BenchConfig) -> Result<Box<dyn Backend + Send + 's>> {
+    /// A lane's backend; on the soft backend, `draws` says whether it keeps
+    /// its draws' counts for another or takes them from one.
+    fn backend<'s>(
+        &self,
+        scene: &'s Scene,
+        config: &BenchConfig,
+        draws: Draws,
+    ) -> Result<Box<dyn Backend + Send + 's>> {
         let (w, h) = config.resolution;
         Ok(match self {
             Self::Soft => {
                 let mut soft = SoftBackend::new(scene, w, h, config.gpu_model.clone());
                 soft.set_query_mode(config.queries);
+                match draws {
+                    Draws::Own => {}
+                    Draws::Record(shared) => soft.record_draws(shared),
+                    Draws::Replay(shared) => soft.replay_draws(shared),
+                }
                 Box::new(soft)
             }
             Self::Wgpu(gpu) => {
@@ -98,6 +110,17 @@ impl Renderer {
     fn parallel_lanes(&self, config: &BenchConfig) -> bool {
         matches!(self, Self::Soft) && config.parallel_lanes
     }
+}
+
+/// Where a soft lane's draws are counted: `sw`'s backend rasterizes them
+/// and keeps their counts and its final image for `ideal`'s, which replays
+/// the same draws without rasterizing them (`occlude_soft::DrawReplay`:
+/// same counts, same image, so the same figures). On the GPU every lane
+/// draws for itself: its times are measured.
+enum Draws {
+    Own,
+    Record(DrawReplay),
+    Replay(DrawReplay),
 }
 
 /// One method's measurements.
@@ -407,30 +430,31 @@ fn build_lanes<'s>(
     variants: Vec<BuiltMethod>,
     renderer: &Renderer,
 ) -> Result<Lanes<'s>> {
-    let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config)?);
+    let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config, Draws::Own)?);
     let mut lanes = Lanes::new(reference, renderer.parallel_lanes(config));
     // `ideal` replays the draw calls `sw` (listed before it) made in the
-    // frame, after it in its chain.
+    // frame, after it in its chain, with the counts of `sw`'s backend.
     let replayed = config.methods.iter().any(|m| m == IDEAL);
-    let calls = DrawCalls::default();
+    let (calls, counts) = (DrawCalls::default(), DrawReplay::default());
     let mut source = None;
     for m in config.methods.iter().filter(|m| m.as_str() != "vfc") {
-        let backend = renderer.backend(scene, config)?;
         match m.as_str() {
             IDEAL => {
                 let built = BuiltMethod { method: Box::new(Ideal::new(Arc::clone(&calls))), params: Vec::new() };
+                let backend = renderer.backend(scene, config, Draws::Replay(counts.clone()))?;
                 lanes.push(Lane::new(built, backend), source);
             }
             ideal::SOURCE if replayed => {
                 source = Some(lanes.len());
+                let backend = renderer.backend(scene, config, Draws::Record(counts.clone()))?;
                 let log = Box::new(DrawLog::new(backend, Arc::clone(&calls)));
                 lanes.push(Lane::new(create(m, &config.options)?, log), None);
             }
-            _ => lanes.push(Lane::new(create(m, &config.options)?, backend), None),
+            _ => lanes.push(Lane::new(create(m, &config.options)?, renderer.backend(scene, config, Draws::Own)?), None),
         }
     }
     for built in variants {
-        lanes.push(Lane::new(built, renderer.backend(scene, config)?), None);
+        lanes.push(Lane::new(built, renderer.backend(scene, config, Draws::Own)?), None);
     }
     for i in 1..lanes.len() {
         let lane = lanes.get_mut(i);
@@ -522,6 +546,36 @@ mod tests {
             drawn += side_by_side.iter().next().unwrap().image.iter().filter(|&&d| d < 1.0).count();
         }
         assert!(drawn > 0, "the walkthrough sees geometry");
+    }
+
+    /// `ideal` on a backend replaying the counts of `sw`'s (as
+    /// `build_lanes` wires them) gives, frame by frame over a walkthrough,
+    /// the simulated statistics and depth image of an `ideal` that
+    /// rasterizes the same draws itself.
+    #[test]
+    fn ideal_replaying_the_counts_of_sw_renders_the_figures_of_ideal_rasterizing() {
+        let (config, _) = lanes_config();
+        let scene = occlude_scenes::load("city", config.size, config.seed, &config.import).unwrap();
+        let hierarchy = Hierarchy::build(&scene, config.hierarchy, config.build);
+        let (calls, counts) = (DrawCalls::default(), DrawReplay::default());
+        let backend = |draws| Renderer::Soft.backend(&scene, &config, draws).unwrap();
+        let ideal = || BuiltMethod { method: Box::new(Ideal::new(Arc::clone(&calls))), params: Vec::new() };
+        let vfc = Lane::new(create("vfc", &config.options).unwrap(), backend(Draws::Own));
+        let mut lanes = Lanes::new(vfc, false);
+        let sw = Box::new(DrawLog::new(backend(Draws::Record(counts.clone())), Arc::clone(&calls)));
+        lanes.push(Lane::new(create("sw", &config.options).unwrap(), sw), None);
+        lanes.push(Lane::new(ideal(), backend(Draws::Replay(counts))), Some(1));
+        lanes.push(Lane::new(ideal(), backend(Draws::Own)), Some(1));
+        let mut fragments = 0;
+        for camera in cameras(&scene, &config) {
+            lanes.frame(&scene, &hierarchy, &camera).unwrap();
+            let (replayed, rasterized) = (&lanes.chains[1][1], &lanes.chains[1][2]);
+            assert_eq!(simulated(replayed.stats), simulated(rasterized.stats));
+            let bits = |image: &[f32]| image.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&replayed.image), bits(&rasterized.image));
+            fragments += rasterized.stats.fragments;
+        }
+        assert!(fragments > 0, "ideal draws something");
     }
 
     /// Everything a run records but wall-clock time: per method and

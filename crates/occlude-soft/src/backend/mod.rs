@@ -36,6 +36,9 @@
 mod culling;
 mod item_buffer;
 mod oracle;
+mod replay;
+
+pub use replay::DrawReplay;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
@@ -47,6 +50,7 @@ use occlude_core::{
     Aabb, Backend, Camera, CostModel, CpuCullingWork, FrameCounter, FrameStats, GpuCulling, GpuCullingUnsupported,
     Instruments, OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
+use replay::Role;
 use std::time::Instant;
 
 /// Recorded triangles (48 bytes each in clip space) past which a draw
@@ -126,6 +130,9 @@ pub struct SoftBackend<'s> {
     /// Recorded triangles past which a draw rasterizes ahead of the flush:
     /// `RASTER_TRIANGLES`, or fewer in tests.
     raster_triangles: usize,
+    /// Recorded triangles past which a draw flushes first:
+    /// `FLUSH_TRIANGLES`, or fewer in tests.
+    flush_triangles: usize,
     ops: Vec<GpuOp>,
     queries: Vec<QueryState>,
     frame_start: Instant,
@@ -138,6 +145,9 @@ pub struct SoftBackend<'s> {
     /// build ended, µs (`None` before it): where `FrameStats::late_ms`
     /// starts.
     late_from_us: Option<f64>,
+    /// Whether draws are counted here or taken from another backend's
+    /// frame (`replay.rs`).
+    replay: Role,
 }
 
 impl<'s> SoftBackend<'s> {
@@ -160,6 +170,7 @@ impl<'s> SoftBackend<'s> {
             rasterized: Vec::new(),
             recorded: 0,
             raster_triangles: RASTER_TRIANGLES,
+            flush_triangles: FLUSH_TRIANGLES,
             ops: Vec::new(),
             queries: Vec::new(),
             frame_start: Instant::now(),
@@ -167,6 +178,7 @@ impl<'s> SoftBackend<'s> {
             query_mode: QueryMode::Hardware,
             batch_open: false,
             late_from_us: None,
+            replay: Role::Own,
         }
     }
 
@@ -233,7 +245,10 @@ impl<'s> SoftBackend<'s> {
     /// counts for the flush, whose time line they do not change.
     fn rasterize_recorded(&mut self) {
         let pending = &self.commands[self.rasterized.len()..];
-        let results = self.rasterizer.execute(&mut self.depth, &self.triangles, pending);
+        let results = match self.replay.taken(pending.len()) {
+            Some(replayed) => replayed,
+            None => self.rasterizer.execute(&mut self.depth, &self.triangles, pending),
+        };
         self.rasterized.extend(results);
         self.triangles.clear();
     }
@@ -250,6 +265,10 @@ impl<'s> SoftBackend<'s> {
         }
         self.rasterize_recorded();
         let results = std::mem::take(&mut self.rasterized);
+        let draws = self.commands.iter().zip(&self.ops).zip(&results);
+        self.replay.keep(
+            draws.filter(|((_, op), _)| op.query.is_none() && !op.cull).map(|((c, _), r)| (*r, c.triangles.len())),
+        );
         let (mut batch, mut batch_end) = (Vec::new(), 0.0);
         // CPU time the replayed submissions blocked (a bounded driver
         // queue): every command recorded after a blocked one was issued
@@ -294,7 +313,7 @@ impl<'s> SoftBackend<'s> {
     /// Draws instance `i` as one draw costing `fixed_us` of GPU time before
     /// its triangles and fragments; counts it.
     fn draw_instance(&mut self, i: u32, fixed_us: f64) {
-        if self.recorded >= FLUSH_TRIANGLES && !self.batch_open {
+        if self.recorded >= self.flush_triangles && !self.batch_open {
             self.flush();
         } else if self.triangles.len() >= self.raster_triangles {
             self.rasterize_recorded();
@@ -302,7 +321,12 @@ impl<'s> SoftBackend<'s> {
         let triangles = self.scene.instance_triangles(i as usize);
         self.count.draw(i, triangles);
         let first = self.triangles.len();
-        self.push_instance_triangles(i);
+        match self.replay.next_draw() {
+            // No triangles to rasterize, but counted towards the flush as
+            // the recording backend's were.
+            Some(recorded) => self.recorded += recorded,
+            None => self.push_instance_triangles(i),
+        }
         let op = GpuOp {
             issued_us: self.clock.cpu,
             fixed_us: self.model.draw_us(fixed_us, triangles),
@@ -340,6 +364,7 @@ impl Backend for SoftBackend<'_> {
         self.queries.clear();
         self.batch_open = false;
         self.late_from_us = None;
+        self.replay.begin_frame();
         self.frame_start = Instant::now();
     }
 
@@ -354,6 +379,7 @@ impl Backend for SoftBackend<'_> {
 
     fn issue_query(&mut self, boxes: &[Aabb]) -> QueryHandle {
         let camera = self.camera.expect("issue_query outside a frame");
+        assert!(!self.replay.replays(), "a backend replaying another's draws answers no query");
         let changed = self.count.query(boxes.len());
         self.charge_state_change(changed);
         self.clock.cpu_work(match self.query_mode {
@@ -421,6 +447,7 @@ impl Backend for SoftBackend<'_> {
 
     fn end_frame(&mut self) -> FrameStats {
         self.flush();
+        self.replay.keep_image(&self.depth);
         let c = &self.clock;
         let mut s = self.count.stats;
         s.frame_ms = c.frame_end() * 1e-3;
@@ -435,6 +462,9 @@ impl Backend for SoftBackend<'_> {
     }
 
     fn gpu_culling(&mut self) -> Result<&mut dyn GpuCulling, GpuCullingUnsupported> {
+        if self.replay.replays() {
+            return Err(GpuCullingUnsupported("a backend replaying another's draws runs no culling commands".into()));
+        }
         Ok(self)
     }
 
@@ -450,7 +480,9 @@ impl Backend for SoftBackend<'_> {
 impl Instruments for SoftBackend<'_> {
     fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.flush();
-        self.depth.copy_to(out);
+        if !self.replay.image(out) {
+            self.depth.copy_to(out);
+        }
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
