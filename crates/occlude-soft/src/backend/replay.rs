@@ -18,9 +18,10 @@
 //! `a_replayed_frame_has_the_figures_and_image_of_a_rasterized_one` checks
 //! it bit for bit, and the bench runner's tests do so on whole walkthroughs.
 //!
-//! A replaying backend rasterizes nothing, so it cannot answer a query, a
-//! GPU-culling command or an oracle: those panic (a wiring error of the
-//! caller, not an input).
+//! A replaying backend rasterizes no draw, so its depth buffer is empty
+//! during the frame: a query panics (a wiring error of the caller, not an
+//! input) and GPU-culling commands are refused (`gpu_culling` errs). The
+//! oracle pass draws into a buffer it clears itself, so it works as usual.
 
 use super::SoftBackend;
 use crate::raster::{CommandResult, DepthBuffer};
