@@ -6,8 +6,9 @@
 //!
 //! **Culled as it goes.** Candidates whose padded box
 //! ([`query_box::padded`]) the depth image already hides are not rasterized,
-//! by the depth-pyramid test of [`occlude_core::depth_pyramid`] (the test of
-//! `hiz`, exact rasterizer's footprint, bias and slack included):
+//! by the depth-pyramid test of [`occlude_core::depth_pyramid`] (`hiz`'s,
+//! with its footprint of the exact rasterizer's pixels, depth bias and
+//! slack):
 //!
 //! - In the drawing pass the candidates go nearest box first, and before
 //!   each rasterizer call of about `part` triangles the pyramid is rebuilt
