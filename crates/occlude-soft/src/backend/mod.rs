@@ -265,16 +265,12 @@ impl<'s> SoftBackend<'s> {
         }
         self.rasterize_recorded();
         let results = std::mem::take(&mut self.rasterized);
-        let draws = self.commands.iter().zip(&self.ops).zip(&results);
-        self.replay.keep(
-            draws.filter(|((_, op), _)| op.query.is_none() && !op.cull).map(|((c, _), r)| (*r, c.triangles.len())),
-        );
         let (mut batch, mut batch_end) = (Vec::new(), 0.0);
         // CPU time the replayed submissions blocked (a bounded driver
         // queue): every command recorded after a blocked one was issued
         // that much later.
         let mut blocked = 0.0;
-        for (op, r) in self.ops.iter().zip(&results) {
+        for ((op, r), command) in self.ops.iter().zip(&results).zip(&self.commands) {
             let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
             let submitted = self.clock.gpu_command(op.issued_us + blocked, cost_us);
             blocked += submitted.blocked;
@@ -295,7 +291,10 @@ impl<'s> SoftBackend<'s> {
                         r.passed
                     };
                 }
-                None if !op.cull => self.count.stats.fragments += r.fragments,
+                None if !op.cull => {
+                    self.count.stats.fragments += r.fragments;
+                    self.replay.keep(*r, command.triangles.len());
+                }
                 // A batched box test: its caller reads the counts.
                 None => {}
             }

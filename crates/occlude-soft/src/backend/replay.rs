@@ -70,11 +70,11 @@ impl Role {
         }
     }
 
-    /// Keeps, when recording, each draw command's counts and recorded
-    /// triangles, in order.
-    pub(super) fn keep(&self, draws: impl Iterator<Item = (CommandResult, usize)>) {
+    /// Keeps, when recording, the next draw command's counts and recorded
+    /// triangles.
+    pub(super) fn keep(&self, result: CommandResult, triangles: usize) {
         if let Self::Record(shared) = self {
-            shared.frame().draws.extend(draws);
+            shared.frame().draws.push((result, triangles));
         }
     }
 
