@@ -185,14 +185,16 @@ unsafe fn edge_spans(tri: &ScreenTriangle, intercepts: &mut [__m256d; 3]) -> Spa
             }
         }
     }
+    // Each edge bounds `lo` (inside to its right) or `hi`, chosen by a blend
+    // rather than a branch: which it is changes from triangle to triangle, so
+    // a branch would be mispredicted on about every subtile row.
+    let (none_lo, none_hi) = (_mm_set1_epi32(i32::MIN), _mm_set1_epi32(i32::MAX));
     for (i, (k, _)) in edges.iter().enumerate() {
         if exact >> i & 1 == 0 {
             let bound = _mm256_cvttpd_epi32(*k);
-            if tri.edges[i].a > 0.0 {
-                lo = _mm_max_epi32(lo, bound);
-            } else {
-                hi = _mm_min_epi32(hi, bound);
-            }
+            let right = _mm_set1_epi32(-i32::from(tri.edges[i].a > 0.0));
+            lo = _mm_max_epi32(lo, _mm_blendv_epi8(none_lo, bound, right));
+            hi = _mm_min_epi32(hi, _mm_blendv_epi8(bound, none_hi, right));
         }
     }
     let mut spans = Spans { lo: [0; 4], hi: [0; 4], exact };
