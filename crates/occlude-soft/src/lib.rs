@@ -10,5 +10,5 @@ pub mod raster;
 pub mod sat;
 pub mod workload;
 
-pub use backend::{DrawReplay, SoftBackend};
+pub use backend::{DrawReplay, SharedSetup, SoftBackend};
 pub use gpu_model::{GpuModel, GpuModelError};

@@ -15,7 +15,7 @@ use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
 use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene};
-use occlude_soft::{DrawReplay, SoftBackend};
+use occlude_soft::{DrawReplay, SharedSetup, SoftBackend};
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -45,20 +45,24 @@ pub struct BenchRun {
     pub warnings: Vec<String>,
 }
 
-/// Makes each method's backend: the soft rasterizer, or the wgpu backend
-/// over one scene upload shared by all methods.
+/// Makes each method's backend: the soft rasterizer (its backends sharing
+/// their triangles' set-up when given one, `occlude_soft::SharedSetup`:
+/// same figures, less CPU time when several lanes draw the same frame), or
+/// the wgpu backend over one scene upload shared by all methods.
 enum Renderer {
-    Soft,
+    Soft(Option<SharedSetup>),
     Wgpu(Arc<GpuScene>),
 }
 
 impl Renderer {
     /// Opens the GPU and uploads `scene` when `config` asks for wgpu; an
     /// adapter that cannot count queries as `config.queries` asks is
-    /// refused.
-    fn new(config: &BenchConfig, scene: &Scene) -> Result<Self> {
+    /// refused. Soft backends share their set-up when `lanes` (the run's
+    /// lane count) is more than one; a lone lane sets up in the
+    /// rasterizer's parallel steps instead.
+    fn new(config: &BenchConfig, scene: &Scene, lanes: usize) -> Result<Self> {
         Ok(match config.backend {
-            BackendKind::Soft => Self::Soft,
+            BackendKind::Soft => Self::Soft((lanes > 1).then(SharedSetup::new)),
             BackendKind::Wgpu => {
                 let ctx = Arc::new(GpuContext::new()?);
                 if config.queries == QueryMode::Hib {
@@ -79,9 +83,12 @@ impl Renderer {
     ) -> Result<Box<dyn Backend + Send + 's>> {
         let (w, h) = config.resolution;
         Ok(match self {
-            Self::Soft => {
+            Self::Soft(shared) => {
                 let mut soft = SoftBackend::new(scene, w, h, config.gpu_model.clone());
                 soft.set_query_mode(config.queries);
+                if let Some(shared) = shared {
+                    soft.share_setup(shared.clone());
+                }
                 match draws {
                     Draws::Own => {}
                     Draws::Record(shared) => soft.record_draws(shared),
@@ -99,7 +106,7 @@ impl Renderer {
 
     fn adapter(&self) -> Option<String> {
         match self {
-            Self::Soft => None,
+            Self::Soft(_) => None,
             Self::Wgpu(gpu) => Some(gpu.context().adapter_name()),
         }
     }
@@ -108,7 +115,7 @@ impl Renderer {
     /// figures are simulated, when `config` asks; never on a GPU, whose
     /// times the lanes would disturb.
     fn parallel_lanes(&self, config: &BenchConfig) -> bool {
-        matches!(self, Self::Soft) && config.parallel_lanes
+        matches!(self, Self::Soft(_)) && config.parallel_lanes
     }
 }
 
@@ -210,8 +217,9 @@ impl<'s> Lane<'s> {
 
 /// A run's lanes in chains: the lanes of a chain render a frame one after
 /// another (`ideal` after the `sw` whose draws it replays), the chains side
-/// by side when [`Self::parallel`]. Nothing else is shared between lanes,
-/// so the order they render in changes no figure.
+/// by side when [`Self::parallel`]. Nothing else is shared between lanes
+/// but the set-up of the frame's triangles (`SharedSetup`), the same
+/// whichever lane makes it, so the order they render in changes no figure.
 struct Lanes<'s> {
     chains: Vec<Vec<Lane<'s>>>,
     /// Per lane in report order (the `vfc` reference first), its chain and
@@ -353,7 +361,8 @@ fn run_scene_here(
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
 
-    let renderer = stage(progress, "uploading the scene", || Renderer::new(config, scene))?;
+    let lanes = 1 + config.methods.iter().filter(|m| m.as_str() != "vfc").count() + variant_methods.len();
+    let renderer = stage(progress, "uploading the scene", || Renderer::new(config, scene, lanes))?;
     let mut lanes = build_lanes(scene, config, variant_methods, &renderer)?;
     let mut warnings = Vec::new();
 
@@ -525,7 +534,9 @@ mod tests {
         let build = |parallel_lanes: bool| {
             let config = BenchConfig { parallel_lanes, ..config.clone() };
             let variants = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>().unwrap();
-            build_lanes(&scene, &config, variants, &Renderer::Soft).unwrap()
+            // Side by side with their set-up shared, one by one each its own.
+            let renderer = Renderer::Soft(parallel_lanes.then(SharedSetup::new));
+            build_lanes(&scene, &config, variants, &renderer).unwrap()
         };
         let (mut side_by_side, mut one_by_one) = (build(true), build(false));
         assert!(side_by_side.parallel && !one_by_one.parallel);
@@ -558,7 +569,7 @@ mod tests {
         let scene = occlude_scenes::load("city", config.size, config.seed, &config.import).unwrap();
         let hierarchy = Hierarchy::build(&scene, config.hierarchy, config.build);
         let (calls, counts) = (DrawCalls::default(), DrawReplay::default());
-        let backend = |draws| Renderer::Soft.backend(&scene, &config, draws).unwrap();
+        let backend = |draws| Renderer::Soft(None).backend(&scene, &config, draws).unwrap();
         let ideal = || BuiltMethod { method: Box::new(Ideal::new(Arc::clone(&calls))), params: Vec::new() };
         let vfc = Lane::new(create("vfc", &config.options).unwrap(), backend(Draws::Own));
         let mut lanes = Lanes::new(vfc, false);

@@ -37,12 +37,14 @@ mod culling;
 mod item_buffer;
 mod oracle;
 mod replay;
+mod shared_setup;
 
 pub use replay::DrawReplay;
+pub use shared_setup::SharedSetup;
 
 use crate::clock::SimClock;
 use crate::gpu_model::GpuModel;
-use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest, Rasterizer};
+use crate::raster::{Command, CommandKind, CommandResult, DepthBuffer, DepthTest, Prepared, Rasterizer};
 use glam::{Mat4, Vec4};
 use occlude_core::host_culling::HostResources;
 use occlude_core::query_box::{query_boxes, BOX_TRIANGLES, QUERY_DEPTH_BIAS};
@@ -51,6 +53,8 @@ use occlude_core::{
     Instruments, OracleView, QueryHandle, QueryMode, RenderState, Scene,
 };
 use replay::Role;
+use shared_setup::FrameSetup;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Recorded triangles (48 bytes each in clip space) past which a draw
@@ -125,6 +129,17 @@ pub struct SoftBackend<'s> {
     commands: Vec<Command>,
     /// The counts of the commands rasterized ahead of the flush, in order.
     rasterized: Vec<CommandResult>,
+    /// Per recorded command, the instance and triangle count of a draw
+    /// set up in [`Self::frame_setup`] rather than in `triangles`.
+    sources: Vec<Option<(u32, usize)>>,
+    /// Set-up triangles of the commands in `sources` not yet rasterized.
+    prepared_pending: usize,
+    /// The set-ups shared with other backends, if any
+    /// ([`Self::share_setup`]), and this frame's table of them.
+    shared_setup: Option<SharedSetup>,
+    frame_setup: Option<Arc<FrameSetup>>,
+    /// Scratch for setting an instance up for `frame_setup`.
+    setup_scratch: (Vec<Vec4>, Vec<[Vec4; 3]>),
     /// Triangles recorded since the last flush, rasterized or not.
     recorded: usize,
     /// Recorded triangles past which a draw rasterizes ahead of the flush:
@@ -168,6 +183,11 @@ impl<'s> SoftBackend<'s> {
             clip_scratch: Vec::new(),
             commands: Vec::new(),
             rasterized: Vec::new(),
+            sources: Vec::new(),
+            prepared_pending: 0,
+            shared_setup: None,
+            frame_setup: None,
+            setup_scratch: (Vec::new(), Vec::new()),
             recorded: 0,
             raster_triangles: RASTER_TRIANGLES,
             flush_triangles: FLUSH_TRIANGLES,
@@ -186,6 +206,14 @@ impl<'s> SoftBackend<'s> {
     /// counts, at the costs of that mode (module documentation).
     pub fn set_query_mode(&mut self, mode: QueryMode) {
         self.query_mode = mode;
+    }
+
+    /// Sets up its draws' triangles in `shared`, with the other backends
+    /// given a clone of it, from the next frame on: each instance once per
+    /// camera for all of them ([`SharedSetup`]). Changes no image, count or
+    /// time; for backends rendering the same frames side by side.
+    pub fn share_setup(&mut self, shared: SharedSetup) {
+        self.shared_setup = Some(shared);
     }
 
     /// The cost model in use.
@@ -237,6 +265,7 @@ impl<'s> SoftBackend<'s> {
     fn record(&mut self, kind: CommandKind, first_triangle: usize, cull_back: bool, mut op: GpuOp) {
         op.fixed_us += std::mem::take(&mut self.pending_state_us);
         self.commands.push(Command { kind, triangles: first_triangle as u32..self.triangles.len() as u32, cull_back });
+        self.sources.push(None);
         self.recorded += self.triangles.len() - first_triangle;
         self.ops.push(op);
     }
@@ -244,13 +273,24 @@ impl<'s> SoftBackend<'s> {
     /// Rasterizes the commands recorded and not yet rasterized, keeping their
     /// counts for the flush, whose time line they do not change.
     fn rasterize_recorded(&mut self) {
-        let pending = &self.commands[self.rasterized.len()..];
+        let done = self.rasterized.len();
+        let pending = &self.commands[done..];
         let results = match self.replay.taken(pending.len()) {
             Some(replayed) => replayed,
-            None => self.rasterizer.execute(&mut self.depth, &self.triangles, pending),
+            None => {
+                let prepared: Vec<Option<&Prepared>> = match &self.frame_setup {
+                    Some(setup) => self.sources[done..]
+                        .iter()
+                        .map(|s| s.map(|(i, _)| setup.get(i).expect("set up when recorded")))
+                        .collect(),
+                    None => Vec::new(),
+                };
+                self.rasterizer.execute_prepared(&mut self.depth, &self.triangles, pending, &prepared)
+            }
         };
         self.rasterized.extend(results);
         self.triangles.clear();
+        self.prepared_pending = 0;
     }
 
     /// Rasterizes everything recorded and replays the GPU time line.
@@ -270,7 +310,7 @@ impl<'s> SoftBackend<'s> {
         // queue): every command recorded after a blocked one was issued
         // that much later.
         let mut blocked = 0.0;
-        for ((op, r), command) in self.ops.iter().zip(&results).zip(&self.commands) {
+        for ((op, r), (command, source)) in self.ops.iter().zip(&results).zip(self.commands.iter().zip(&self.sources)) {
             let cost_us = op.fixed_us + (r.fragments as f64 * op.fragment_ns + r.passed as f64 * op.passed_ns) * 1e-3;
             let submitted = self.clock.gpu_command(op.issued_us + blocked, cost_us);
             blocked += submitted.blocked;
@@ -293,7 +333,7 @@ impl<'s> SoftBackend<'s> {
                 }
                 None if !op.cull => {
                     self.count.stats.fragments += r.fragments;
-                    self.replay.keep(*r, command.triangles.len());
+                    self.replay.keep(*r, source.map_or(command.triangles.len(), |(_, n)| n));
                 }
                 // A batched box test: its caller reads the counts.
                 None => {}
@@ -305,6 +345,7 @@ impl<'s> SoftBackend<'s> {
         self.batch_open = false;
         self.recorded = 0;
         self.commands.clear();
+        self.sources.clear();
         self.ops.clear();
         results
     }
@@ -314,17 +355,25 @@ impl<'s> SoftBackend<'s> {
     fn draw_instance(&mut self, i: u32, fixed_us: f64) {
         if self.recorded >= self.flush_triangles && !self.batch_open {
             self.flush();
-        } else if self.triangles.len() >= self.raster_triangles {
+        } else if self.triangles.len() + self.prepared_pending >= self.raster_triangles {
             self.rasterize_recorded();
         }
         let triangles = self.scene.instance_triangles(i as usize);
         self.count.draw(i, triangles);
         let first = self.triangles.len();
-        match self.replay.next_draw() {
+        let mut source = None;
+        match (self.replay.next_draw(), &self.frame_setup) {
             // No triangles to rasterize, but counted towards the flush as
             // the recording backend's were.
-            Some(recorded) => self.recorded += recorded,
-            None => self.push_instance_triangles(i),
+            (Some(recorded), _) => self.recorded += recorded,
+            (None, Some(setup)) => {
+                let prepared = setup.get_or_prepare(self.scene, i, &self.rasterizer, &mut self.setup_scratch);
+                self.prepared_pending += prepared.len();
+                let n = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].indices.len() / 3;
+                self.recorded += n;
+                source = Some((i, n));
+            }
+            (None, None) => self.push_instance_triangles(i),
         }
         let op = GpuOp {
             issued_us: self.clock.cpu,
@@ -335,6 +384,7 @@ impl<'s> SoftBackend<'s> {
             cull: false,
         };
         self.record(CommandKind::Draw, first, false, op);
+        *self.sources.last_mut().expect("the draw just recorded") = source;
     }
 
     fn query_state(&mut self, query: QueryHandle) -> QueryState {
@@ -364,6 +414,8 @@ impl Backend for SoftBackend<'_> {
         self.batch_open = false;
         self.late_from_us = None;
         self.replay.begin_frame();
+        let (width, height, instances) = (self.depth.width(), self.depth.height(), self.scene.instances.len());
+        self.frame_setup = self.shared_setup.as_ref().map(|s| s.frame(self.view_projection, width, height, instances));
         self.frame_start = Instant::now();
     }
 
@@ -529,6 +581,28 @@ mod tests {
         (camera, Aabb::new(Vec3::new(-0.1, -0.1, -3.0), Vec3::new(0.1, 0.1, -2.9)))
     }
 
+    /// What a frame of draws and queries with checks between them gave:
+    /// its statistics (but wall time), whether the first query was
+    /// available when checked, both counts and the image's bits.
+    type Figures = (FrameStats, bool, [u64; 2], Vec<u32>);
+
+    /// Renders [`quads`] through `camera` on `backend` in draws and
+    /// queries (one of `hidden`) with checks between them.
+    fn draws_and_queries(backend: &mut SoftBackend, camera: &Camera, hidden: Aabb) -> Figures {
+        backend.begin_frame(camera);
+        backend.draw(&[3, 1, 12]);
+        let early = backend.issue_query(&[hidden]);
+        backend.draw(&[0, 2, 4, 5]);
+        let available = backend.is_available(early);
+        let late = backend.issue_query(&[Aabb::new(Vec3::new(-0.2, -0.2, -2.3), Vec3::new(0.3, 0.3, -1.0))]);
+        backend.draw(&[6, 7, 8, 9, 10, 11]);
+        let pixels = [backend.result(early), backend.result(late)];
+        let mut depth = Vec::new();
+        backend.depth_image(&mut depth);
+        let stats = FrameStats { wall_ms: 0.0, ..backend.end_frame() };
+        (stats, available, pixels, depth.iter().map(|d| d.to_bits()).collect())
+    }
+
     /// Rasterizing ahead of the flush (after every draw, every few, never)
     /// gives the same image, query counts and frame statistics, bit for bit,
     /// in a frame of draws and queries with a bounded driver queue (so that
@@ -541,23 +615,43 @@ mod tests {
         let frame = |raster_triangles: usize| {
             let mut backend = SoftBackend::new(&scene, 97, 71, model.clone());
             backend.raster_triangles = raster_triangles;
-            backend.begin_frame(&camera);
-            backend.draw(&[3, 1, 12]);
-            let early = backend.issue_query(&[hidden]);
-            backend.draw(&[0, 2, 4, 5]);
-            let available = backend.is_available(early);
-            let late = backend.issue_query(&[Aabb::new(Vec3::new(-0.2, -0.2, -2.3), Vec3::new(0.3, 0.3, -1.0))]);
-            backend.draw(&[6, 7, 8, 9, 10, 11]);
-            let pixels = [backend.result(early), backend.result(late)];
-            let mut depth = Vec::new();
-            backend.depth_image(&mut depth);
-            let stats = FrameStats { wall_ms: 0.0, ..backend.end_frame() };
-            (stats, available, pixels, depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
+            draws_and_queries(&mut backend, &camera, hidden)
         };
         let never = frame(usize::MAX);
         assert!(never.2[1] > 0 && never.0.submit_wait_ms > 0.0, "{never:?}");
         for raster_triangles in [1, 2, 5, 13] {
             assert_eq!(frame(raster_triangles), never, "ahead every {raster_triangles} triangles");
+        }
+    }
+
+    /// Backends sharing their set-up give, bit for bit, the figures of a
+    /// backend setting up for itself: the first of a camera setting every
+    /// instance up, the next ones finding them set up, with another camera
+    /// (a new table) in between, rasterizing ahead of the flush or not.
+    #[test]
+    fn sharing_the_set_up_changes_no_figure() {
+        let scene = quads();
+        let (camera, hidden) = view_and_hidden_box();
+        let key = Keyframe {
+            time: 0.0,
+            position: Vec3::new(0.3, 0.2, 0.4),
+            target: Vec3::new(0.1, 0.0, -2.0),
+            fov_y_deg: 50.0,
+        };
+        let other = key.camera(4.0 / 3.0, 0.1, 100.0);
+        let model = GpuModel { gpu_draw_call_us: 40.0, driver_queue_us: 60.0, ..GpuModel::modern() };
+        let alone =
+            |camera: &Camera| draws_and_queries(&mut SoftBackend::new(&scene, 97, 71, model.clone()), camera, hidden);
+        let shared = SharedSetup::new();
+        for camera in [&camera, &other, &camera] {
+            let expected = alone(camera);
+            for raster_triangles in [usize::MAX, 1, 5] {
+                let mut backend = SoftBackend::new(&scene, 97, 71, model.clone());
+                backend.share_setup(shared.clone());
+                backend.raster_triangles = raster_triangles;
+                assert_eq!(draws_and_queries(&mut backend, camera, hidden), expected, "ahead every {raster_triangles}");
+                assert!(backend.frame_setup.as_ref().is_some_and(|s| s.get(12).is_some()), "set up in the table");
+            }
         }
     }
 

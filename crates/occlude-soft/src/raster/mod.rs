@@ -310,13 +310,44 @@ impl Rasterizer {
         triangles: &[[Vec4; 3]],
         commands: &[Command],
     ) -> Vec<CommandResult> {
-        for c in commands {
+        self.execute_prepared(depth, triangles, commands, &[])
+    }
+
+    /// [`Self::execute`], where the commands that `prepared` gives a
+    /// [`Prepared`] for (`prepared[c]` for command `c`; an empty `prepared`
+    /// for none) rasterize its set-up triangles instead of their range of
+    /// `triangles` (empty, then), with the same results as if they had been
+    /// set up here.
+    ///
+    /// # Panics
+    /// As [`Self::execute`]; also if `prepared` is neither empty nor one per
+    /// command, or holds a set-up for another viewport or back-face rule
+    /// than its command's.
+    pub fn execute_prepared(
+        &mut self,
+        depth: &mut DepthBuffer,
+        triangles: &[[Vec4; 3]],
+        commands: &[Command],
+        prepared: &[Option<&Prepared>],
+    ) -> Vec<CommandResult> {
+        assert!(prepared.is_empty() || prepared.len() == commands.len(), "one prepared set-up or none per command");
+        for (i, c) in commands.iter().enumerate() {
             assert!(
                 c.triangles.start <= c.triangles.end && c.triangles.end as usize <= triangles.len(),
                 "command triangle range {:?} out of bounds of {} triangles",
                 c.triangles,
                 triangles.len()
             );
+            if let Some(p) = prepared.get(i).copied().flatten() {
+                assert!(
+                    (p.width, p.height, p.cull_back) == (depth.width, depth.height, c.cull_back),
+                    "a set-up prepared for {}x{} drawn into {}x{}, or with another back-face rule",
+                    p.width,
+                    p.height,
+                    depth.width,
+                    depth.height
+                );
+            }
         }
         let mut results = vec![CommandResult::default(); commands.len()];
         let (width, height) = (depth.width, depth.height);
@@ -324,7 +355,7 @@ impl Rasterizer {
             return results;
         }
         let grid = TileGrid::new(width, height);
-        self.setup_and_bin(Viewport::new(width, height), grid, triangles, commands);
+        self.setup_and_bin(Viewport::new(width, height), grid, triangles, commands, prepared);
         self.kinds.clear();
         self.kinds.extend(commands.iter().map(|c| c.kind));
         self.found.clear();
@@ -373,12 +404,19 @@ impl Rasterizer {
 
     /// Clips, sets up and bins every command's triangles into `self.chunks`, in
     /// command order, in parallel over chunks of consecutive triangles.
-    fn setup_and_bin(&mut self, viewport: Viewport, grid: TileGrid, triangles: &[[Vec4; 3]], commands: &[Command]) {
+    fn setup_and_bin(
+        &mut self,
+        viewport: Viewport,
+        grid: TileGrid,
+        triangles: &[[Vec4; 3]],
+        commands: &[Command],
+        prepared: &[Option<&Prepared>],
+    ) {
         self.starts.clear();
         let mut total = 0usize;
-        for c in commands {
+        for (i, c) in commands.iter().enumerate() {
             self.starts.push(total);
-            total += c.triangles.len();
+            total += prepared.get(i).copied().flatten().map_or(c.triangles.len(), |p| p.triangles.len());
         }
         self.starts.push(total);
         // About four chunks per thread, for balance.
@@ -391,15 +429,95 @@ impl Rasterizer {
         self.chunks.par_iter_mut().enumerate().for_each(|(ci, chunk)| {
             chunk.clear(grid);
             let lo = ci * chunk_len;
-            let span = SetupSpan { triangles, commands, starts, range: lo..(lo + chunk_len).min(total) };
+            let span = SetupSpan { triangles, commands, prepared, starts, range: lo..(lo + chunk_len).min(total) };
+            let mut binning = Binning { chunk, grid };
             match kernel {
-                Kernel::Scalar => setup_span(kernel, chunk, grid, viewport, &span),
+                Kernel::Scalar => setup_span(kernel, &mut binning, viewport, &span),
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-                Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, chunk, grid, viewport, &span) },
+                Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, &mut binning, viewport, &span) },
             }
             chunk.bin(grid);
         });
+    }
+}
+
+/// A draw's or query's triangles set up once ([`Rasterizer::prepare`]) for
+/// rasterizers that draw them into buffers of one size with one camera (the
+/// lanes of a benchmark run drawing an instance in the same frame): each
+/// then bins and rasterizes them without setting them up again, with the
+/// results of setting them up itself.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    width: u32,
+    height: u32,
+    cull_back: bool,
+    /// The set-up triangles in input order, those that may cover a pixel
+    /// centre; their command index is set when they are binned.
+    triangles: Vec<RasterTri>,
+}
+
+impl Prepared {
+    /// The set-up triangles kept: those that may cover a pixel centre.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Whether no triangle may cover a pixel centre.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+}
+
+impl Rasterizer {
+    /// Sets up `triangles` for a `width` x `height` buffer as
+    /// [`Self::execute`] would for a command of them with `cull_back`, for
+    /// [`Self::execute_prepared`]. Runs on the calling thread.
+    pub fn prepare(&self, width: u32, height: u32, triangles: &[[Vec4; 3]], cull_back: bool) -> Prepared {
+        let mut out = Vec::new();
+        let n = triangles.len();
+        let command = Command { kind: CommandKind::Draw, triangles: 0..n as u32, cull_back };
+        let span = SetupSpan {
+            triangles,
+            commands: std::slice::from_ref(&command),
+            prepared: &[],
+            starts: &[0, n],
+            range: 0..n,
+        };
+        let viewport = Viewport::new(width, height);
+        match self.kernel {
+            Kernel::Scalar => setup_span(self.kernel, &mut out, viewport, &span),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+            Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, &mut out, viewport, &span) },
+        }
+        Prepared { width, height, cull_back, triangles: out }
+    }
+}
+
+/// Where [`setup_span`] puts the triangles it sets up: a chunk binning them,
+/// or a list keeping them ([`Prepared`]).
+trait Staging {
+    fn stage(&mut self, t: RasterTri);
+}
+
+/// A chunk binning to the tiles of `grid`.
+struct Binning<'a> {
+    chunk: &'a mut Chunk,
+    grid: TileGrid,
+}
+
+impl Staging for Binning<'_> {
+    #[inline(always)]
+    fn stage(&mut self, t: RasterTri) {
+        self.chunk.push(self.grid, t);
+    }
+}
+
+impl Staging for Vec<RasterTri> {
+    #[inline(always)]
+    fn stage(&mut self, t: RasterTri) {
+        self.push(t);
     }
 }
 
@@ -407,24 +525,27 @@ impl Rasterizer {
 struct SetupSpan<'a> {
     triangles: &'a [[Vec4; 3]],
     commands: &'a [Command],
+    /// Per command, its triangles already set up, if so (or empty: none).
+    prepared: &'a [Option<&'a Prepared>],
     /// Start of each command in the concatenation (and its end).
     starts: &'a [usize],
     range: Range<usize>,
 }
 
-/// Clips and sets up the triangles of `span` into `chunk`, in order; with an AVX2
+/// Clips and sets up the triangles of `span` into `out`, in order (a command's
+/// [`Prepared`] set-up copied with the command's index); with an AVX2
 /// kernel, four at a time where they need no clipping (`setup_avx2`), after
 /// dropping, four at a time, those whose bounding box holds no pixel centre
 /// (`setup_avx2::uncovered4`, about a third of `setup4`'s work): most of the
 /// triangles of a large scene at 1024x768 are smaller than a pixel.
 #[inline(always)]
-fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
+fn setup_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span: &SetupSpan<'_>) {
     // Only the x86-64 kernels have a four-at-a-time set-up.
     #[cfg(not(target_arch = "x86_64"))]
     let _ = kernel;
-    let emit = |chunk: &mut Chunk, t: SetupTri| {
+    let emit = |out: &mut S, t: SetupTri| {
         if let Some(r) = RasterTri::new(&t) {
-            chunk.push(grid, r);
+            out.stage(r);
         }
     };
     let mut poly = clip::Polygon::new();
@@ -435,6 +556,15 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
     while g < hi {
         let c = &span.commands[cmd];
         let end = hi.min(span.starts[cmd + 1]);
+        if let Some(p) = span.prepared.get(cmd).copied().flatten() {
+            let at = g - span.starts[cmd];
+            for t in &p.triangles[at..at + (end - g)] {
+                out.stage(RasterTri { cmd: cmd as u32, ..*t });
+            }
+            g = end;
+            cmd += 1;
+            continue;
+        }
         let first = c.triangles.start as usize + (g - span.starts[cmd]);
         let mut rest = &span.triangles[first..first + (end - g)];
         #[cfg(target_arch = "x86_64")]
@@ -445,16 +575,16 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
             // The triangles that may cover a pixel centre, set up four at a time.
             let mut pending = [[Vec4::ZERO; 3]; 4];
             let mut n = 0;
-            let mut set_up = |chunk: &mut Chunk, tris: &[[Vec4; 3]; 4], n: usize| {
+            let mut set_up = |out: &mut S, tris: &[[Vec4; 3]; 4], n: usize| {
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
                 let lanes = unsafe { setup_avx2::setup4(tris, c.cull_back, cmd as u32, viewport, &mut four) };
                 for (i, (tri, r)) in tris.iter().zip(&four).take(n).enumerate() {
                     if lanes.ready & (1 << i) != 0 {
                         if let Some(r) = r.covered_rows() {
-                            chunk.push(grid, r);
+                            out.stage(r);
                         }
                     } else if lanes.scalar & (1 << i) != 0 {
-                        setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(chunk, t));
+                        setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(out, t));
                     }
                 }
             };
@@ -463,7 +593,7 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
                 // SAFETY: as above.
                 let uncovered = unsafe { setup_avx2::uncovered4(group, viewport) };
                 if uncovered == 0 && n == 0 {
-                    set_up(chunk, group, 4);
+                    set_up(out, group, 4);
                     continue;
                 }
                 for (i, tri) in group.iter().enumerate() {
@@ -471,7 +601,7 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
                         pending[n] = *tri;
                         n += 1;
                         if n == 4 {
-                            set_up(chunk, &pending, 4);
+                            set_up(out, &pending, 4);
                             n = 0;
                         }
                     }
@@ -482,11 +612,11 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
                 // not read.
                 let last = pending[n - 1];
                 pending[n..].fill(last);
-                set_up(chunk, &pending, n);
+                set_up(out, &pending, n);
             }
         }
         for tri in rest {
-            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(chunk, t));
+            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(out, t));
         }
         g = end;
         cmd += 1;
@@ -499,8 +629,8 @@ fn setup_span(kernel: Kernel, chunk: &mut Chunk, grid: TileGrid, viewport: Viewp
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn setup_span_avx2(avx2: Avx2, chunk: &mut Chunk, grid: TileGrid, viewport: Viewport, span: &SetupSpan<'_>) {
-    setup_span(Kernel::Avx2(avx2), chunk, grid, viewport, span);
+unsafe fn setup_span_avx2<S: Staging>(avx2: Avx2, out: &mut S, viewport: Viewport, span: &SetupSpan<'_>) {
+    setup_span(Kernel::Avx2(avx2), out, viewport, span);
 }
 
 /// Executes `commands` with a fresh [`Rasterizer`]; see [`Rasterizer::execute`].

@@ -499,6 +499,47 @@ fn mixed_commands(n: u32) -> Vec<Command> {
     commands
 }
 
+/// Commands whose triangles were set up beforehand ([`Rasterizer::prepare`],
+/// every other command, by another rasterizer) give the results and image of
+/// setting them up in the call, with either kernel, in one call or several.
+#[test]
+fn prepared_commands_give_the_results_of_commands_set_up_in_the_call() {
+    let tris = random_scene(400, 13);
+    let commands = mixed_commands(tris.len() as u32);
+    let size = (333, 251);
+    for raster in [Rasterizer::new, Rasterizer::scalar] {
+        let mut expected_depth = DepthBuffer::new(size.0, size.1);
+        let expected = raster().execute(&mut expected_depth, &tris, &commands);
+        let preparer = raster();
+        let prepared: Vec<Option<Prepared>> = commands
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let range = c.triangles.start as usize..c.triangles.end as usize;
+                (i % 2 == 0).then(|| preparer.prepare(size.0, size.1, &tris[range], c.cull_back))
+            })
+            .collect();
+        assert!(prepared.iter().flatten().any(|p| !p.is_empty()) && prepared.iter().flatten().any(Prepared::is_empty));
+        // The prepared commands' own ranges are not read: empty them.
+        let emptied: Vec<Command> = commands
+            .iter()
+            .zip(&prepared)
+            .map(|(c, p)| if p.is_some() { cmd(c.kind, 0..0, c.cull_back) } else { c.clone() })
+            .collect();
+        let refs: Vec<Option<&Prepared>> = prepared.iter().map(Option::as_ref).collect();
+        for split in [emptied.len(), 5] {
+            let mut depth = DepthBuffer::new(size.0, size.1);
+            let mut rasterizer = raster();
+            let mut results = Vec::new();
+            for (commands, prepared) in emptied.chunks(split).zip(refs.chunks(split)) {
+                results.extend(rasterizer.execute_prepared(&mut depth, &tris, commands, prepared));
+            }
+            assert_eq!(results, expected, "in calls of {split} commands");
+            assert_eq!(bits(&depth), bits(&expected_depth), "in calls of {split} commands");
+        }
+    }
+}
+
 #[test]
 fn simd_and_scalar_match_the_per_pixel_reference() {
     // Odd sizes, several tiles, a few execute calls on the same buffer so that the

@@ -1,0 +1,102 @@
+//! [`SharedSetup`]: instances' triangles set up once per camera for every
+//! soft backend drawing the same scene at the same resolution.
+//!
+//! The lanes of a benchmark run render the same frame side by side, each
+//! with its own depth buffer, and most of them draw many of the same
+//! instances: view-frustum culling every one in the frustum, the others
+//! what they find visible. A triangle's set-up (transform, projection,
+//! snapping, edges, depth plane) depends only on the instance, the camera's
+//! view-projection and the buffer's size, never on what was drawn before,
+//! so one lane's set-up is every lane's: the first lane to draw an instance
+//! in a frame sets it up ([`Rasterizer::prepare`]) and keeps it here, the
+//! others bin and rasterize it from here
+//! ([`Rasterizer::execute_prepared`]). Images, counts and times are those
+//! of setting it up in each lane (tested); what changes is how often the
+//! CPU running the benchmark does it.
+
+use crate::raster::{Prepared, Rasterizer};
+use glam::{Mat4, Vec4};
+use occlude_core::Scene;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Set-ups shared by the soft backends that [`SoftBackend::share_setup`]
+/// gives a clone of: a table for the latest camera any of them began a
+/// frame with. Backends rendering the same frames in step (a benchmark's
+/// lanes, frame after frame) share one table a frame; a backend beginning a
+/// frame with another camera or buffer size starts a new table, which the
+/// others find when they begin a frame with that camera, and keeps
+/// setting up in it for itself meanwhile. A table holds, until the last
+/// backend using it begins another frame, the set-up triangles of every
+/// instance drawn through its camera that may cover a pixel centre, 64
+/// bytes each: `occlude bench --paper chc --scene teapots` (paper size)
+/// peaked at 510 MB resident with shared set-ups, 114 MB without.
+///
+/// [`SoftBackend::share_setup`]: super::SoftBackend::share_setup
+#[derive(Clone, Debug, Default)]
+pub struct SharedSetup {
+    latest: Arc<Mutex<Option<Arc<FrameSetup>>>>,
+}
+
+impl SharedSetup {
+    /// A table no backend uses yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The table for frames of `instances` instances seen through
+    /// `view_projection` at `width` x `height`: the latest one if it is for
+    /// those, else a new one, which becomes the latest.
+    pub(super) fn frame(&self, view_projection: Mat4, width: u32, height: u32, instances: usize) -> Arc<FrameSetup> {
+        let mut latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let same = |f: &FrameSetup| {
+            f.is_for(&view_projection) && (f.width, f.height, f.slots.len()) == (width, height, instances)
+        };
+        match latest.as_ref().filter(|f| same(f)) {
+            Some(f) => Arc::clone(f),
+            None => {
+                let slots = (0..instances).map(|_| OnceLock::new()).collect();
+                let f = Arc::new(FrameSetup { view_projection, width, height, slots });
+                *latest = Some(Arc::clone(&f));
+                f
+            }
+        }
+    }
+}
+
+/// The set-ups of one camera and buffer size, one slot per instance.
+#[derive(Debug)]
+pub(super) struct FrameSetup {
+    view_projection: Mat4,
+    width: u32,
+    height: u32,
+    slots: Vec<OnceLock<Prepared>>,
+}
+
+impl FrameSetup {
+    /// Instance `i`'s set-up, made now (by `rasterizer`, its clip-space
+    /// triangles in `scratch`) if no backend has made it yet.
+    pub(super) fn get_or_prepare(
+        &self,
+        scene: &Scene,
+        i: u32,
+        rasterizer: &Rasterizer,
+        scratch: &mut (Vec<Vec4>, Vec<[Vec4; 3]>),
+    ) -> &Prepared {
+        self.slots[i as usize].get_or_init(|| {
+            let (clip, triangles) = scratch;
+            triangles.clear();
+            scene.push_clip_triangles(i, &self.view_projection, clip, triangles);
+            rasterizer.prepare(self.width, self.height, triangles, false)
+        })
+    }
+
+    /// Whether its set-ups are for `view_projection`.
+    fn is_for(&self, view_projection: &Mat4) -> bool {
+        self.view_projection.to_cols_array().map(f32::to_bits) == view_projection.to_cols_array().map(f32::to_bits)
+    }
+
+    /// Instance `i`'s set-up, if made.
+    pub(super) fn get(&self, i: u32) -> Option<&Prepared> {
+        self.slots[i as usize].get()
+    }
+}
