@@ -132,14 +132,12 @@ pub struct SoftBackend<'s> {
     /// Per recorded command, the instance and triangle count of a draw
     /// set up in [`Self::frame_setup`] rather than in `triangles`.
     sources: Vec<Option<(u32, usize)>>,
-    /// Set-up triangles of the commands in `sources` not yet rasterized.
+    /// Input triangles of the commands in `sources` not yet rasterized.
     prepared_pending: usize,
     /// The set-ups shared with other backends, if any
     /// ([`Self::share_setup`]), and this frame's table of them.
     shared_setup: Option<SharedSetup>,
     frame_setup: Option<Arc<FrameSetup>>,
-    /// Scratch for setting an instance up for `frame_setup`.
-    setup_scratch: (Vec<Vec4>, Vec<[Vec4; 3]>),
     /// Triangles recorded since the last flush, rasterized or not.
     recorded: usize,
     /// Recorded triangles past which a draw rasterizes ahead of the flush:
@@ -187,7 +185,6 @@ impl<'s> SoftBackend<'s> {
             prepared_pending: 0,
             shared_setup: None,
             frame_setup: None,
-            setup_scratch: (Vec::new(), Vec::new()),
             recorded: 0,
             raster_triangles: RASTER_TRIANGLES,
             flush_triangles: FLUSH_TRIANGLES,
@@ -279,10 +276,14 @@ impl<'s> SoftBackend<'s> {
             Some(replayed) => replayed,
             None => {
                 let prepared: Vec<Option<&Prepared>> = match &self.frame_setup {
-                    Some(setup) => self.sources[done..]
-                        .iter()
-                        .map(|s| s.map(|(i, _)| setup.get(i).expect("set up when recorded")))
-                        .collect(),
+                    Some(setup) => {
+                        let instances: Vec<u32> = self.sources[done..].iter().flatten().map(|&(i, _)| i).collect();
+                        setup.prepare(self.scene, &instances, &self.rasterizer);
+                        self.sources[done..]
+                            .iter()
+                            .map(|s| s.map(|(i, _)| setup.get(i).expect("set up just now")))
+                            .collect()
+                    }
                     None => Vec::new(),
                 };
                 self.rasterizer.execute_prepared(&mut self.depth, &self.triangles, pending, &prepared)
@@ -366,10 +367,10 @@ impl<'s> SoftBackend<'s> {
             // No triangles to rasterize, but counted towards the flush as
             // the recording backend's were.
             (Some(recorded), _) => self.recorded += recorded,
-            (None, Some(setup)) => {
-                let prepared = setup.get_or_prepare(self.scene, i, &self.rasterizer, &mut self.setup_scratch);
-                self.prepared_pending += prepared.len();
+            // Set up (or found set up) when rasterized.
+            (None, Some(_)) => {
                 let n = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].indices.len() / 3;
+                self.prepared_pending += n;
                 self.recorded += n;
                 source = Some((i, n));
             }

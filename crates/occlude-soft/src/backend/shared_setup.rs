@@ -7,16 +7,18 @@
 //! what they find visible. A triangle's set-up (transform, projection,
 //! snapping, edges, depth plane) depends only on the instance, the camera's
 //! view-projection and the buffer's size, never on what was drawn before,
-//! so one lane's set-up is every lane's: the first lane to draw an instance
-//! in a frame sets it up ([`Rasterizer::prepare`]) and keeps it here, the
-//! others bin and rasterize it from here
+//! so one lane's set-up is every lane's: the first lane to rasterize an
+//! instance in a frame sets it up ([`Rasterizer::prepare`], the instances
+//! of a rasterizer call in parallel) and keeps it here, the others bin and
+//! rasterize it from here
 //! ([`Rasterizer::execute_prepared`]). Images, counts and times are those
 //! of setting it up in each lane (tested); what changes is how often the
 //! CPU running the benchmark does it.
 
 use crate::raster::{Prepared, Rasterizer};
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 use occlude_core::Scene;
+use rayon::prelude::*;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Set-ups shared by the soft backends that [`SoftBackend::share_setup`]
@@ -28,8 +30,9 @@ use std::sync::{Arc, Mutex, OnceLock};
 /// setting up in it for itself meanwhile. A table holds, until the last
 /// backend using it begins another frame, the set-up triangles of every
 /// instance drawn through its camera that may cover a pixel centre, 64
-/// bytes each: `occlude bench --paper chc --scene teapots` (paper size)
-/// peaked at 510 MB resident with shared set-ups, 114 MB without.
+/// bytes each: `occlude bench --paper chc --scene plant --frames 30`
+/// (paper size) peaked at 447 MB resident with shared set-ups, 127 MB
+/// without.
 ///
 /// [`SoftBackend::share_setup`]: super::SoftBackend::share_setup
 #[derive(Clone, Debug, Default)]
@@ -73,21 +76,19 @@ pub(super) struct FrameSetup {
 }
 
 impl FrameSetup {
-    /// Instance `i`'s set-up, made now (by `rasterizer`, its clip-space
-    /// triangles in `scratch`) if no backend has made it yet.
-    pub(super) fn get_or_prepare(
-        &self,
-        scene: &Scene,
-        i: u32,
-        rasterizer: &Rasterizer,
-        scratch: &mut (Vec<Vec4>, Vec<[Vec4; 3]>),
-    ) -> &Prepared {
-        self.slots[i as usize].get_or_init(|| {
-            let (clip, triangles) = scratch;
-            triangles.clear();
-            scene.push_clip_triangles(i, &self.view_projection, clip, triangles);
-            rasterizer.prepare(self.width, self.height, triangles, false)
-        })
+    /// Sets up those of `instances` no backend has set up yet, in parallel
+    /// (rayon), with `rasterizer`'s kernel.
+    pub(super) fn prepare(&self, scene: &Scene, instances: &[u32], rasterizer: &Rasterizer) {
+        instances.par_iter().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(clip, triangles), &i| {
+                self.slots[i as usize].get_or_init(|| {
+                    triangles.clear();
+                    scene.push_clip_triangles(i, &self.view_projection, clip, triangles);
+                    rasterizer.prepare(self.width, self.height, triangles, false)
+                });
+            },
+        );
     }
 
     /// Whether its set-ups are for `view_projection`.

@@ -84,7 +84,11 @@ impl RasterTri {
     }
 
     /// `self`, whose rows are its bounding box's (`y0 == plane_y`), with the rows
-    /// that a horizontal edge excludes removed; `None` when it excludes every row.
+    /// that a horizontal edge excludes removed; `None` when it excludes every row,
+    /// or when the rows left hold at most 2 x 2 pixel centres and the triangle
+    /// covers none of them. Most triangles of a large scene are that small, and
+    /// most of those cover no centre; dropped here, they are neither binned nor
+    /// rasterized.
     #[inline(always)]
     pub fn covered_rows(mut self) -> Option<Self> {
         let (mut y0, mut y1) = (i64::from(self.y0), i64::from(self.y1));
@@ -102,7 +106,23 @@ impl RasterTri {
             }
         }
         (self.y0, self.y1) = (y0 as i32, y1 as i32);
-        (y0 <= y1).then_some(self)
+        if y0 > y1 {
+            return None;
+        }
+        if self.x1 - self.x0 < 2 && y1 - y0 < 2 {
+            let [(g0, a0, b0), (g1, a1, b1), (g2, a2, b2)] = self.edges_at(self.x0, self.plane_y);
+            let first = y0 - i64::from(self.plane_y);
+            let mut covers = false;
+            for j in first..=first + (y1 - y0) {
+                for i in 0..=i64::from(self.x1 - self.x0) {
+                    covers |= (g0 + a0 * i + b0 * j >= 0) & (g1 + a1 * i + b1 * j >= 0) & (g2 + a2 * i + b2 * j >= 0);
+                }
+            }
+            if !covers {
+                return None;
+            }
+        }
+        Some(self)
     }
 
     /// The reduced edge functions `(g, a, b)` set up at pixel `(x, y)`: the pixel `i`
