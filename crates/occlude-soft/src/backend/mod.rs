@@ -208,7 +208,8 @@ impl<'s> SoftBackend<'s> {
     /// Sets up its draws' triangles in `shared`, with the other backends
     /// given a clone of it, from the next frame on: each instance once per
     /// camera for all of them ([`SharedSetup`]). Changes no image, count or
-    /// time; for backends rendering the same frames side by side.
+    /// time; for backends of one scene rendering the same frames side by
+    /// side (the table knows instances by index, not by scene).
     pub fn share_setup(&mut self, shared: SharedSetup) {
         self.shared_setup = Some(shared);
     }
