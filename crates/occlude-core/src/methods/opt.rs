@@ -222,6 +222,13 @@ mod tests {
         let scene = Scene::from_bounds("boxes", &boxes).unwrap();
         let h = Hierarchy::build(&scene, HierarchyKind::KdTree, BuildOptions::default());
         assert!(h.items.len() > scene.instances.len(), "instances shared by leaves");
+        // The premise: a node's box holds its children's, bound by bound.
+        for n in 0..h.node_count() as NodeId {
+            for &c in h.children(n) {
+                let (p, c) = (h.bounds(n), h.bounds(c));
+                assert!(p.min.cmple(c.min).all() && c.max.cmple(p.max).all(), "node {n}");
+            }
+        }
         let (mut some, mut not_all) = (false, false);
         for (k, (w, ht)) in [(61u32, 47u32), (80, 64), (33, 90)].into_iter().enumerate() {
             let at = Vec3::new(rng.range(-25.0, 25.0), rng.range(-2.0, 8.0), rng.range(-25.0, 25.0));
