@@ -370,7 +370,7 @@ impl<'s> SoftBackend<'s> {
             (Some(recorded), _) => self.recorded += recorded,
             // Set up (or found set up) when rasterized.
             (None, Some(_)) => {
-                let n = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].indices.len() / 3;
+                let n = self.scene.meshes[self.scene.instances[i as usize].mesh as usize].triangle_count();
                 self.prepared_pending += n;
                 self.recorded += n;
                 source = Some((i, n));

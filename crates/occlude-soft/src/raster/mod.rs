@@ -430,13 +430,7 @@ impl Rasterizer {
             chunk.clear(grid);
             let lo = ci * chunk_len;
             let span = SetupSpan { triangles, commands, prepared, starts, range: lo..(lo + chunk_len).min(total) };
-            let mut binning = Binning { chunk, grid };
-            match kernel {
-                Kernel::Scalar => setup_span(kernel, &mut binning, viewport, &span),
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-                Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, &mut binning, viewport, &span) },
-            }
+            set_up_span(kernel, &mut Binning { chunk, grid }, viewport, &span);
             chunk.bin(grid);
         });
     }
@@ -484,13 +478,7 @@ impl Rasterizer {
             starts: &[0, n],
             range: 0..n,
         };
-        let viewport = Viewport::new(width, height);
-        match self.kernel {
-            Kernel::Scalar => setup_span(self.kernel, &mut out, viewport, &span),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-            Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, &mut out, viewport, &span) },
-        }
+        set_up_span(self.kernel, &mut out, Viewport::new(width, height), &span);
         Prepared { width, height, cull_back, triangles: out }
     }
 }
@@ -620,6 +608,16 @@ fn setup_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span:
         }
         g = end;
         cmd += 1;
+    }
+}
+
+/// [`setup_span`] with `kernel`'s instructions.
+fn set_up_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span: &SetupSpan<'_>) {
+    match kernel {
+        Kernel::Scalar => setup_span(kernel, out, viewport, span),
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        Kernel::Avx2(avx2) => unsafe { setup_span_avx2(avx2, out, viewport, span) },
     }
 }
 
