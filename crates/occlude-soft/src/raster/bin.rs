@@ -40,12 +40,16 @@ pub(super) struct Chunk {
     /// The triangles grouped by tile (a triangle is copied to every tile its bounding
     /// box touches), in order within each tile.
     binned: Vec<RasterTri>,
+    /// The fragments of the triangles counted instead of added (hidden behind the
+    /// hierarchical depth: `hidden`), per command in runs, in command order.
+    hidden: Vec<(u32, u64)>,
 }
 
 impl Chunk {
     /// Empties the chunk for binning to the tiles of `grid` (keeping its memory).
     pub fn clear(&mut self, grid: TileGrid) {
         self.staged.clear();
+        self.hidden.clear();
         // Counts go to starts[tile + 2], so that after the prefix sum in `bin`
         // starts[tile + 1] is the tile's first entry; filling then advances it to the
         // tile's end, which is the next tile's start.
@@ -57,6 +61,21 @@ impl Chunk {
     pub fn push(&mut self, grid: TileGrid, t: RasterTri) {
         for_each_tile(grid, &t, |tile| self.starts[tile + 2] += 1);
         self.staged.push(t);
+    }
+
+    /// Adds `fragments` to command `cmd`'s count, for a triangle counted instead of
+    /// added.
+    #[inline(always)]
+    pub fn count_hidden(&mut self, cmd: u32, fragments: u64) {
+        match self.hidden.last_mut() {
+            Some((last, sum)) if *last == cmd => *sum += fragments,
+            _ => self.hidden.push((cmd, fragments)),
+        }
+    }
+
+    /// The commands' fragments counted instead of added, per command (in runs).
+    pub fn hidden(&self) -> &[(u32, u64)] {
+        &self.hidden
     }
 
     /// Groups the triangles added by tile, for [`Chunk::tile`].

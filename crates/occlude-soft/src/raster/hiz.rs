@@ -5,9 +5,10 @@
 //! A bound is exact when computed, and stays a valid bound while only draws write the
 //! block, since a draw only ever lowers depths; it is then merely loose, and the block
 //! is marked dirty. Dirty blocks are recomputed for queries (which write nothing, so
-//! the refresh pays off for every later query and draw); draws test the bounds as
-//! they are, as recomputing on every draw would cost a fill-rate-bound workload more
-//! than the rejection saves. Writes from outside the rasterizer, which may raise
+//! the refresh pays off for every later query and draw) and at the start of every
+//! rasterizer call, for its binning (`hidden`); within a call draws test the bounds
+//! as they are, as recomputing on every draw would cost a fill-rate-bound workload
+//! more than the rejection saves. Writes from outside the rasterizer, which may raise
 //! depths, reset the bounds to infinity.
 //!
 //! Rejection never changes a result: it skips only pixels whose test would fail,
@@ -46,6 +47,16 @@ impl TileHiZ {
         self.lowest = f32::INFINITY;
     }
 
+    /// The smallest of the blocks' bounds.
+    pub fn lowest(&self) -> f32 {
+        self.lowest
+    }
+
+    /// Whether some block's bound may be loose.
+    pub fn is_dirty(&self) -> bool {
+        self.dirty != 0
+    }
+
     /// Marks the blocks of `mask` as written by a draw.
     #[inline(always)]
     pub fn mark_written(&mut self, mask: u64) {
@@ -54,32 +65,32 @@ impl TileHiZ {
 
     /// Recomputes the dirty blocks of `mask` from the tile's `rows`.
     pub fn refresh(&mut self, rows: &TileRows<'_>, mask: u64) {
-        let mut todo = mask & self.dirty;
-        while todo != 0 {
-            let b = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
-            let (by, bx) = (b / BLOCKS, b % BLOCKS);
-            let start = (bx * GROUP).min(rows.width());
-            let end = (start + GROUP).min(rows.width());
-            // Per column, the largest depth: for a whole block, in a form the
-            // compiler turns into one vector max per row. `>` ignores NaN pixels, as
+        let todo = mask & self.dirty;
+        if todo == 0 {
+            return;
+        }
+        const WIDTH: usize = BLOCKS * GROUP;
+        for by in 0..BLOCKS {
+            let row_blocks = (todo >> (BLOCKS * by)) as u8;
+            if row_blocks == 0 {
+                continue;
+            }
+            // Per column of the block row, the largest depth, a pixel row at a time
+            // (vector maxes; a tile cut by the buffer's edge has padding columns of
+            // -inf): the row's eight blocks at once. `>` ignores NaN pixels, as
             // `f32::max` does.
-            let mut columns = [f32::NEG_INFINITY; GROUP];
-            let mut fold = |row: &[f32]| {
-                for (m, &d) in columns.iter_mut().zip(row) {
-                    if d > *m {
-                        *m = d;
-                    }
-                }
-            };
+            let mut columns = [f32::NEG_INFINITY; WIDTH];
             for y in by * GROUP..(by * GROUP + GROUP).min(rows.height()) {
-                let row = &rows.row(y)[start..end];
-                match <&[f32; GROUP]>::try_from(row) {
-                    Ok(whole) => fold(whole),
-                    Err(_) => fold(row),
+                let row = rows.row(y);
+                for (m, &d) in columns.iter_mut().zip(row) {
+                    *m = if d > *m { d } else { *m };
                 }
             }
-            self.max[b] = columns.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
+            for (bx, block) in columns.chunks_exact(GROUP).enumerate() {
+                if row_blocks & (1 << bx) != 0 {
+                    self.max[by * BLOCKS + bx] = block.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
+                }
+            }
         }
         self.dirty &= !mask;
         self.lowest = self.max.iter().fold(f32::INFINITY, |m, &v| m.min(v));

@@ -17,21 +17,24 @@
 //! in three steps:
 //!
 //! 1. `setup` and `bin`, in parallel over chunks of the input: clip and set up each
-//!    triangle, then index the chunk's triangles by the 64x64-pixel tiles their
-//!    bounding boxes touch;
+//!    triangle, count the small ones that the hierarchical depth at the call's
+//!    start hides (`hidden`), then index the chunk's other triangles by the
+//!    64x64-pixel tiles their bounding boxes touch;
 //! 2. `tile`, in parallel over tiles: each tile runs its triangles in command order,
 //!    on its own pixels; per triangle, `hiz` rejects the 8x8 blocks whose stored
 //!    depths it cannot pass; with AVX2 `avx2` then tests the window's pixels 8
 //!    at a time, otherwise (and for the windows `avx2` declines) `span` walks
 //!    its exact row spans incrementally and `shade` depth-tests them one pixel
 //!    at a time, with identical results;
-//! 3. the tiles' fragment counts are summed per command.
+//! 3. the tiles' fragment counts and the hidden triangles' are summed per
+//!    command.
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
 mod bin;
 mod clip;
 mod fragments;
+mod hidden;
 mod hiz;
 mod setup;
 #[cfg(target_arch = "x86_64")]
@@ -53,6 +56,7 @@ use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use avx2::Avx2;
 use bin::{Chunk, TileGrid};
+use hidden::HiddenTest;
 use hiz::TileHiZ;
 use setup::{setup_triangle, SetupTri, Viewport};
 use span::RasterTri;
@@ -188,6 +192,22 @@ impl DepthBuffer {
                 out.extend_from_slice(&self.pixels()[start..start + tile.min(width - tx * tile)]);
             }
         }
+    }
+
+    /// Makes the hierarchical depth of the blocks that draws wrote exact again
+    /// (in parallel over tiles), for the binning of the next rasterizer call
+    /// (`hidden`). A cleared buffer's bounds are exact already.
+    fn refresh_hiz(&mut self, grid: TileGrid) {
+        let dirty: Vec<usize> = (0..grid.len()).filter(|&i| self.hiz[i].is_dirty()).collect();
+        if dirty.is_empty() {
+            return;
+        }
+        let tiles = Tiles::new(self, grid);
+        dirty.into_par_iter().for_each(|i| {
+            // SAFETY: each tile index appears once, so its view is the only one.
+            let view = unsafe { tiles.view(i) };
+            view.hiz.refresh(&view.rows, !0);
+        });
     }
 
     /// Resets every pixel to the far plane (1.0), for the next frame.
@@ -355,9 +375,13 @@ impl Rasterizer {
             return results;
         }
         let grid = TileGrid::new(width, height);
-        self.setup_and_bin(Viewport::new(width, height), grid, triangles, commands, prepared);
         self.kinds.clear();
         self.kinds.extend(commands.iter().map(|c| c.kind));
+        let kinds = std::mem::take(&mut self.kinds);
+        depth.refresh_hiz(grid);
+        let hidden = HiddenTest::new(&depth.hiz, grid, &kinds);
+        self.setup_and_bin(Viewport::new(width, height), grid, hidden, triangles, commands, prepared);
+        self.kinds = kinds;
         self.found.clear();
         self.found.resize_with(commands.len(), AtomicBool::default);
         let chunks = &self.chunks[..];
@@ -394,6 +418,9 @@ impl Rasterizer {
                 r.passed += p.passed;
             }
         }
+        for &(cmd, fragments) in chunks.iter().flat_map(Chunk::hidden) {
+            results[cmd as usize].fragments += fragments;
+        }
         for (r, c) in results.iter_mut().zip(commands) {
             if let CommandKind::QueryAny(_) = c.kind {
                 r.passed = r.passed.min(1);
@@ -408,6 +435,7 @@ impl Rasterizer {
         &mut self,
         viewport: Viewport,
         grid: TileGrid,
+        hidden: Option<HiddenTest<'_>>,
         triangles: &[[Vec4; 3]],
         commands: &[Command],
         prepared: &[Option<&Prepared>],
@@ -430,7 +458,7 @@ impl Rasterizer {
             chunk.clear(grid);
             let lo = ci * chunk_len;
             let span = SetupSpan { triangles, commands, prepared, starts, range: lo..(lo + chunk_len).min(total) };
-            set_up_span(kernel, &mut Binning { chunk, grid }, viewport, &span);
+            set_up_span(kernel, &mut Binning { chunk, grid, hidden }, viewport, &span);
             chunk.bin(grid);
         });
     }
@@ -489,16 +517,21 @@ trait Staging {
     fn stage(&mut self, t: RasterTri);
 }
 
-/// A chunk binning to the tiles of `grid`.
+/// A chunk binning to the tiles of `grid`, but for the small triangles that
+/// `hidden` finds hidden, which it counts.
 struct Binning<'a> {
     chunk: &'a mut Chunk,
     grid: TileGrid,
+    hidden: Option<HiddenTest<'a>>,
 }
 
 impl Staging for Binning<'_> {
     #[inline(always)]
     fn stage(&mut self, t: RasterTri) {
-        self.chunk.push(self.grid, t);
+        match self.hidden.as_ref().and_then(|h| h.fragments_if_hidden(&t)) {
+            Some(fragments) => self.chunk.count_hidden(t.cmd, fragments),
+            None => self.chunk.push(self.grid, t),
+        }
     }
 }
 

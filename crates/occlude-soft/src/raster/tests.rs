@@ -558,6 +558,35 @@ fn simd_and_scalar_match_the_per_pixel_reference() {
     }
 }
 
+/// Small triangles behind what an earlier call drew are counted as they are
+/// binned (`hidden`), with the results and image of rasterizing them, on both
+/// kernels and with every kind of command.
+#[test]
+fn small_hidden_triangles_counted_at_binning_match_the_reference() {
+    // The first call draws an occluder over the left half at depth 0.3; the
+    // second draws and queries random triangles, tiny to large, in front of it
+    // and behind, and small ones behind it whose edges run through pixel centres
+    // (where the fill rule decides).
+    let v = |x: f32, y: f32| Vec4::new(x, y, 0.3, 1.0);
+    for mut raster in [Rasterizer::new(), Rasterizer::scalar()] {
+        for (w, h) in [(190, 140), (333, 251)] {
+            let mut tris = vec![[v(-1.0, -1.0), v(0.0, -1.0), v(0.0, 1.0)], [v(-1.0, -1.0), v(0.0, 1.0), v(-1.0, 1.0)]];
+            tris.extend(random_scene(600, 21));
+            for k in 0..40 {
+                let (x, y) = ((k % 8 * 9) as f32 + 3.5, (k / 8 * 11) as f32 + 5.5);
+                let p = |dx: f32, dy: f32| at_pixel(x + dx, y + dy, 0.6, 1.5, w, h);
+                let (a, b, c) = (p(0.0, 0.0), p(3.0 + (k % 3) as f32, 0.0), p(0.0, 3.0 + (k % 4) as f32));
+                tris.push(if k % 2 == 0 { [a, c, b] } else { [a, b, c] });
+            }
+            let calls = vec![vec![cmd(CommandKind::Draw, 0..2, false)], mixed_commands(tris.len() as u32)];
+            let size = (w, h);
+            check_against_reference(&mut raster, size, &tris, &calls);
+            let counted: u64 = raster.chunks.iter().flat_map(Chunk::hidden).map(|&(_, f)| f).sum();
+            assert!(counted > 100, "{counted} fragments counted at binning at {size:?}");
+        }
+    }
+}
+
 #[test]
 fn hidden_and_visible_queries_after_external_writes_and_clears() {
     // A full occluder at 0.5, then queries behind it (hidden: the hierarchical depth
