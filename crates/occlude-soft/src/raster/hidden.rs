@@ -14,6 +14,14 @@
 //! is counted pixel by pixel and goes no further. Larger ones are binned:
 //! the tiles count them faster, and skip their rejected blocks' depth tests.
 //!
+//! A command whose triangles were set up beforehand (a [`super::Prepared`]
+//! instance, drawn by several lanes in a frame) is first tested whole, by its
+//! [`Extent`]: the union of its triangles' boxes at the least of their depth
+//! bounds. Hidden so, it adds the count of its triangles' pixels
+//! ([`RasterTri::covered`], counted once per set-up and shared by the calls
+//! that need it) and none of its triangles is binned; a view-frustum culling
+//! lane draws most of a large scene's instances behind nearer ones.
+//!
 //! **Why the results are the same.** The bounds at the call's start are upper
 //! bounds of the depths at any later point of the call: the call's draws only lower
 //! depths, and its queries write none. A fragment at or behind such a bound (LESS;
@@ -24,7 +32,9 @@
 //! AVX2 windows); a triangle whose bounding box holds one pixel centre covers it
 //! (set-up keeps no triangle of at most 2 x 2 centres that covers none): one
 //! fragment. An any-pass query counts no fragments, so its hidden triangles add
-//! nothing.
+//! nothing. An extent's rectangle holds each of its triangles' boxes and its
+//! bound is at most each triangle's bound over its box, so a command hidden
+//! whole has every triangle hidden.
 
 use super::bin::TileGrid;
 use super::hiz::{min_depth, rect_mask, TileHiZ};
@@ -43,6 +53,43 @@ pub(super) struct HiddenTest<'a> {
     kinds: &'a [CommandKind],
 }
 
+/// Where a set of set-up triangles may cover pixels, and how near: the union
+/// of their rows and columns, and a lower bound of their depths there. A
+/// command whose triangles' extent is hidden is hidden whole
+/// ([`HiddenTest::command_fragments`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Extent {
+    /// Columns `x0..=x1` and rows `y0..=y1`: `[x0, x1, y0, y1]`.
+    rect: [i32; 4],
+    /// At most every fragment's depth.
+    min: f32,
+}
+
+impl Extent {
+    /// The extent of `triangles`; `None` when there are none, or when a depth
+    /// plane is too steep to bound ([`min_depth`]).
+    pub fn of(triangles: &[RasterTri]) -> Option<Self> {
+        let (first, rest) = triangles.split_first()?;
+        let mut extent = Self { rect: [first.x0, first.x1, first.y0, first.y1], min: f32::INFINITY };
+        for t in std::iter::once(first).chain(rest) {
+            let [x0, x1, y0, y1] = &mut extent.rect;
+            (*x0, *x1, *y0, *y1) = ((*x0).min(t.x0), (*x1).max(t.x1), (*y0).min(t.y0), (*y1).max(t.y1));
+            extent.min = extent.min.min(min_depth(t, t.x0, t.x1, t.y0, t.y1)?);
+        }
+        Some(extent)
+    }
+}
+
+/// Whether a command of `kind` passes fragments at equal depth (EQUAL), and
+/// whether it counts them (not an any-pass query).
+fn test_of(kind: CommandKind) -> (bool, bool) {
+    match kind {
+        CommandKind::Draw => (false, true),
+        CommandKind::Query(test) => (test == DepthTest::Equal, true),
+        CommandKind::QueryAny(test) => (test == DepthTest::Equal, false),
+    }
+}
+
 impl<'a> HiddenTest<'a> {
     /// The test for a call drawing into a buffer with the hierarchical depth `hiz`
     /// (tiles of `grid`), running commands of `kinds`; `None` when no bound is
@@ -56,32 +103,62 @@ impl<'a> HiddenTest<'a> {
     /// `None` if it is to be binned.
     #[inline(always)]
     pub fn fragments_if_hidden(&self, t: &RasterTri) -> Option<u64> {
-        let (equal, counted) = match self.kinds[t.cmd as usize] {
-            CommandKind::Draw => (false, true),
-            CommandKind::Query(test) => (test == DepthTest::Equal, true),
-            CommandKind::QueryAny(test) => (test == DepthTest::Equal, false),
-        };
+        let (equal, counted) = test_of(self.kinds[t.cmd as usize]);
         // The box's minimum bounds the minimum of every window inside it.
         let min = min_depth(t, t.x0, t.x1, t.y0, t.y1)?;
+        self.hidden_windows([t.x0, t.x1, t.y0, t.y1], min, equal, |window| {
+            if counted {
+                window_fragments(t, window)
+            } else {
+                Some(0)
+            }
+        })
+    }
+
+    /// The fragments of a command of `kind` whose triangles lie within
+    /// `extent`, if that is hidden: every triangle then is (the argument of the
+    /// module documentation, for the extent's bound), and `fragments()` gives
+    /// the count of their pixels. `None` if it is not hidden.
+    pub fn command_fragments(
+        &self,
+        extent: &Extent,
+        kind: CommandKind,
+        fragments: impl FnOnce() -> u64,
+    ) -> Option<u64> {
+        let (equal, counted) = test_of(kind);
+        self.hidden_windows(extent.rect, extent.min, equal, |_| Some(0))?;
+        Some(if counted { fragments() } else { 0 })
+    }
+
+    /// The sum of `count` over the windows of the rectangle `[x0, x1, y0, y1]` in
+    /// the tiles it touches, if every block of every window rejects fragments at
+    /// depth `min` (`equal`: for an EQUAL test) and `count` gives a number for
+    /// each; `None` otherwise.
+    #[inline(always)]
+    fn hidden_windows(
+        &self,
+        [x0, x1, y0, y1]: [i32; 4],
+        min: f32,
+        equal: bool,
+        mut count: impl FnMut([i32; 4]) -> Option<u64>,
+    ) -> Option<u64> {
         let tile = TILE as i32;
-        let mut fragments = 0;
-        for ty in t.y0 / tile..=t.y1 / tile {
-            for tx in t.x0 / tile..=t.x1 / tile {
-                let (x0, y0) = (tx * tile, ty * tile);
-                let [wx0, wx1, wy0, wy1] =
-                    [t.x0.max(x0), t.x1.min(x0 + tile - 1), t.y0.max(y0), t.y1.min(y0 + tile - 1)];
-                let blocks =
-                    rect_mask((wx0 - x0) as usize, (wy0 - y0) as usize, (wx1 - x0) as usize, (wy1 - y0) as usize);
+        let mut sum = 0;
+        for ty in y0 / tile..=y1 / tile {
+            for tx in x0 / tile..=x1 / tile {
+                let (left, top) = (tx * tile, ty * tile);
+                let window = [x0.max(left), x1.min(left + tile - 1), y0.max(top), y1.min(top + tile - 1)];
+                let [wx0, wx1, wy0, wy1] = window.map(|v| v as usize);
+                let (left, top) = (left as usize, top as usize);
+                let blocks = rect_mask(wx0 - left, wy0 - top, wx1 - left, wy1 - top);
                 let hiz = &self.hiz[ty as usize * self.grid.tiles_x + tx as usize];
                 if hiz.rejected(blocks, min, equal) != blocks {
                     return None;
                 }
-                if counted {
-                    fragments += window_fragments(t, [wx0, wx1, wy0, wy1])?;
-                }
+                sum += count(window)?;
             }
         }
-        Some(fragments)
+        Some(sum)
     }
 }
 
@@ -92,24 +169,10 @@ const MAX_COUNTED: i32 = 64;
 /// The pixels `t` covers in `window` (columns `x0..=x1`, rows `y0..=y1`, inside one
 /// tile and inside `t`'s box), if the window holds at most [`MAX_COUNTED`].
 #[inline(always)]
-fn window_fragments(t: &RasterTri, [x0, x1, y0, y1]: [i32; 4]) -> Option<u64> {
+fn window_fragments(t: &RasterTri, window: [i32; 4]) -> Option<u64> {
     if t.x0 == t.x1 && t.y0 == t.y1 {
         return Some(1);
     }
-    if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_COUNTED {
-        return None;
-    }
-    // Each centre's edge functions, `g + a * i + b * j` as
-    // `RasterTri::covered_rows` tests them, stepped by `a` along a row.
-    let [(mut g0, a0, b0), (mut g1, a1, b1), (mut g2, a2, b2)] = t.edges_at(x0, y0);
-    let mut covered = 0;
-    for _ in y0..=y1 {
-        let (mut e0, mut e1, mut e2) = (g0, g1, g2);
-        for _ in x0..=x1 {
-            covered += u64::from((e0 >= 0) & (e1 >= 0) & (e2 >= 0));
-            (e0, e1, e2) = (e0 + a0, e1 + a1, e2 + a2);
-        }
-        (g0, g1, g2) = (g0 + b0, g1 + b1, g2 + b2);
-    }
-    Some(covered)
+    let [x0, x1, y0, y1] = window;
+    ((x1 - x0 + 1) * (y1 - y0 + 1) <= MAX_COUNTED).then(|| t.covered_in(window))
 }

@@ -16,9 +16,10 @@
 //! [`Rasterizer::execute`] runs a list of [`Command`]s (draws and occlusion queries)
 //! in three steps:
 //!
-//! 1. `setup` and `bin`, in parallel over chunks of the input: clip and set up each
-//!    triangle, count the small ones that the hierarchical depth at the call's
-//!    start hides (`hidden`), then index the chunk's other triangles by the
+//! 1. `setup` and `bin`, in parallel over chunks of the input: count whole the
+//!    commands set up beforehand that the hierarchical depth at the call's start
+//!    hides (`hidden`), clip and set up each other triangle, count the small ones
+//!    that depth hides, then index the chunk's other triangles by the
 //!    64x64-pixel tiles their bounding boxes touch;
 //! 2. `tile`, in parallel over tiles: each tile runs its triangles in command order,
 //!    on its own pixels; per triangle, `hiz` rejects the 8x8 blocks whose stored
@@ -49,6 +50,7 @@ mod tests;
 
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
+use std::sync::OnceLock;
 
 use glam::Vec4;
 use rayon::prelude::*;
@@ -56,7 +58,7 @@ use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use avx2::Avx2;
 use bin::{Chunk, TileGrid};
-use hidden::HiddenTest;
+use hidden::{Extent, HiddenTest};
 use hiz::TileHiZ;
 use setup::{setup_triangle, SetupTri, Viewport};
 use span::RasterTri;
@@ -291,6 +293,9 @@ pub struct Rasterizer {
     found: Vec<AtomicBool>,
     /// The tiles some triangle touches.
     busy: Vec<usize>,
+    /// Per command, whether its prepared triangles are all hidden, so counted
+    /// whole and not binned.
+    hidden_whole: Vec<bool>,
 }
 
 impl Default for Rasterizer {
@@ -307,7 +312,15 @@ impl Rasterizer {
     }
 
     fn with_kernel(kernel: Kernel) -> Self {
-        Self { kernel, chunks: Vec::new(), starts: Vec::new(), kinds: Vec::new(), found: Vec::new(), busy: Vec::new() }
+        Self {
+            kernel,
+            chunks: Vec::new(),
+            starts: Vec::new(),
+            kinds: Vec::new(),
+            found: Vec::new(),
+            busy: Vec::new(),
+            hidden_whole: Vec::new(),
+        }
     }
 
     /// A rasterizer that runs the portable scalar code whatever the CPU, to test it
@@ -380,6 +393,17 @@ impl Rasterizer {
         let kinds = std::mem::take(&mut self.kinds);
         depth.refresh_hiz(grid);
         let hidden = HiddenTest::new(&depth.hiz, grid, &kinds);
+        // A prepared command whose extent is hidden: counted whole, not binned.
+        self.hidden_whole.clear();
+        for (i, c) in commands.iter().enumerate() {
+            let whole = prepared
+                .get(i)
+                .copied()
+                .flatten()
+                .and_then(|p| hidden?.command_fragments(p.extent.as_ref()?, c.kind, || p.fragments()));
+            results[i].fragments += whole.unwrap_or(0);
+            self.hidden_whole.push(whole.is_some());
+        }
         self.setup_and_bin(Viewport::new(width, height), grid, hidden, triangles, commands, prepared);
         self.kinds = kinds;
         self.found.clear();
@@ -444,7 +468,11 @@ impl Rasterizer {
         let mut total = 0usize;
         for (i, c) in commands.iter().enumerate() {
             self.starts.push(total);
-            total += prepared.get(i).copied().flatten().map_or(c.triangles.len(), |p| p.triangles.len());
+            total += match prepared.get(i).copied().flatten() {
+                _ if self.hidden_whole.get(i) == Some(&true) => 0,
+                Some(p) => p.triangles.len(),
+                None => c.triangles.len(),
+            };
         }
         self.starts.push(total);
         // About four chunks per thread, for balance.
@@ -477,6 +505,12 @@ pub struct Prepared {
     /// The set-up triangles in input order, those that may cover a pixel
     /// centre; their command index is set when they are binned.
     triangles: Vec<RasterTri>,
+    /// Where the triangles may cover pixels, and how near: a call whose depth
+    /// buffer hides it counts the command whole ([`Self::fragments`]) and
+    /// bins none of its triangles (`hidden`).
+    extent: Option<Extent>,
+    /// The pixels the triangles cover, once a call has counted them.
+    covered: OnceLock<u64>,
 }
 
 impl Prepared {
@@ -488,6 +522,13 @@ impl Prepared {
     /// Whether no triangle may cover a pixel centre.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
+    }
+
+    /// The pixels the triangles cover (a pixel covered by two counts twice),
+    /// counted by the first call that needs them: the lanes drawing an
+    /// instance in a frame share its count as they share its set-up.
+    fn fragments(&self) -> u64 {
+        *self.covered.get_or_init(|| self.triangles.iter().map(RasterTri::covered).sum())
     }
 }
 
@@ -507,7 +548,7 @@ impl Rasterizer {
             range: 0..n,
         };
         set_up_span(self.kernel, &mut out, Viewport::new(width, height), &span);
-        Prepared { width, height, cull_back, triangles: out }
+        Prepared { width, height, cull_back, extent: Extent::of(&out), triangles: out, covered: OnceLock::new() }
     }
 }
 

@@ -125,6 +125,54 @@ impl RasterTri {
         Some(self)
     }
 
+    /// The pixel centres the triangle covers in `window` (columns `x0..=x1`,
+    /// rows `y0..=y1`, within its rows and columns), each centre's edge
+    /// functions tested as [`Self::covered_rows`] tests them, stepped along
+    /// the rows: for small windows (the walk and the tiles count large ones
+    /// faster).
+    #[inline(always)]
+    pub fn covered_in(&self, [x0, x1, y0, y1]: [i32; 4]) -> u64 {
+        let [(mut g0, a0, b0), (mut g1, a1, b1), (mut g2, a2, b2)] = self.edges_at(x0, y0);
+        let mut covered = 0;
+        for _ in y0..=y1 {
+            let (mut e0, mut e1, mut e2) = (g0, g1, g2);
+            for _ in x0..=x1 {
+                covered += u64::from((e0 >= 0) & (e1 >= 0) & (e2 >= 0));
+                (e0, e1, e2) = (e0 + a0, e1 + a1, e2 + a2);
+            }
+            (g0, g1, g2) = (g0 + b0, g1 + b1, g2 + b2);
+        }
+        covered
+    }
+
+    /// The pixel centres the triangle covers: its fragments, as every
+    /// rasterizer path counts them. A triangle whose rows and columns hold
+    /// one centre covers it ([`Self::covered_rows`] keeps no triangle of at
+    /// most 2 x 2 centres that covers none); up to [`STEPPED`] centres are
+    /// tested one by one ([`Self::covered_in`]), more are walked by spans
+    /// ([`walk`]) window by window.
+    pub fn covered(&self) -> u64 {
+        const STEPPED: i32 = 64;
+        let [x0, x1, y0, y1] = [self.x0, self.x1, self.y0, self.y1];
+        if x0 == x1 && y0 == y1 {
+            return 1;
+        }
+        if (x1 - x0 + 1) * (y1 - y0 + 1) <= STEPPED {
+            return self.covered_in([x0, x1, y0, y1]);
+        }
+        let mut spans = [Span::default(); MAX_WINDOW];
+        let mut covered = 0;
+        for x in (x0..=x1).step_by(MAX_WINDOW) {
+            let (end, mut y) = ((x + MAX_WINDOW as i32 - 1).min(x1), y0);
+            while y <= y1 {
+                let rows = ((y1 - y + 1) as usize).min(MAX_WINDOW);
+                covered += walk(self, x, end, y, &mut spans[..rows]) as u64;
+                y += rows as i32;
+            }
+        }
+        covered
+    }
+
     /// The reduced edge functions `(g, a, b)` set up at pixel `(x, y)`: the pixel `i`
     /// columns right and `j` rows below is covered when `g + a * i + b * j >= 0` for
     /// every edge.

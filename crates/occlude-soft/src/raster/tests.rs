@@ -587,6 +587,73 @@ fn small_hidden_triangles_counted_at_binning_match_the_reference() {
     }
 }
 
+/// A prepared command whose triangles are all behind what an earlier call drew
+/// is counted whole (`hidden::Extent`), with the results and image of
+/// rasterizing it, on both kernels and with every kind of command; clusters in
+/// front of the occluder or reaching past it are rasterized.
+#[test]
+fn prepared_commands_hidden_whole_match_the_commands_set_up_in_the_call() {
+    let v = |x: f32, y: f32| Vec4::new(x, y, 0.3, 1.0);
+    let occluder = [[v(-1.0, -1.0), v(0.0, -1.0), v(0.0, 1.0)], [v(-1.0, -1.0), v(0.0, 1.0), v(-1.0, 1.0)]];
+    for (w, h) in [(190, 140), (333, 251)] {
+        // Clusters of triangles from under a pixel to 80 pixels across (so that
+        // every way of counting a triangle's pixels is used), behind the
+        // occluder, behind it but for one triangle, or straddling its edge.
+        let mut tris = occluder.to_vec();
+        let mut clusters = Vec::new();
+        let mut rng = Rng::new(5, 0);
+        for k in 0..24 {
+            let (cx, z) = match k % 3 {
+                0 => (0.35 * w as f32 * rng.range(0.2, 1.0), 0.6),
+                1 => (0.35 * w as f32 * rng.range(0.2, 1.0), 0.1),
+                _ => (0.5 * w as f32, 0.6),
+            };
+            let cy = h as f32 * rng.range(0.2, 0.8);
+            let size = [0.7f32, 3.0, 12.0, 80.0][k % 4].min(cx - 1.0);
+            let start = tris.len() as u32;
+            for j in 0..12 {
+                // The clusters in front have one triangle in front, the others behind.
+                let z = if k % 3 == 1 && j != 7 { 0.6 } else { z };
+                let mut p = || {
+                    let (x, y) = (cx + rng.range(-size, size) / 2.0, cy + rng.range(-size, size) / 2.0);
+                    at_pixel(x, y, z * rng.range(0.95, 1.05), rng.range(0.5, 2.0), w, h)
+                };
+                tris.push([p(), p(), p()]);
+            }
+            clusters.push(start..tris.len() as u32);
+        }
+        let mut commands = Vec::new();
+        for c in &clusters {
+            commands.push(cmd(CommandKind::Query(DepthTest::Less), c.clone(), false));
+            commands.push(cmd(CommandKind::Query(DepthTest::Equal), c.clone(), false));
+            commands.push(cmd(CommandKind::QueryAny(DepthTest::Less), c.clone(), false));
+            commands.push(cmd(CommandKind::Draw, c.clone(), false));
+        }
+        let first = [cmd(CommandKind::Draw, 0..2, false)];
+        for raster in [Rasterizer::new, Rasterizer::scalar] {
+            let mut expected_depth = DepthBuffer::new(w, h);
+            let mut rasterizer = raster();
+            rasterizer.execute(&mut expected_depth, &tris, &first);
+            let expected = rasterizer.execute(&mut expected_depth, &tris, &commands);
+            let prepared: Vec<Prepared> = commands
+                .iter()
+                .map(|c| raster().prepare(w, h, &tris[c.triangles.start as usize..c.triangles.end as usize], false))
+                .collect();
+            let refs: Vec<Option<&Prepared>> = prepared.iter().map(Some).collect();
+            let emptied: Vec<Command> = commands.iter().map(|c| cmd(c.kind, 0..0, false)).collect();
+            let mut depth = DepthBuffer::new(w, h);
+            let mut rasterizer = raster();
+            rasterizer.execute(&mut depth, &tris, &first);
+            let results = rasterizer.execute_prepared(&mut depth, &tris, &emptied, &refs);
+            assert_eq!(results, expected, "at {w}x{h}");
+            assert_eq!(bits(&depth), bits(&expected_depth), "at {w}x{h}");
+            let whole = rasterizer.hidden_whole.iter().filter(|&&h| h).count();
+            assert!(whole >= 16 && whole < commands.len(), "{whole} of {} commands hidden whole", commands.len());
+            assert!(results.iter().zip(&rasterizer.hidden_whole).any(|(r, &h)| h && r.fragments > 1000));
+        }
+    }
+}
+
 #[test]
 fn hidden_and_visible_queries_after_external_writes_and_clears() {
     // A full occluder at 0.5, then queries behind it (hidden: the hierarchical depth
