@@ -175,14 +175,23 @@ impl Scene {
         clip: &mut Vec<Vec4>,
         triangles: &mut Vec<[Vec4; 3]>,
     ) {
+        let indices = self.clip_vertices(i, view_projection, clip);
+        triangles
+            .extend(indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]));
+    }
+
+    /// Writes the clip-space vertices of instance `i` seen through
+    /// `view_projection` to `clip` (replacing what it held) and returns its
+    /// mesh's triangles, three indices into them each: the triangles of
+    /// [`Self::push_clip_triangles`], for a rasterizer that projects each
+    /// vertex once.
+    pub fn clip_vertices(&self, i: u32, view_projection: &Mat4, clip: &mut Vec<Vec4>) -> &[u32] {
         let inst = &self.instances[i as usize];
         let mesh = &self.meshes[inst.mesh as usize];
         let mvp = *view_projection * inst.transform;
         clip.clear();
         clip.extend(mesh.positions.iter().map(|p| mvp * p.extend(1.0)));
-        triangles.extend(
-            mesh.indices.chunks_exact(3).map(|t| [clip[t[0] as usize], clip[t[1] as usize], clip[t[2] as usize]]),
-        );
+        &mesh.indices
     }
 
     /// Adds a mesh and returns its index.

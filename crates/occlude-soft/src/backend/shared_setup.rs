@@ -8,8 +8,9 @@
 //! snapping, edges, depth plane) depends only on the instance, the camera's
 //! view-projection and the buffer's size, never on what was drawn before,
 //! so one lane's set-up is every lane's: the first lane to rasterize an
-//! instance in a frame sets it up ([`Rasterizer::prepare`], the instances
-//! of a rasterizer call in parallel) and keeps it here, the others bin and
+//! instance in a frame sets it up ([`Rasterizer::prepare_indexed`], from
+//! its mesh's vertices and indices, the instances of a rasterizer call in
+//! parallel) and keeps it here, the others bin and
 //! rasterize it from here
 //! ([`Rasterizer::execute_prepared`]). Images, counts and times are those
 //! of setting it up in each lane (tested); what changes is how often the
@@ -79,16 +80,12 @@ impl FrameSetup {
     /// Sets up those of `instances` no backend has set up yet, in parallel
     /// (rayon), with `rasterizer`'s kernel.
     pub(super) fn prepare(&self, scene: &Scene, instances: &[u32], rasterizer: &Rasterizer) {
-        instances.par_iter().for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(clip, triangles), &i| {
-                self.slots[i as usize].get_or_init(|| {
-                    triangles.clear();
-                    scene.push_clip_triangles(i, &self.view_projection, clip, triangles);
-                    rasterizer.prepare(self.width, self.height, triangles, false)
-                });
-            },
-        );
+        instances.par_iter().for_each_init(Vec::new, |clip, &i| {
+            self.slots[i as usize].get_or_init(|| {
+                let indices = scene.clip_vertices(i, &self.view_projection, clip);
+                rasterizer.prepare_indexed(self.width, self.height, clip, indices, false)
+            });
+        });
     }
 
     /// Whether its set-ups are for `view_projection`.

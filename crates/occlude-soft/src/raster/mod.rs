@@ -514,6 +514,12 @@ pub struct Prepared {
 }
 
 impl Prepared {
+    /// The set-up `triangles` of a command with `cull_back` for a `width` x
+    /// `height` buffer.
+    fn new(width: u32, height: u32, cull_back: bool, triangles: Vec<RasterTri>) -> Self {
+        Self { width, height, cull_back, extent: Extent::of(&triangles), triangles, covered: OnceLock::new() }
+    }
+
     /// The set-up triangles kept: those that may cover a pixel centre.
     pub fn len(&self) -> usize {
         self.triangles.len()
@@ -548,7 +554,44 @@ impl Rasterizer {
             range: 0..n,
         };
         set_up_span(self.kernel, &mut out, Viewport::new(width, height), &span);
-        Prepared { width, height, cull_back, extent: Extent::of(&out), triangles: out, covered: OnceLock::new() }
+        Prepared::new(width, height, cull_back, out)
+    }
+
+    /// [`Self::prepare`] for the triangles that `indices` (three per triangle)
+    /// make of `vertices`, with the same set-up: an indexed mesh's vertices are
+    /// each projected once, however many triangles share them.
+    ///
+    /// # Panics
+    /// If an index is out of bounds of `vertices`.
+    pub fn prepare_indexed(
+        &self,
+        width: u32,
+        height: u32,
+        vertices: &[Vec4],
+        indices: &[u32],
+        cull_back: bool,
+    ) -> Prepared {
+        let largest = indices.iter().copied().max().unwrap_or(0);
+        assert!(
+            indices.is_empty() || (largest as usize) < vertices.len(),
+            "vertex index {largest} out of bounds of {} vertices",
+            vertices.len()
+        );
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2(_) => {
+                let mut out = Vec::new();
+                // SAFETY: an `Avx2` exists only where the CPU supports AVX2, and
+                // the indices are checked above.
+                unsafe { set_up_indexed_avx2(vertices, indices, cull_back, Viewport::new(width, height), &mut out) };
+                Prepared::new(width, height, cull_back, out)
+            }
+            Kernel::Scalar => {
+                let triangles: Vec<[Vec4; 3]> =
+                    indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| vertices[t[k] as usize])).collect();
+                self.prepare(width, height, &triangles, cull_back)
+            }
+        }
     }
 }
 
@@ -605,11 +648,6 @@ fn setup_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span:
     // Only the x86-64 kernels have a four-at-a-time set-up.
     #[cfg(not(target_arch = "x86_64"))]
     let _ = kernel;
-    let emit = |out: &mut S, t: SetupTri| {
-        if let Some(r) = RasterTri::new(&t) {
-            out.stage(r);
-        }
-    };
     let mut poly = clip::Polygon::new();
     let (lo, hi) = (span.range.start, span.range.end);
     // The last command starting at or before `lo` (skipping empty ones).
@@ -634,54 +672,165 @@ fn setup_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span:
             let groups = rest.chunks_exact(4);
             rest = groups.remainder();
             let mut four = [RasterTri::PLACEHOLDER; 4];
-            // The triangles that may cover a pixel centre, set up four at a time.
-            let mut pending = [[Vec4::ZERO; 3]; 4];
-            let mut n = 0;
             let mut set_up = |out: &mut S, tris: &[[Vec4; 3]; 4], n: usize| {
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
                 let lanes = unsafe { setup_avx2::setup4(tris, c.cull_back, cmd as u32, viewport, &mut four) };
-                for (i, (tri, r)) in tris.iter().zip(&four).take(n).enumerate() {
-                    if lanes.ready & (1 << i) != 0 {
-                        if let Some(r) = r.covered_rows() {
-                            out.stage(r);
-                        }
-                    } else if lanes.scalar & (1 << i) != 0 {
-                        setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(out, t));
-                    }
-                }
+                stage_four(out, lanes, &four, n, |out, i| {
+                    setup_triangle(&tris[i], c.cull_back, cmd as u32, viewport, &mut poly, |t| stage_setup(out, t));
+                });
             };
+            // The triangles that may cover a pixel centre, set up four at a time.
+            let mut pending = Pending::new();
             for group in groups {
                 let group: &[[Vec4; 3]; 4] = group.try_into().expect("four triangles");
                 // SAFETY: as above.
                 let uncovered = unsafe { setup_avx2::uncovered4(group, viewport) };
-                if uncovered == 0 && n == 0 {
+                if uncovered == 0 && pending.is_empty() {
                     set_up(out, group, 4);
-                    continue;
-                }
-                for (i, tri) in group.iter().enumerate() {
-                    if uncovered & (1 << i) == 0 {
-                        pending[n] = *tri;
-                        n += 1;
-                        if n == 4 {
-                            set_up(out, &pending, 4);
-                            n = 0;
-                        }
-                    }
+                } else {
+                    pending.add(group, uncovered, |tris, n| set_up(out, tris, n));
                 }
             }
-            if n > 0 {
-                // The unused lanes repeat a pending triangle; their results are
-                // not read.
-                let last = pending[n - 1];
-                pending[n..].fill(last);
-                set_up(out, &pending, n);
-            }
+            pending.finish(|tris, n| set_up(out, tris, n));
         }
         for tri in rest {
-            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| emit(out, t));
+            setup_triangle(tri, c.cull_back, cmd as u32, viewport, &mut poly, |t| stage_setup(out, t));
         }
         g = end;
         cmd += 1;
+    }
+}
+
+/// Stages the first `n` of four triangles set up four at a time (`lanes`,
+/// their raster forms `four`): the ready ones whose rows may cover a pixel
+/// centre, and, through `scalar(out, i)`, the triangles `i` handed back to the
+/// scalar set-up.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn stage_four<S: Staging>(
+    out: &mut S,
+    lanes: setup_avx2::Lanes,
+    four: &[RasterTri; 4],
+    n: usize,
+    mut scalar: impl FnMut(&mut S, usize),
+) {
+    for (i, r) in four.iter().enumerate().take(n) {
+        if lanes.ready & (1 << i) != 0 {
+            if let Some(r) = r.covered_rows() {
+                out.stage(r);
+            }
+        } else if lanes.scalar & (1 << i) != 0 {
+            scalar(out, i);
+        }
+    }
+}
+
+/// Sets up the triangles `indices` (three per triangle) make of `vertices`
+/// into `out`, in order, as [`setup_span`] sets up the same triangles given
+/// vertex by vertex: every vertex projected once ([`setup_avx2::project4`]),
+/// however many triangles share it, then the triangles set up four at a time
+/// from the projected vertices.
+///
+/// # Safety
+/// The CPU must support AVX2, and every index must be within `vertices`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn set_up_indexed_avx2(
+    vertices: &[Vec4],
+    indices: &[u32],
+    cull_back: bool,
+    viewport: Viewport,
+    out: &mut Vec<RasterTri>,
+) {
+    let mut records = vec![[0.0; 4]; vertices.len().next_multiple_of(4)];
+    for (v, r) in vertices.chunks(4).zip(records.chunks_exact_mut(4)) {
+        // A last group of fewer than four repeats its last vertex.
+        let mut four = [v[v.len() - 1]; 4];
+        four[..v.len()].copy_from_slice(v);
+        setup_avx2::project4(&four, viewport, r.try_into().expect("four records"));
+    }
+    let (mut four, mut poly) = ([RasterTri::PLACEHOLDER; 4], clip::Polygon::new());
+    // Sets up the first `n` of the four triangles `i`, their vertices `p` if
+    // gathered already.
+    let mut set_up = |out: &mut Vec<RasterTri>, i: &[[u32; 3]; 4], n, p: Option<_>| {
+        let p = p.unwrap_or_else(|| setup_avx2::gather4(&records, i));
+        let lanes = setup_avx2::setup4_projected(p, cull_back, 0, viewport, &mut four);
+        stage_four(out, lanes, &four, n, |out, t| {
+            let clip = i[t].map(|k| vertices[k as usize]);
+            setup_triangle(&clip, cull_back, 0, viewport, &mut poly, |t| stage_setup(out, t));
+        });
+    };
+    // The triangles that may cover a pixel centre, set up four at a time.
+    let mut pending = Pending::new();
+    let whole = &indices[..indices.len() / 3 * 3];
+    let groups = whole.chunks_exact(12);
+    let rest = groups.remainder();
+    for group in groups {
+        let i: [[u32; 3]; 4] = std::array::from_fn(|t| [group[3 * t], group[3 * t + 1], group[3 * t + 2]]);
+        let p = setup_avx2::gather4(&records, &i);
+        let uncovered = setup_avx2::uncovered4_projected(&p, viewport);
+        if uncovered == 0 && pending.is_empty() {
+            set_up(out, &i, 4, Some(p));
+        } else {
+            pending.add(&i, uncovered, |i, n| set_up(out, i, n, None));
+        }
+    }
+    for t in rest.chunks_exact(3) {
+        pending.add(&[[t[0], t[1], t[2]]; 4], 0b1110, |i, n| set_up(out, i, n, None));
+    }
+    pending.finish(|i, n| set_up(out, i, n, None));
+}
+
+/// Up to four triangles (or their indices) gathered for a four-wide set-up,
+/// in order, from groups of four of which a pre-test drops some.
+#[cfg(target_arch = "x86_64")]
+struct Pending<T> {
+    items: [T; 4],
+    n: usize,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<T: Copy + Default> Pending<T> {
+    fn new() -> Self {
+        Self { items: [T::default(); 4], n: 0 }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Adds the items of `group` whose bit in `dropped` is clear, calling
+    /// `full(items, 4)` whenever four are gathered.
+    #[inline(always)]
+    fn add(&mut self, group: &[T; 4], dropped: u8, mut full: impl FnMut(&[T; 4], usize)) {
+        for (k, item) in group.iter().enumerate() {
+            // Written always, kept (`n` advanced) where not dropped: no branch.
+            self.items[self.n] = *item;
+            self.n += usize::from(dropped & (1 << k) == 0);
+            if self.n == 4 {
+                full(&self.items, 4);
+                self.n = 0;
+            }
+        }
+    }
+
+    /// Calls `last(items, n)` for the `n` items left, if any; the unused slots
+    /// repeat the last of them, and their results are not read.
+    fn finish(&mut self, mut last: impl FnMut(&[T; 4], usize)) {
+        if self.n > 0 {
+            let fill = self.items[self.n - 1];
+            self.items[self.n..].fill(fill);
+            last(&self.items, self.n);
+            self.n = 0;
+        }
+    }
+}
+
+/// Stages the raster form of the scalar set-up's triangle `t`, if its rows may
+/// cover a pixel centre.
+fn stage_setup<S: Staging>(out: &mut S, t: SetupTri) {
+    if let Some(r) = RasterTri::new(&t) {
+        out.stage(r);
     }
 }
 

@@ -7,6 +7,13 @@
 //! products and the doubled area are exact in `f64` as they are in `i64`), and
 //! writes their raster forms ([`RasterTri`]) with one 4x4 transpose per four
 //! fields. Any other triangle is handed back to the scalar set-up.
+//!
+//! Projecting a vertex depends on that vertex alone, so an indexed mesh's
+//! vertices can be projected once each ([`project4`], four at a time, kept as
+//! [`VertexRecord`]s) and its triangles set up from them ([`gather4`],
+//! [`uncovered4_projected`], [`setup4_projected`]) with the results of
+//! [`setup4`] on the same triangles given vertex by vertex: a closed mesh has
+//! about half as many vertices as triangles, each shared by some six.
 
 use std::arch::x86_64::*;
 
@@ -54,7 +61,17 @@ struct Vertices {
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn load(tris: &[[Vec4; 3]; 4], k: usize) -> Vertices {
-    let v = |t: usize| _mm_loadu_ps(tris[t][k].as_ref().as_ptr());
+    lanes(&[tris[0][k], tris[1][k], tris[2][k], tris[3][k]])
+}
+
+/// The four vertices `v` as `f64` lanes.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn lanes(v: &[Vec4; 4]) -> Vertices {
+    let v = |t: usize| _mm_loadu_ps(v[t].as_ref().as_ptr());
     let (a, b, c, d) = (v(0), v(1), v(2), v(3));
     // Transposes the four (x, y, z, w) rows into four columns.
     let (ab_lo, ab_hi) = (_mm_unpacklo_ps(a, b), _mm_unpackhi_ps(a, b));
@@ -69,7 +86,8 @@ unsafe fn load(tris: &[[Vec4; 3]; 4], k: usize) -> Vertices {
 
 /// A vertex projected to the screen, as `setup::project` does: fixed-point `x, y`
 /// (integers in `f64`) and NDC depth; `ok` lanes are finite and within range.
-struct Projected {
+#[derive(Clone, Copy)]
+pub(super) struct Projected {
     x: __m256d,
     y: __m256d,
     z: __m256d,
@@ -241,22 +259,145 @@ pub(super) unsafe fn setup4(
     viewport: Viewport,
     out: &mut [RasterTri; 4],
 ) -> Lanes {
-    let verts = [load(tris, 0), load(tris, 1), load(tris, 2)];
+    let p0 = project_usual(&load(tris, 0), viewport);
+    let p1 = project_usual(&load(tris, 1), viewport);
+    let p2 = project_usual(&load(tris, 2), viewport);
+    setup4_projected([p0, p1, p2], cull_back, cmd, viewport, out)
+}
+
+/// [`project`], with `ok` the lanes of the usual case: finite inputs (all four
+/// coordinates, as `clip_triangle` checks), inside the guard band, projected
+/// within range.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn project_usual(v: &Vertices, viewport: Viewport) -> Projected {
+    let mut usual = inside(v, viewport);
+    for c in [v.x, v.y, v.z, v.w] {
+        usual = _mm256_and_pd(usual, abs_below::<_CMP_LT_OQ>(c, f64::INFINITY));
+    }
+    let p = project(v, viewport);
+    Projected { ok: _mm256_and_pd(usual, p.ok), ..p }
+}
+
+/// A vertex projected for [`setup4_indexed`]: fixed-point `x`, `y`, depth `z`
+/// (as [`project`] gives them), and all bits set where it is of the usual case
+/// ([`project_usual`]), else zero.
+pub(super) type VertexRecord = [f64; 4];
+
+/// Projects the four vertices `v` into `out`, as [`setup4`] projects each
+/// vertex of its triangles: a vertex shared by several triangles is projected
+/// once.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn project4(v: &[Vec4; 4], viewport: Viewport, out: &mut [VertexRecord; 4]) {
+    let p = project_usual(&lanes(v), viewport);
+    // The 4x4 transpose of the x, y, z, ok rows into one record per vertex.
+    let (xy_lo, xy_hi) = (_mm256_unpacklo_pd(p.x, p.y), _mm256_unpackhi_pd(p.x, p.y));
+    let (zo_lo, zo_hi) = (_mm256_unpacklo_pd(p.z, p.ok), _mm256_unpackhi_pd(p.z, p.ok));
+    let records = [
+        _mm256_permute2f128_pd::<0x20>(xy_lo, zo_lo),
+        _mm256_permute2f128_pd::<0x20>(xy_hi, zo_hi),
+        _mm256_permute2f128_pd::<0x31>(xy_lo, zo_lo),
+        _mm256_permute2f128_pd::<0x31>(xy_hi, zo_hi),
+    ];
+    for (o, r) in out.iter_mut().zip(records) {
+        _mm256_storeu_pd(o.as_mut_ptr(), r);
+    }
+}
+
+/// Vertex `k` of the four triangles `i` (indices into `records`), one per lane.
+///
+/// # Safety
+/// The CPU must support AVX2, and every index must be within `records`.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn gather(records: &[VertexRecord], i: &[[u32; 3]; 4], k: usize) -> Projected {
+    let r = |t: usize| _mm256_loadu_pd(records.get_unchecked(i[t][k] as usize).as_ptr());
+    let (a, b, c, d) = (r(0), r(1), r(2), r(3));
+    // The 4x4 transpose of four records into x, y, z, ok lanes.
+    let (ab_lo, ab_hi) = (_mm256_unpacklo_pd(a, b), _mm256_unpackhi_pd(a, b));
+    let (cd_lo, cd_hi) = (_mm256_unpacklo_pd(c, d), _mm256_unpackhi_pd(c, d));
+    Projected {
+        x: _mm256_permute2f128_pd::<0x20>(ab_lo, cd_lo),
+        y: _mm256_permute2f128_pd::<0x20>(ab_hi, cd_hi),
+        z: _mm256_permute2f128_pd::<0x31>(ab_lo, cd_lo),
+        ok: _mm256_permute2f128_pd::<0x31>(ab_hi, cd_hi),
+    }
+}
+
+/// The vertices of the four triangles `i` (indices into `records`), projected
+/// by [`project4`], as lanes for [`uncovered4_projected`] and [`setup4_projected`].
+///
+/// # Safety
+/// The CPU must support AVX2, and every index must be within `records`.
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) unsafe fn gather4(records: &[VertexRecord], i: &[[u32; 3]; 4]) -> [Projected; 3] {
+    [gather(records, i, 0), gather(records, i, 1), gather(records, i, 2)]
+}
+
+/// The pixel columns `x0..=x1` and rows `y0..=y1` whose centres lie within the
+/// vertices' bounds (`setup_screen`), as `[x0, y0, x1, y1]`: exact, as the
+/// divisions are by a power of two.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn pixel_box([p0, p1, p2]: &[Projected; 3], viewport: Viewport) -> [__m256d; 4] {
+    let (zero, half, inv_one) = (_mm256_setzero_pd(), _mm256_set1_pd(HALF as f64), _mm256_set1_pd(1.0 / ONE as f64));
+    let min3 = |a, b, c| _mm256_min_pd(_mm256_min_pd(a, b), c);
+    let max3 = |a, b, c| _mm256_max_pd(_mm256_max_pd(a, b), c);
+    let first = |lo| _mm256_max_pd(_mm256_ceil_pd(_mm256_mul_pd(_mm256_sub_pd(lo, half), inv_one)), zero);
+    let last = |hi, size: u32| {
+        _mm256_min_pd(
+            _mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(hi, half), inv_one)),
+            _mm256_set1_pd(f64::from(size) - 1.0),
+        )
+    };
+    [
+        first(min3(p0.x, p1.x, p2.x)),
+        first(min3(p0.y, p1.y, p2.y)),
+        last(max3(p0.x, p1.x, p2.x), viewport.width),
+        last(max3(p0.y, p1.y, p2.y), viewport.height),
+    ]
+}
+
+/// The lanes of the usual case among the triangles of the projected vertices `p`
+/// whose bounding box holds no pixel centre of the viewport: those
+/// [`setup4_projected`] drops for that reason (exactly, from the snapped
+/// vertices, where [`uncovered4`] estimates). Bit `i` for triangle `i`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(super) unsafe fn uncovered4_projected(p: &[Projected; 3], viewport: Viewport) -> u8 {
+    let usual = _mm256_and_pd(_mm256_and_pd(p[0].ok, p[1].ok), p[2].ok);
+    let [x0, y0, x1, y1] = pixel_box(p, viewport);
+    let empty = _mm256_or_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GT_OQ>(y0, y1));
+    bits(_mm256_and_pd(usual, empty)) as u8
+}
+
+/// [`setup4`] from its triangles' projected vertices `p` ([`project_usual`]).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn setup4_projected(
+    [p0, mut p1, mut p2]: [Projected; 3],
+    cull_back: bool,
+    cmd: u32,
+    viewport: Viewport,
+    out: &mut [RasterTri; 4],
+) -> Lanes {
     let zero = _mm256_setzero_pd();
-    // Finite inputs (all four coordinates, as `clip_triangle` checks), inside the
-    // guard band, projected within range: the usual case.
-    let mut usual = _mm256_cmp_pd::<_CMP_TRUE_UQ>(zero, zero);
-    for v in &verts {
-        for c in [v.x, v.y, v.z, v.w] {
-            usual = _mm256_and_pd(usual, abs_below::<_CMP_LT_OQ>(c, f64::INFINITY));
-        }
-        usual = _mm256_and_pd(usual, inside(v, viewport));
-    }
-    let [p0, p1, mut p2] = [project(&verts[0], viewport), project(&verts[1], viewport), project(&verts[2], viewport)];
-    let mut p1 = p1;
-    for p in [&p0, &p1, &p2] {
-        usual = _mm256_and_pd(usual, p.ok);
-    }
+    let usual = _mm256_and_pd(_mm256_and_pd(p0.ok, p1.ok), p2.ok);
 
     // Twice the signed area, exact (see the module documentation); with y down,
     // front faces have negative area, and positive-area order swaps vertices 1, 2.
@@ -275,22 +416,8 @@ pub(super) unsafe fn setup4(
         *b = _mm256_blendv_pd(old_b, old_a, swap);
     }
 
-    // The pixels whose centres lie within the vertices' bounds (`setup_screen`):
-    // exact, as the divisions are by a power of two.
-    let (half, inv_one) = (_mm256_set1_pd(HALF as f64), _mm256_set1_pd(1.0 / ONE as f64));
-    let min3 = |a, b, c| _mm256_min_pd(_mm256_min_pd(a, b), c);
-    let max3 = |a, b, c| _mm256_max_pd(_mm256_max_pd(a, b), c);
-    let first = |lo| _mm256_max_pd(_mm256_ceil_pd(_mm256_mul_pd(_mm256_sub_pd(lo, half), inv_one)), zero);
-    let last = |hi, size: u32| {
-        _mm256_min_pd(
-            _mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(hi, half), inv_one)),
-            _mm256_set1_pd(f64::from(size) - 1.0),
-        )
-    };
-    let x0 = first(min3(p0.x, p1.x, p2.x));
-    let y0 = first(min3(p0.y, p1.y, p2.y));
-    let x1 = last(max3(p0.x, p1.x, p2.x), viewport.width);
-    let y1 = last(max3(p0.y, p1.y, p2.y), viewport.height);
+    let [x0, y0, x1, y1] = pixel_box(&[p0, p1, p2], viewport);
+    let inv_one = _mm256_set1_pd(1.0 / ONE as f64);
     keep = _mm256_and_pd(keep, _mm256_and_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_LE_OQ>(y0, y1)));
 
     // The depth plane, in `setup_screen`'s order of operations.

@@ -60,6 +60,11 @@ fn command(n: u32) -> impl Strategy<Value = Command> {
     })
 }
 
+/// A raster form's fields, bit for bit, to compare set-ups.
+fn fields(t: &RasterTri) -> (u32, [i32; 5], [[i32; 2]; 3], [u32; 3]) {
+    (t.cmd, [t.x0, t.x1, t.y0, t.y1, t.plane_y], t.verts, [t.z_origin, t.z_dx, t.z_dy].map(f32::to_bits))
+}
+
 /// The four-at-a-time set-up of `tris` against the scalar one, lane by lane: a set-up
 /// triangle's raster form must be the scalar set-up's only one, field for field and
 /// bit for bit; a dropped one must have none; a triangle inside the viewport (`w` =
@@ -70,9 +75,6 @@ fn check_four_at_a_time_setup(tris: &[[Vec4; 3]; 4], size: (u32, u32), cull_back
     if !is_x86_feature_detected!("avx2") {
         return Ok(());
     }
-    let fields = |t: &RasterTri| {
-        (t.cmd, [t.x0, t.x1, t.y0, t.y1, t.plane_y], t.verts, [t.z_origin, t.z_dx, t.z_dy].map(f32::to_bits))
-    };
     let viewport = Viewport::new(size.0, size.1);
     let mut four = [RasterTri::PLACEHOLDER; 4];
     // SAFETY: the CPU supports AVX2 (checked above).
@@ -214,6 +216,29 @@ proptest! {
         cull_back in any::<bool>(),
     ) {
         check_uncovered_lanes(&tris, size, cull_back)?;
+    }
+
+    #[test]
+    fn indexed_setup_matches_the_setup_of_its_triangles(
+        vertices in prop::collection::vec(prop_oneof![
+            8 => triangle(),
+            1 => (triangle(), 0..12usize, prop_oneof![Just(f32::NAN), Just(f32::INFINITY), Just(-0.0), Just(0.0)])
+                .prop_map(|(mut t, at, v)| { t[at / 4][at % 4] = v; t }),
+        ], 1..12).prop_map(|t| t.concat()),
+        picks in prop::collection::vec(any::<prop::sample::Index>(), 0..100),
+        size in (1u32..300, 1u32..300),
+        cull_back in any::<bool>(),
+    ) {
+        // Triangles sharing vertices in any pattern, a last one incomplete.
+        let indices: Vec<u32> = picks.iter().map(|i| i.index(vertices.len()) as u32).collect();
+        let triangles: Vec<[Vec4; 3]> =
+            indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| vertices[t[k] as usize])).collect();
+        for raster in [Rasterizer::new(), Rasterizer::scalar()] {
+            let indexed = raster.prepare_indexed(size.0, size.1, &vertices, &indices, cull_back);
+            let expected = raster.prepare(size.0, size.1, &triangles, cull_back);
+            let all = |p: &super::super::Prepared| p.triangles.iter().map(fields).collect::<Vec<_>>();
+            prop_assert_eq!(all(&indexed), all(&expected));
+        }
     }
 
     #[test]
