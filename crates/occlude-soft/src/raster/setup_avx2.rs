@@ -282,7 +282,7 @@ unsafe fn project_usual(v: &Vertices, viewport: Viewport) -> Projected {
     Projected { ok: _mm256_and_pd(usual, p.ok), ..p }
 }
 
-/// A vertex projected for [`setup4_indexed`]: fixed-point `x`, `y`, depth `z`
+/// A vertex projected for [`gather4`]: fixed-point `x`, `y`, depth `z`
 /// (as [`project`] gives them), and all bits set where it is of the usual case
 /// ([`project_usual`]), else zero.
 pub(super) type VertexRecord = [f64; 4];
