@@ -1,5 +1,6 @@
-//! Small triangles hidden behind the hierarchical depth as they are binned:
-//! counted there, neither binned nor rasterized.
+//! Triangles hidden behind the hierarchical depth as they are binned (small
+//! ones one by one, a prepared command's all at once): counted there, neither
+//! binned nor rasterized.
 //!
 //! A draw's or query's result needs every fragment's count, passing or not (the
 //! clock charges a draw for the pixels it covers), so a triangle whose fragments
