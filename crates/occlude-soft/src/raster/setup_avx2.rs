@@ -384,6 +384,32 @@ pub(super) unsafe fn uncovered4_projected(p: &[Projected; 3], viewport: Viewport
     bits(_mm256_and_pd(usual, empty)) as u8
 }
 
+/// Lanes where the triangle `p` (vertices in the order of positive area)
+/// covers the centre of pixel `(x, y)`: its edge functions as
+/// `setup::edges_at` defines them, top-left rule included, exact in `f64`
+/// (coordinates below 2^23 in magnitude, so each product is below 2^48).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn centre_covered(p: &[Projected; 3], x: __m256d, y: __m256d) -> __m256d {
+    let (zero, one, half) = (_mm256_setzero_pd(), _mm256_set1_pd(ONE as f64), _mm256_set1_pd(HALF as f64));
+    let (cx, cy) = (_mm256_add_pd(_mm256_mul_pd(x, one), half), _mm256_add_pd(_mm256_mul_pd(y, one), half));
+    let edge = |a: &Projected, b: &Projected| {
+        let (dx, dy) = (_mm256_sub_pd(b.x, a.x), _mm256_sub_pd(b.y, a.y));
+        let value = _mm256_sub_pd(_mm256_mul_pd(dx, _mm256_sub_pd(cy, a.y)), _mm256_mul_pd(dy, _mm256_sub_pd(cx, a.x)));
+        // A top or left edge covers centres on it (`>= 0`), another does not
+        // (`>= 1`: `> 0`, the value being an integer).
+        let top_left = _mm256_or_pd(
+            _mm256_cmp_pd::<_CMP_LT_OQ>(dy, zero),
+            _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(dy, zero), _mm256_cmp_pd::<_CMP_GT_OQ>(dx, zero)),
+        );
+        _mm256_blendv_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(value, zero), _mm256_cmp_pd::<_CMP_GE_OQ>(value, zero), top_left)
+    };
+    _mm256_and_pd(_mm256_and_pd(edge(&p[0], &p[1]), edge(&p[1], &p[2])), edge(&p[2], &p[0]))
+}
+
 /// [`setup4`] from its triangles' projected vertices `p` ([`project_usual`]).
 ///
 /// # Safety
@@ -419,6 +445,13 @@ pub(super) unsafe fn setup4_projected(
     let [x0, y0, x1, y1] = pixel_box(&[p0, p1, p2], viewport);
     let inv_one = _mm256_set1_pd(1.0 / ONE as f64);
     keep = _mm256_and_pd(keep, _mm256_and_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_LE_OQ>(y0, y1)));
+    // A triangle whose box holds one pixel centre and that does not cover it
+    // covers nothing: most of a large scene's set-up triangles (dropped here,
+    // not by `RasterTri::covered_rows` after the set-up).
+    let single = _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_EQ_OQ>(y0, y1));
+    if bits(_mm256_and_pd(single, keep)) != 0 {
+        keep = _mm256_andnot_pd(_mm256_andnot_pd(centre_covered(&[p0, p1, p2], x0, y0), single), keep);
+    }
 
     // The depth plane, in `setup_screen`'s order of operations.
     let (px0, py0) = (_mm256_mul_pd(p0.x, inv_one), _mm256_mul_pd(p0.y, inv_one));
