@@ -148,7 +148,7 @@ impl RasterTri {
     /// The pixel centres the triangle covers: its fragments, as every
     /// rasterizer path counts them. A triangle whose rows and columns hold
     /// one centre covers it ([`Self::covered_rows`] keeps no triangle of at
-    /// most 2 x 2 centres that covers none); up to [`STEPPED`] centres are
+    /// most 2 x 2 centres that covers none); up to 64 centres (`STEPPED`) are
     /// tested one by one ([`Self::covered_in`]), more are walked by spans
     /// ([`walk`]) window by window.
     pub fn covered(&self) -> u64 {
