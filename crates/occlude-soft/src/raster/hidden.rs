@@ -70,9 +70,11 @@ impl Extent {
     /// The extent of `triangles`; `None` when there are none, or when a depth
     /// plane is too steep to bound ([`min_depth`]).
     pub fn of(triangles: &[RasterTri]) -> Option<Self> {
-        let (first, rest) = triangles.split_first()?;
-        let mut extent = Self { rect: [first.x0, first.x1, first.y0, first.y1], min: f32::INFINITY };
-        for t in std::iter::once(first).chain(rest) {
+        if triangles.is_empty() {
+            return None;
+        }
+        let mut extent = Self { rect: [i32::MAX, i32::MIN, i32::MAX, i32::MIN], min: f32::INFINITY };
+        for t in triangles {
             let [x0, x1, y0, y1] = &mut extent.rect;
             (*x0, *x1, *y0, *y1) = ((*x0).min(t.x0), (*x1).max(t.x1), (*y0).min(t.y0), (*y1).max(t.y1));
             extent.min = extent.min.min(min_depth(t, t.x0, t.x1, t.y0, t.y1)?);

@@ -776,7 +776,7 @@ unsafe fn set_up_indexed_avx2(
         }
     }
     for t in rest.chunks_exact(3) {
-        pending.add(&[[t[0], t[1], t[2]]; 4], 0b1110, |i, n| set_up(out, i, n, None));
+        pending.push([t[0], t[1], t[2]], true, |i, n| set_up(out, i, n, None));
     }
     pending.finish(|i, n| set_up(out, i, n, None));
 }
@@ -803,14 +803,20 @@ impl<T: Copy + Default> Pending<T> {
     /// `full(items, 4)` whenever four are gathered.
     #[inline(always)]
     fn add(&mut self, group: &[T; 4], dropped: u8, mut full: impl FnMut(&[T; 4], usize)) {
-        for (k, item) in group.iter().enumerate() {
-            // Written always, kept (`n` advanced) where not dropped: no branch.
-            self.items[self.n] = *item;
-            self.n += usize::from(dropped & (1 << k) == 0);
-            if self.n == 4 {
-                full(&self.items, 4);
-                self.n = 0;
-            }
+        for (k, &item) in group.iter().enumerate() {
+            self.push(item, dropped & (1 << k) == 0, &mut full);
+        }
+    }
+
+    /// Adds `item` if `keep`, calling `full(items, 4)` if four are then gathered.
+    #[inline(always)]
+    fn push(&mut self, item: T, keep: bool, mut full: impl FnMut(&[T; 4], usize)) {
+        // Written always, kept (`n` advanced) only if `keep`: no branch.
+        self.items[self.n] = item;
+        self.n += usize::from(keep);
+        if self.n == 4 {
+            full(&self.items, 4);
+            self.n = 0;
         }
     }
 
