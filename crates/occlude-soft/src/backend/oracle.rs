@@ -32,10 +32,19 @@
 //! test `culling_changes_no_image_and_no_count` checks it against the
 //! uncompromising oracle on random scenes and views.
 //!
+//! **Set up once.** A backend sharing its set-ups (`SharedSetup`, the
+//! lanes of a benchmark run) takes its candidates' triangles from the table
+//! of the oracle's camera: view-frustum culling's lane sets up every
+//! instance in the frustum for that camera anyway, and the oracle's two
+//! passes then neither project nor set up a triangle of their own. The
+//! rasterizer gives a prepared command the results of setting it up in the
+//! call.
+//!
 //! [`query_box::padded`]: occlude_core::query_box::padded
 
+use super::shared_setup::FrameSetup;
 use super::SoftBackend;
-use crate::raster::{Command, CommandKind, DepthBuffer, DepthTest};
+use crate::raster::{Command, CommandKind, DepthBuffer, DepthTest, Prepared};
 use glam::Mat4;
 use occlude_core::depth_pyramid::{box_footprint, DepthPyramid};
 use occlude_core::query_box::padded;
@@ -96,6 +105,9 @@ impl SoftBackend<'_> {
     ) -> OracleView {
         self.view_projection = camera.view_projection();
         self.depth.clear();
+        let (width, height, instances) = (self.depth.width(), self.depth.height(), self.scene.instances.len());
+        let setup = self.shared_setup.as_ref().map(|s| s.frame(self.view_projection, width, height, instances));
+        let setup = setup.as_deref();
         let mut culling = cull.then(|| Culling::new(camera, &self.depth));
         let mut order: Vec<usize> = (0..candidates.len()).collect();
         if cull {
@@ -104,45 +116,63 @@ impl SoftBackend<'_> {
                 |k: usize| self.scene.instances[candidates[k] as usize].bounds.distance_squared(camera.position);
             order.sort_by(|&a, &b| distance(a).total_cmp(&distance(b)).then(a.cmp(&b)));
         }
-        self.oracle_pass(CommandKind::Draw, candidates, &order, part, culling.as_mut());
+        self.oracle_pass(CommandKind::Draw, candidates, &order, part, setup, culling.as_mut());
         // The drawing pass refreshed the pyramid after its last call: it is
         // the final image's.
         order.sort_unstable();
         let kind = CommandKind::Query(DepthTest::Equal);
         let mut pixels = vec![0; candidates.len()];
-        for (k, passed) in self.oracle_pass(kind, candidates, &order, part, culling.as_mut()) {
+        for (k, passed) in self.oracle_pass(kind, candidates, &order, part, setup, culling.as_mut()) {
             pixels[k] = passed;
         }
         OracleView::new(candidates, pixels, self.depth.to_vec(), self.depth.width(), self.depth.height())
     }
 
     /// One pass of the oracle: `candidates[k]` for each `k` of `order`
-    /// rasterized as `kind` in calls of about `part` triangles, those that
-    /// `culling` hides skipped (its pyramid rebuilt after every call of a
-    /// drawing pass). Returns the index `k` of each rasterized candidate
-    /// with its passing pixels.
+    /// rasterized as `kind` in calls of about `part` triangles, set up in
+    /// `setup` if given, those that `culling` hides skipped (its pyramid
+    /// rebuilt after every call of a drawing pass). Returns the index `k` of
+    /// each rasterized candidate with its passing pixels.
     fn oracle_pass(
         &mut self,
         kind: CommandKind,
         candidates: &[u32],
         order: &[usize],
         part: usize,
+        setup: Option<&FrameSetup>,
         mut culling: Option<&mut Culling>,
     ) -> Vec<(usize, u64)> {
         let (mut commands, mut rasterized, mut counted) = (Vec::new(), Vec::new(), Vec::new());
+        // The instances of the call's commands, and their triangles, when set up in `setup`.
+        let (mut instances, mut prepared_triangles) = (Vec::new(), 0);
         for (n, &k) in order.iter().enumerate() {
             let i = candidates[k];
             if !culling.as_ref().is_some_and(|c| c.hides(&self.scene.instances[i as usize].bounds)) {
                 let first = self.triangles.len() as u32;
-                self.push_instance_triangles(i);
+                match setup {
+                    Some(_) => {
+                        instances.push(i);
+                        prepared_triangles += self.scene.instance_triangles(i as usize) as usize;
+                    }
+                    None => self.push_instance_triangles(i),
+                }
                 commands.push(Command { kind, triangles: first..self.triangles.len() as u32, cull_back: false });
                 rasterized.push(k);
             }
-            if !commands.is_empty() && (self.triangles.len() >= part || n + 1 == order.len()) {
-                let results = self.rasterizer.execute(&mut self.depth, &self.triangles, &commands);
+            if !commands.is_empty() && (self.triangles.len() + prepared_triangles >= part || n + 1 == order.len()) {
+                let prepared: Vec<Option<&Prepared>> = match setup {
+                    Some(setup) => {
+                        setup.prepare(self.scene, &instances, &self.rasterizer);
+                        instances.iter().map(|&i| Some(setup.get(i).expect("set up just now"))).collect()
+                    }
+                    None => Vec::new(),
+                };
+                let results = self.rasterizer.execute_prepared(&mut self.depth, &self.triangles, &commands, &prepared);
                 counted.extend(rasterized.drain(..).zip(results.iter().map(|r| r.passed)));
                 self.triangles.clear();
                 commands.clear();
+                instances.clear();
+                prepared_triangles = 0;
                 if let Some(c) = culling.as_deref_mut().filter(|_| kind == CommandKind::Draw) {
                     c.refresh(&self.depth);
                 }
@@ -155,7 +185,7 @@ impl SoftBackend<'_> {
 #[cfg(test)]
 mod tests {
     use crate::gpu_model::GpuModel;
-    use crate::SoftBackend;
+    use crate::{SharedSetup, SoftBackend};
     use glam::Vec3;
     use occlude_core::{Aabb, Keyframe, Scene};
     use proptest::prelude::*;
@@ -164,13 +194,15 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(256))]
         /// On random boxes (overlapping, touching the eye, off screen) seen
         /// from random places, the culled oracle gives the unculled one's
-        /// image and counts bit for bit, whatever the size of its calls.
+        /// image and counts bit for bit, whatever the size of its calls and
+        /// whether it sets up its triangles in a shared table.
         #[test]
         fn culling_changes_no_image_and_no_count(
             boxes in prop::collection::vec((prop::array::uniform3(-10.0f32..10.0), prop::array::uniform3(0.02f32..4.0)), 1..80),
             eye in prop::array::uniform3(-12.0f32..12.0),
             look in prop::array::uniform3(-1.0f32..1.0),
             part in 1usize..300,
+            shared in any::<bool>(),
         ) {
             let bounds: Vec<Aabb> =
                 boxes.iter().map(|&(c, h)| Aabb::new(Vec3::from(c) - Vec3::from(h), Vec3::from(c) + Vec3::from(h))).collect();
@@ -180,12 +212,15 @@ mod tests {
             let key = Keyframe { time: 0.0, position, target: position + Vec3::from(look), fov_y_deg: 60.0 };
             let camera = key.camera(4.0 / 3.0, 0.1, 100.0);
             let candidates: Vec<u32> = (0..bounds.len() as u32).collect();
-            let view = |part: usize, cull: bool| {
+            let view = |part: usize, cull: bool, shared: bool| {
                 let mut backend = SoftBackend::new(&scene, 83, 61, GpuModel::modern());
+                if shared {
+                    backend.share_setup(SharedSetup::new());
+                }
                 let v = backend.oracle_in_parts(&camera, &candidates, part, cull);
                 (v.pixels, v.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>())
             };
-            prop_assert_eq!(view(part, true), view(usize::MAX, false));
+            prop_assert_eq!(view(part, true, shared), view(usize::MAX, false, false));
         }
     }
 }
