@@ -48,6 +48,7 @@ mod tile;
 #[cfg(test)]
 mod tests;
 
+use std::cell::RefCell;
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
 use std::sync::OnceLock;
@@ -579,13 +580,14 @@ impl Rasterizer {
         );
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2(_) => {
-                let mut out = Vec::new();
+            Kernel::Avx2(_) => INDEXED_SCRATCH.with_borrow_mut(|(records, out)| {
+                out.clear();
+                let viewport = Viewport::new(width, height);
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2, and
                 // the indices are checked above.
-                unsafe { set_up_indexed_avx2(vertices, indices, cull_back, Viewport::new(width, height), &mut out) };
-                Prepared::new(width, height, cull_back, out)
-            }
+                unsafe { set_up_indexed_avx2(vertices, indices, cull_back, viewport, records, out) };
+                Prepared::new(width, height, cull_back, out.to_vec())
+            }),
             Kernel::Scalar => {
                 let triangles: Vec<[Vec4; 3]> =
                     indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| vertices[t[k] as usize])).collect();
@@ -725,11 +727,23 @@ fn stage_four<S: Staging>(
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+thread_local! {
+    /// The memory [`Rasterizer::prepare_indexed`] sets up in, reused call after
+    /// call on each thread: the projected vertices, and the kept triangles
+    /// before their copy of exact size. A frame's shared set-up prepares
+    /// thousands of instances on each thread, and allocating both per
+    /// instance (the triangles' vector grown by doubling) cost the plant's
+    /// benchmark several percent of its CPU time in the allocator.
+    static INDEXED_SCRATCH: RefCell<(Vec<setup_avx2::VertexRecord>, Vec<RasterTri>)> =
+        const { RefCell::new((Vec::new(), Vec::new())) };
+}
+
 /// Sets up the triangles `indices` (three per triangle) make of `vertices`
 /// into `out`, in order, as [`setup_span`] sets up the same triangles given
-/// vertex by vertex: every vertex projected once ([`setup_avx2::project4`]),
-/// however many triangles share it, then the triangles set up four at a time
-/// from the projected vertices.
+/// vertex by vertex: every vertex projected once ([`setup_avx2::project4`])
+/// into `records`, however many triangles share it, then the triangles set
+/// up four at a time from the projected vertices.
 ///
 /// # Safety
 /// The CPU must support AVX2, and every index must be within `vertices`.
@@ -740,9 +754,11 @@ unsafe fn set_up_indexed_avx2(
     indices: &[u32],
     cull_back: bool,
     viewport: Viewport,
+    records: &mut Vec<setup_avx2::VertexRecord>,
     out: &mut Vec<RasterTri>,
 ) {
-    let mut records = vec![[0.0; 4]; vertices.len().next_multiple_of(4)];
+    records.clear();
+    records.resize(vertices.len().next_multiple_of(4), [0.0; 4]);
     for (v, r) in vertices.chunks(4).zip(records.chunks_exact_mut(4)) {
         // A last group of fewer than four repeats its last vertex.
         let mut four = [v[v.len() - 1]; 4];
@@ -753,7 +769,7 @@ unsafe fn set_up_indexed_avx2(
     // Sets up the first `n` of the four triangles `i`, their vertices `p` if
     // gathered already.
     let mut set_up = |out: &mut Vec<RasterTri>, i: &[[u32; 3]; 4], n, p: Option<_>| {
-        let p = p.unwrap_or_else(|| setup_avx2::gather4(&records, i));
+        let p = p.unwrap_or_else(|| setup_avx2::gather4(records, i));
         let lanes = setup_avx2::setup4_projected(p, cull_back, 0, viewport, &mut four);
         stage_four(out, lanes, &four, n, |out, t| {
             let clip = i[t].map(|k| vertices[k as usize]);
@@ -767,7 +783,7 @@ unsafe fn set_up_indexed_avx2(
     let rest = groups.remainder();
     for group in groups {
         let i: [[u32; 3]; 4] = std::array::from_fn(|t| [group[3 * t], group[3 * t + 1], group[3 * t + 2]]);
-        let p = setup_avx2::gather4(&records, &i);
+        let p = setup_avx2::gather4(records, &i);
         let uncovered = setup_avx2::uncovered4_projected(&p, viewport);
         if uncovered == 0 && pending.is_empty() {
             set_up(out, &i, 4, Some(p));
