@@ -586,7 +586,15 @@ impl Rasterizer {
                 // SAFETY: an `Avx2` exists only where the CPU supports AVX2, and
                 // the indices are checked above.
                 unsafe { set_up_indexed_avx2(vertices, indices, cull_back, viewport, records, out) };
-                Prepared::new(width, height, cull_back, out.to_vec())
+                let prepared = Prepared::new(width, height, cull_back, out.to_vec());
+                // A thread keeps no more than a usual instance needs.
+                if records.capacity() > SCRATCH_KEPT {
+                    *records = Vec::new();
+                }
+                if out.capacity() > SCRATCH_KEPT {
+                    *out = Vec::new();
+                }
+                prepared
             }),
             Kernel::Scalar => {
                 let triangles: Vec<[Vec4; 3]> =
@@ -738,6 +746,13 @@ thread_local! {
     static INDEXED_SCRATCH: RefCell<(Vec<setup_avx2::VertexRecord>, Vec<RasterTri>)> =
         const { RefCell::new((Vec::new(), Vec::new())) };
 }
+
+/// The most vertex records or triangles [`INDEXED_SCRATCH`] keeps for the
+/// next call (2 and 4 MiB): an instance of a mesh larger than that (an
+/// imported model of millions of triangles) allocates its own, so that no
+/// thread holds such a mesh's memory after its set-up.
+#[cfg(target_arch = "x86_64")]
+const SCRATCH_KEPT: usize = 1 << 16;
 
 /// Sets up the triangles `indices` (three per triangle) make of `vertices`
 /// into `out`, in order, as [`setup_span`] sets up the same triangles given
