@@ -279,10 +279,10 @@ impl<'s> SoftBackend<'s> {
                 let prepared: Vec<Option<&Prepared>> = match &self.frame_setup {
                     Some(setup) => {
                         let instances: Vec<u32> = self.sources[done..].iter().flatten().map(|&(i, _)| i).collect();
-                        setup.prepare(self.scene, &instances, &self.rasterizer);
+                        let mut set_up = setup.prepare(self.scene, &instances, &self.rasterizer).into_iter();
                         self.sources[done..]
                             .iter()
-                            .map(|s| s.map(|(i, _)| setup.get(i).expect("set up just now")))
+                            .map(|s| s.map(|_| set_up.next().expect("one set-up per such draw")))
                             .collect()
                     }
                     None => Vec::new(),

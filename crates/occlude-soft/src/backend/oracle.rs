@@ -162,8 +162,7 @@ impl SoftBackend<'_> {
             if !commands.is_empty() && (self.triangles.len() + prepared_triangles >= part || n + 1 == order.len()) {
                 let prepared: Vec<Option<&Prepared>> = match setup {
                     Some(setup) => {
-                        setup.prepare(self.scene, &instances, &self.rasterizer);
-                        instances.iter().map(|&i| Some(setup.get(i).expect("set up just now"))).collect()
+                        setup.prepare(self.scene, &instances, &self.rasterizer).into_iter().map(Some).collect()
                     }
                     None => Vec::new(),
                 };

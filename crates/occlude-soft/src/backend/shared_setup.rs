@@ -77,24 +77,29 @@ pub(super) struct FrameSetup {
 }
 
 impl FrameSetup {
-    /// Sets up those of `instances` no backend has set up yet, in parallel
-    /// (rayon), with `rasterizer`'s kernel.
-    pub(super) fn prepare(&self, scene: &Scene, instances: &[u32], rasterizer: &Rasterizer) {
-        instances.par_iter().for_each_init(Vec::new, |clip, &i| {
-            self.slots[i as usize].get_or_init(|| {
-                let indices = scene.clip_vertices(i, &self.view_projection, clip);
-                rasterizer.prepare_indexed(self.width, self.height, clip, indices, false)
-            });
-        });
+    /// The set-up of each of `instances`, in order: those no backend has set
+    /// up yet set up here, in parallel (rayon), with `rasterizer`'s kernel.
+    pub(super) fn prepare(&self, scene: &Scene, instances: &[u32], rasterizer: &Rasterizer) -> Vec<&Prepared> {
+        instances
+            .par_iter()
+            .map_init(Vec::new, |clip, &i| {
+                self.slots[i as usize].get_or_init(|| {
+                    let indices = scene.clip_vertices(i, &self.view_projection, clip);
+                    rasterizer.prepare_indexed(self.width, self.height, clip, indices, false)
+                })
+            })
+            .collect()
+    }
+
+    /// Instance `i`'s set-up, if made (for tests: the backends take theirs
+    /// from [`Self::prepare`]).
+    #[cfg(test)]
+    pub(super) fn get(&self, i: u32) -> Option<&Prepared> {
+        self.slots[i as usize].get()
     }
 
     /// Whether its set-ups are for `view_projection`.
     fn is_for(&self, view_projection: &Mat4) -> bool {
         self.view_projection.to_cols_array().map(f32::to_bits) == view_projection.to_cols_array().map(f32::to_bits)
-    }
-
-    /// Instance `i`'s set-up, if made.
-    pub(super) fn get(&self, i: u32) -> Option<&Prepared> {
-        self.slots[i as usize].get()
     }
 }
