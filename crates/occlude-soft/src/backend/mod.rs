@@ -73,6 +73,13 @@ const RASTER_TRIANGLES: usize = 1 << 16;
 /// line to replay.
 const ORACLE_PART: usize = 1 << 16;
 
+/// Triangles per rasterizer call of the oracle pass when they come set up
+/// from a [`SharedSetup`] table: nothing is set up in the call, so fewer,
+/// larger calls rebuild the pass's depth pyramid less often. 2^18 took the
+/// fewest instructions per frame of the power plant's `--paper chc` (2^14:
+/// 6.71 billion, 2^16: 5.71, 2^18: 5.57, 2^20: 5.84; docs/benchmarks.md).
+const ORACLE_PREPARED_PART: usize = 1 << 18;
+
 /// A recorded command's place on the simulated GPU time line.
 #[derive(Clone, Copy, Debug)]
 struct GpuOp {
@@ -539,7 +546,8 @@ impl Instruments for SoftBackend<'_> {
     }
 
     fn oracle(&mut self, camera: &Camera, candidates: &[u32]) -> OracleView {
-        self.oracle_in_parts(camera, candidates, ORACLE_PART, true)
+        let part = if self.shared_setup.is_some() { ORACLE_PREPARED_PART } else { ORACLE_PART };
+        self.oracle_in_parts(camera, candidates, part, true)
     }
 }
 

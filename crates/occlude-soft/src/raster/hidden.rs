@@ -21,7 +21,11 @@
 //! bounds. Hidden so, it adds the count of its triangles' pixels
 //! ([`RasterTri::covered`], counted once per set-up and shared by the calls
 //! that need it) and none of its triangles is binned; a view-frustum culling
-//! lane draws most of a large scene's instances behind nearer ones.
+//! lane draws most of a large scene's instances behind nearer ones. Not
+//! hidden, its triangles are tested the same way in runs of a few
+//! consecutive ones (`GROUP`), each run's count also shared, before one by
+//! one: the lanes then count a partly hidden instance's hidden runs once
+//! between them, not each of their triangles once per lane.
 //!
 //! **Why the results are the same.** The bounds at the call's start are upper
 //! bounds of the depths at any later point of the call: the call's draws only lower
@@ -34,8 +38,8 @@
 //! (set-up keeps no triangle of at most 2 x 2 centres that covers none): one
 //! fragment. An any-pass query counts no fragments, so its hidden triangles add
 //! nothing. An extent's rectangle holds each of its triangles' boxes and its
-//! bound is at most each triangle's bound over its box, so a command hidden
-//! whole has every triangle hidden.
+//! bound is at most each triangle's bound over its box, so a command (or a
+//! run of its triangles) hidden whole has every triangle hidden.
 
 use super::bin::TileGrid;
 use super::hiz::{min_depth, rect_mask, TileHiZ};
@@ -81,6 +85,12 @@ impl Extent {
         }
         Some(extent)
     }
+
+    /// The extent of the triangles of `self` and `other` together.
+    pub fn union(&self, other: &Self) -> Self {
+        let ([a0, a1, a2, a3], [b0, b1, b2, b3]) = (self.rect, other.rect);
+        Self { rect: [a0.min(b0), a1.max(b1), a2.min(b2), a3.max(b3)], min: self.min.min(other.min) }
+    }
 }
 
 /// Whether a command of `kind` passes fragments at equal depth (EQUAL), and
@@ -118,17 +128,13 @@ impl<'a> HiddenTest<'a> {
         })
     }
 
-    /// The fragments of a command of `kind` whose triangles lie within
-    /// `extent`, if that is hidden: every triangle then is (the argument of the
-    /// module documentation, for the extent's bound), and `fragments()` gives
-    /// the count of their pixels. `None` if it is not hidden.
-    pub fn command_fragments(
-        &self,
-        extent: &Extent,
-        kind: CommandKind,
-        fragments: impl FnOnce() -> u64,
-    ) -> Option<u64> {
-        let (equal, counted) = test_of(kind);
+    /// The fragments of triangles of command `cmd` that lie within `extent`,
+    /// if that is hidden: every triangle then is (the argument of the module
+    /// documentation, for the extent's bound), and `fragments()` gives the
+    /// count of their pixels. `None` if it is not hidden.
+    #[inline(always)]
+    pub fn command_fragments(&self, extent: &Extent, cmd: u32, fragments: impl FnOnce() -> u64) -> Option<u64> {
+        let (equal, counted) = test_of(self.kinds[cmd as usize]);
         self.hidden_windows(extent.rect, extent.min, equal, |_| Some(0))?;
         Some(if counted { fragments() } else { 0 })
     }

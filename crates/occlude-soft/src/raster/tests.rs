@@ -654,6 +654,61 @@ fn prepared_commands_hidden_whole_match_the_commands_set_up_in_the_call() {
     }
 }
 
+/// A prepared command partly in front of what an earlier call drew has its
+/// runs of [`GROUP`] triangles behind it counted whole (`Group`), with the
+/// results and image of setting it up in the call, on both kernels, where the
+/// set-up chunks split its groups.
+#[test]
+fn prepared_groups_hidden_whole_match_the_commands_set_up_in_the_call() {
+    let v = |x: f32, y: f32| Vec4::new(x, y, 0.3, 1.0);
+    let (w, h) = (333, 251);
+    let mut tris = vec![[v(-1.0, -1.0), v(0.0, -1.0), v(0.0, 1.0)], [v(-1.0, -1.0), v(0.0, 1.0), v(-1.0, 1.0)]];
+    // A command of 100 triangles anywhere, so that the chunks' bounds (every
+    // `MIN_SETUP_CHUNK` triangles) fall inside the next command's groups.
+    tris.extend(random_scene(100, 3).into_iter().take(100));
+    let first = tris.len() as u32;
+    // Then runs of 128 triangles (many groups) 2 to 12 pixels across: behind
+    // the occluder, beside it, or in front of it.
+    let mut rng = Rng::new(8, 0);
+    for k in 0..12 {
+        let (cx, z) = match k % 3 {
+            0 => (0.4 * w as f32 * rng.range(0.2, 1.0), 0.6),
+            1 => (w as f32 * rng.range(0.6, 0.9), 0.6),
+            _ => (0.4 * w as f32 * rng.range(0.2, 1.0), 0.1),
+        };
+        let cy = h as f32 * rng.range(0.2, 0.8);
+        for j in 0..128 {
+            let size = [2.0f32, 4.0, 12.0][j % 3];
+            let mut p = || {
+                let (x, y) = (cx + rng.range(-size, size) / 2.0, cy + rng.range(-size, size) / 2.0);
+                at_pixel(x, y, z * rng.range(0.95, 1.05), rng.range(0.5, 2.0), w, h)
+            };
+            tris.push([p(), p(), p()]);
+        }
+    }
+    let n = tris.len() as u32;
+    let commands = [cmd(CommandKind::Draw, 2..first, false), cmd(CommandKind::Query(DepthTest::Less), first..n, false)];
+    let occluder = [cmd(CommandKind::Draw, 0..2, false)];
+    for raster in [Rasterizer::new, Rasterizer::scalar] {
+        let mut expected_depth = DepthBuffer::new(w, h);
+        let mut rasterizer = raster();
+        rasterizer.execute(&mut expected_depth, &tris, &occluder);
+        let expected = rasterizer.execute(&mut expected_depth, &tris, &commands);
+        let prepared = raster().prepare(w, h, &tris[first as usize..], false);
+        let emptied = [commands[0].clone(), cmd(commands[1].kind, 0..0, false)];
+        let mut depth = DepthBuffer::new(w, h);
+        let mut rasterizer = raster();
+        rasterizer.execute(&mut depth, &tris, &occluder);
+        let results = rasterizer.execute_prepared(&mut depth, &tris, &emptied, &[None, Some(&prepared)]);
+        assert_eq!(results, expected);
+        assert_eq!(bits(&depth), bits(&expected_depth));
+        assert!(!rasterizer.hidden_whole[1] && rasterizer.chunks.len() > 2, "{} chunks", rasterizer.chunks.len());
+        // A group is counted only where it was hidden whole.
+        let counted = prepared.groups.iter().filter(|g| g.covered.get().is_some()).count();
+        assert!(counted >= 2 && counted < prepared.groups.len() - 4, "{counted} of {} groups", prepared.groups.len());
+    }
+}
+
 #[test]
 fn hidden_and_visible_queries_after_external_writes_and_clears() {
     // A full occluder at 0.5, then queries behind it (hidden: the hierarchical depth
