@@ -77,7 +77,9 @@ const ORACLE_PART: usize = 1 << 16;
 /// from a [`SharedSetup`] table: nothing is set up in the call, so fewer,
 /// larger calls rebuild the pass's depth pyramid less often. 2^18 took the
 /// fewest instructions per frame of the power plant's `--paper chc` (2^14:
-/// 6.71 billion, 2^16: 5.71, 2^18: 5.57, 2^20: 5.84; docs/benchmarks.md).
+/// 6.71 billion, 2^16: 5.71, 2^18: 5.57, 2^20: 5.84) and 10 % fewer than
+/// 2^16 on the teapots, 6 % more on the city, whose whole view takes one or
+/// two calls (docs/benchmarks.md).
 const ORACLE_PREPARED_PART: usize = 1 << 18;
 
 /// A recorded command's place on the simulated GPU time line.
