@@ -650,13 +650,11 @@ impl Rasterizer {
 trait Staging {
     fn stage(&mut self, t: RasterTri);
 
-    /// Stages group `g` of `p`'s triangles for command `cmd`; a call may
-    /// count a hidden group whole instead.
+    /// Whether group `g` of `p`'s triangles is hidden, for command `cmd`,
+    /// and so counted whole here instead of staged.
     #[inline(always)]
-    fn stage_group(&mut self, cmd: u32, p: &Prepared, g: usize) {
-        for t in p.group_triangles(g) {
-            self.stage(RasterTri { cmd, ..*t });
-        }
+    fn counted_group(&mut self, _cmd: u32, _p: &Prepared, _g: usize) -> bool {
+        false
     }
 }
 
@@ -678,20 +676,16 @@ impl Staging for Binning<'_> {
     }
 
     #[inline(always)]
-    fn stage_group(&mut self, cmd: u32, p: &Prepared, g: usize) {
-        let triangles = p.group_triangles(g);
-        let hidden = self.hidden.as_ref().and_then(|h| {
-            let extent = p.groups[g].extent.as_ref()?;
-            h.command_fragments(extent, cmd, || p.groups[g].fragments(triangles))
-        });
-        match hidden {
-            Some(fragments) => self.chunk.count_hidden(cmd, fragments),
-            None => {
-                for t in triangles {
-                    self.stage(RasterTri { cmd, ..*t });
-                }
-            }
+    fn counted_group(&mut self, cmd: u32, p: &Prepared, g: usize) -> bool {
+        let group = &p.groups[g];
+        let hidden = self
+            .hidden
+            .as_ref()
+            .and_then(|h| h.command_fragments(group.extent.as_ref()?, cmd, || group.fragments(p.group_triangles(g))));
+        if let Some(fragments) = hidden {
+            self.chunk.count_hidden(cmd, fragments);
         }
+        hidden.is_some()
     }
 }
 
@@ -737,7 +731,11 @@ fn setup_span<S: Staging>(kernel: Kernel, out: &mut S, viewport: Viewport, span:
             // in order: past this span's end, and none of it by the next span.
             let at = g - span.starts[cmd];
             for group in at.div_ceil(GROUP)..(at + (end - g)).div_ceil(GROUP) {
-                out.stage_group(cmd as u32, p, group);
+                if !out.counted_group(cmd as u32, p, group) {
+                    for t in p.group_triangles(group) {
+                        out.stage(RasterTri { cmd: cmd as u32, ..*t });
+                    }
+                }
             }
             g = end;
             cmd += 1;
