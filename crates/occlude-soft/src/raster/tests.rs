@@ -587,6 +587,24 @@ fn small_hidden_triangles_counted_at_binning_match_the_reference() {
     }
 }
 
+/// A new rasterizer of `raster` that has run the call `first` and then
+/// `commands` (with their `prepared` set-ups; empty for none) on a `w` x `h`
+/// buffer; with the second call's results and the image.
+fn after_first_call(
+    raster: fn() -> Rasterizer,
+    (w, h): (u32, u32),
+    tris: &[[Vec4; 3]],
+    first: &[Command],
+    commands: &[Command],
+    prepared: &[Option<&Prepared>],
+) -> (Rasterizer, Vec<CommandResult>, DepthBuffer) {
+    let mut depth = DepthBuffer::new(w, h);
+    let mut rasterizer = raster();
+    rasterizer.execute(&mut depth, tris, first);
+    let results = rasterizer.execute_prepared(&mut depth, tris, commands, prepared);
+    (rasterizer, results, depth)
+}
+
 /// A prepared command whose triangles are all behind what an earlier call drew
 /// is counted whole (`hidden::Extent`), with the results and image of
 /// rasterizing it, on both kernels and with every kind of command; clusters in
@@ -631,20 +649,14 @@ fn prepared_commands_hidden_whole_match_the_commands_set_up_in_the_call() {
         }
         let first = [cmd(CommandKind::Draw, 0..2, false)];
         for raster in [Rasterizer::new, Rasterizer::scalar] {
-            let mut expected_depth = DepthBuffer::new(w, h);
-            let mut rasterizer = raster();
-            rasterizer.execute(&mut expected_depth, &tris, &first);
-            let expected = rasterizer.execute(&mut expected_depth, &tris, &commands);
+            let (_, expected, expected_depth) = after_first_call(raster, (w, h), &tris, &first, &commands, &[]);
             let prepared: Vec<Prepared> = commands
                 .iter()
                 .map(|c| raster().prepare(w, h, &tris[c.triangles.start as usize..c.triangles.end as usize], false))
                 .collect();
             let refs: Vec<Option<&Prepared>> = prepared.iter().map(Some).collect();
             let emptied: Vec<Command> = commands.iter().map(|c| cmd(c.kind, 0..0, false)).collect();
-            let mut depth = DepthBuffer::new(w, h);
-            let mut rasterizer = raster();
-            rasterizer.execute(&mut depth, &tris, &first);
-            let results = rasterizer.execute_prepared(&mut depth, &tris, &emptied, &refs);
+            let (rasterizer, results, depth) = after_first_call(raster, (w, h), &tris, &first, &emptied, &refs);
             assert_eq!(results, expected, "at {w}x{h}");
             assert_eq!(bits(&depth), bits(&expected_depth), "at {w}x{h}");
             let whole = rasterizer.hidden_whole.iter().filter(|&&h| h).count();
@@ -690,16 +702,11 @@ fn prepared_groups_hidden_whole_match_the_commands_set_up_in_the_call() {
     let commands = [cmd(CommandKind::Draw, 2..first, false), cmd(CommandKind::Query(DepthTest::Less), first..n, false)];
     let occluder = [cmd(CommandKind::Draw, 0..2, false)];
     for raster in [Rasterizer::new, Rasterizer::scalar] {
-        let mut expected_depth = DepthBuffer::new(w, h);
-        let mut rasterizer = raster();
-        rasterizer.execute(&mut expected_depth, &tris, &occluder);
-        let expected = rasterizer.execute(&mut expected_depth, &tris, &commands);
+        let (_, expected, expected_depth) = after_first_call(raster, (w, h), &tris, &occluder, &commands, &[]);
         let prepared = raster().prepare(w, h, &tris[first as usize..], false);
         let emptied = [commands[0].clone(), cmd(commands[1].kind, 0..0, false)];
-        let mut depth = DepthBuffer::new(w, h);
-        let mut rasterizer = raster();
-        rasterizer.execute(&mut depth, &tris, &occluder);
-        let results = rasterizer.execute_prepared(&mut depth, &tris, &emptied, &[None, Some(&prepared)]);
+        let refs = [None, Some(&prepared)];
+        let (rasterizer, results, depth) = after_first_call(raster, (w, h), &tris, &occluder, &emptied, &refs);
         assert_eq!(results, expected);
         assert_eq!(bits(&depth), bits(&expected_depth));
         assert!(!rasterizer.hidden_whole[1] && rasterizer.chunks.len() > 2, "{} chunks", rasterizer.chunks.len());
