@@ -677,7 +677,7 @@ fn prepared_groups_hidden_whole_match_the_commands_set_up_in_the_call() {
     let mut tris = vec![[v(-1.0, -1.0), v(0.0, -1.0), v(0.0, 1.0)], [v(-1.0, -1.0), v(0.0, 1.0), v(-1.0, 1.0)]];
     // A command of 100 triangles anywhere, so that the chunks' bounds (every
     // `MIN_SETUP_CHUNK` triangles) fall inside the next command's groups.
-    tris.extend(random_scene(100, 3).into_iter().take(100));
+    tris.extend(random_scene(100, 3));
     let first = tris.len() as u32;
     // Then runs of 128 triangles (many groups) 2 to 12 pixels across: behind
     // the occluder, beside it, or in front of it.
