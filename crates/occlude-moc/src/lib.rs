@@ -79,25 +79,26 @@
 //!   buffer shows a pixel, `nearest < E(p) <= B(p)`, so the test says visible.
 //!
 //! # Rasterization
-//! Per subtile row of a triangle, each edge's x-intercepts on the four pixel
-//! rows are computed at once (evaluated on the first subtile row, then stepped
-//! by one addition per row, the bands widened by the steps' proven rounding),
-//! then the masks and depth bounds of eight
-//! neighbouring subtiles at once by shifts and one plane evaluation per eight
-//! subtiles (in `f64`, then a step per subtile in `f32`)
-//! (the `raster::lanes` module: only rows whose intercept lies within its proven
-//! rounding band of a pixel boundary are decided pixel by pixel, so masks are
-//! exactly the per-pixel definition above; pixel rows of a subtile row above
-//! or below the triangle are left empty by its edges, decided so, and only
-//! the padding rows below the screen by a test of their own), and merged into
-//! them in lanes: the
-//! subtiles are stored in groups of eight (64x4 pixels), field by field, and
-//! each lane applies the merge rule above. These steps run in AVX2 where the
-//! CPU has it (detected at run time) and in portable code otherwise, with
-//! bit-identical results; with AVX2, four triangles are also set up at once
-//! (projection, snapping, edges, depth plane: the `raster::setup` module),
-//! bit for bit as the scalar set-up does each. Inside a rayon pool of several threads, large
-//! triangle sets are set up and binned to bands of subtile rows in parallel
+//! In MOC's 32x8-pixel tiles: per tile row of a triangle (two subtile rows),
+//! each edge's x-intercepts on the eight pixel rows are computed at once in
+//! `f32` lanes (from the intercept of the triangle's first tile row, evaluated
+//! in `f64`, with a band widened by the `f32` rounding, proven), then per tile
+//! in reach the masks and depth bounds of its eight subtiles at once by shifts
+//! and one plane evaluation per subtile row of the tile (in `f64`, then a step
+//! per subtile in `f32`) (the `raster::lanes` module: only rows whose
+//! intercept lies within its proven rounding band of a pixel boundary are
+//! decided pixel by pixel, so masks are exactly the per-pixel definition
+//! above; pixel rows of a tile row above or below the triangle are left empty
+//! by its edges, decided so, and only the padding rows below the screen by a
+//! test of their own), and merged into them in lanes: the subtiles are stored
+//! in groups of eight across (64x4 pixels), field by field, a tile being half
+//! of two groups one above the other, and each lane applies the merge rule
+//! above. These steps run in AVX2 where the CPU has it (detected at run time)
+//! and in portable code otherwise, with bit-identical results; with AVX2,
+//! four triangles are also set up at once (projection, snapping, edges, depth
+//! plane, the `f32` intercepts: the `raster::setup` module), bit for bit as
+//! the scalar set-up does each. Inside a rayon pool of several threads, large
+//! triangle sets are set up and binned to bands of tile rows in parallel
 //! chunks, then drawn in parallel bands, each band taking its triangles in
 //! order: the buffer is the same whatever the threads.
 

@@ -1,8 +1,11 @@
-//! Occluder rasterization: per subtile row, each edge's x-intercepts on the
-//! four pixel rows, then the coverage masks of the subtiles in reach by shifts
-//! of the rows' spans and their depth bounds from the triangle's plane, eight
-//! subtiles at a time ([`lanes`], in AVX2 where the CPU has it: [`avx2`]).
-//! With AVX2, triangles are set up four at a time ([`setup`]).
+//! Occluder rasterization, in MOC's 32x8-pixel tiles (HPG 2016 section 4):
+//! per tile row (two subtile rows), each edge's x-intercepts on the eight
+//! pixel rows, then per tile in reach the coverage masks of its eight
+//! subtiles by shifts of the rows' spans and their depth bounds from the
+//! triangle's plane, all eight at once ([`lanes`], in AVX2 where the CPU has
+//! it: [`avx2`]). The buffer stores subtiles in groups of eight across
+//! ([`Group`]); a tile is half of two groups one above the other. With AVX2,
+//! triangles are set up four at a time ([`setup`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with the top-left rule on the edge; of
@@ -24,7 +27,7 @@ mod lanes;
 mod setup;
 
 pub(crate) use avx2::Avx2;
-use lanes::{GroupStep, Lanes, Portable, Spans, LANES};
+use lanes::{Intercepts, Lanes, Portable, Spans, TileStep, LANES, STEP_ROWS, TILE_W};
 use setup::{LaneState, SETUP_LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
@@ -57,25 +60,10 @@ pub enum CullMode {
     None,
 }
 
-/// Relative error allowance of the intercept bands for one evaluation: `2^-46`,
+/// Relative error allowance of the intercept bands ([`Edge::band`]): `2^-46`,
 /// far above the few units in the last place (`2^-53`) the few rounded
-/// operations can lose.
+/// operations of one evaluation can lose.
 const BAND_SCALE: f64 = 1.0 / (1u64 << 46) as f64;
-
-/// Relative error allowance of the intercept bands per step from one subtile
-/// row to the next ([`band_scale`]): `2^-52`, twice the `2^-53` one rounded
-/// addition can lose.
-const STEP_SCALE: f64 = 1.0 / (1u64 << 52) as f64;
-
-/// The factor of an edge's intercept band ([`Edge::band`]) on a screen
-/// `y_max` pixels high: [`BAND_SCALE`] for the intercept of a subtile row's
-/// first pixel rows, evaluated directly, plus [`STEP_SCALE`] for each of the
-/// at most `y_max / 4 + 1` steps of `4 slope` that carry it down to the rows
-/// below (`raster::lanes`, "Stepped intercepts").
-#[inline]
-fn band_scale(y_max: f64) -> f64 {
-    BAND_SCALE + STEP_SCALE * (y_max * 0.25 + 1.0)
-}
 
 /// How far a rasterizer's vertices may lie from a [`ScreenTriangle`]'s, and
 /// what the triangle gives up for it.
@@ -137,13 +125,12 @@ impl Edge {
     /// Half-width, in pixels, of the band around the computed intercept outside
     /// which [`covers`](Self::covers) is decided by the side of the intercept,
     /// for pixel centres within `x_max`, `y_max` of the origin: the intercept's
-    /// own rounding plus the edge function's rounding divided by its slope,
-    /// and the rounding of the steps that carry the intercept from row to row
-    /// ([`band_scale`]). Infinite or NaN when the intercept cannot be trusted.
+    /// own rounding plus the edge function's rounding divided by its slope
+    /// ([`BAND_SCALE`]). Infinite or NaN when the intercept cannot be trusted.
     fn band(&self, x_max: f64, y_max: f64) -> f64 {
         let intercept = self.slope.abs() * y_max + self.offset.abs() + x_max + 1.0;
         let function = (self.a.abs() * x_max + self.b.abs() * y_max + self.c.abs()) / self.a.abs();
-        band_scale(y_max) * (intercept + function)
+        BAND_SCALE * (intercept + function)
     }
 
     /// The pixels `lo..hi` of row `y` (centre `y + 0.5`), clipped to `x0..x1`,
@@ -264,8 +251,9 @@ impl DepthPlane {
         round_far(self.zmax)
     }
 
-    /// An `f32` bound on the triangle's depth over subtile `l` of the group of
-    /// eight whose first subtile's top-left corner is (`gx`, `by`): the plane at
+    /// An `f32` bound on the triangle's depth over subtile `l` of the run of
+    /// subtiles in a row (a tile's four, [`lanes::tile_lanes`]) whose first
+    /// subtile's top-left corner is (`gx`, `by`): the plane at
     /// the first subtile's corner ([`Self::corner_x`], [`Self::row_term`]) in
     /// `f64`, rounded far ([`Self::far_at`]), plus `l` exact [`Self::lane_step`]s
     /// in `f32` ([`far_sum`]), capped by [`Self::far_max`]. Lane `l`'s corner
@@ -323,12 +311,9 @@ pub(crate) struct ScreenTriangle {
     y1: i32,
     /// Intercept bands of the edges ([`Edge::band`]).
     bands: [f64; 3],
-    /// The range `x0 - 1.5 ..= x1 + 3.5` the lanes' intercepts (`raster::lanes`,
-    /// one past the pixel index whose centre the edge crosses) are clamped
-    /// to: pixels of the window keep their side, and no whole number is near
-    /// a clamped end.
-    t_min: f64,
-    t_max: f64,
+    /// The edges' `f32` intercepts from the triangle's first tile row
+    /// ([`Intercepts::new`]).
+    lanes: Intercepts,
 }
 
 impl ScreenTriangle {
@@ -376,8 +361,15 @@ impl ScreenTriangle {
         let m = tolerance.edge;
         let edges = [Edge::new(t[0], t[1], m), Edge::new(t[1], t[2], m), Edge::new(t[2], t[0], m)];
         let bands = edges.map(|e| e.band(w, h));
-        let (t_min, t_max) = (f64::from(x0) - 1.5, f64::from(x1) + 3.5);
-        Some(ScreenTriangle { edges, plane: DepthPlane::new(&t, tolerance.depth), x0, x1, y0, y1, bands, t_min, t_max })
+        let plane = DepthPlane::new(&t, tolerance.depth);
+        Some(ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, lanes: Intercepts::EMPTY }.with_lanes())
+    }
+
+    /// The triangle with its [`Intercepts`] computed.
+    #[inline]
+    pub(crate) fn with_lanes(mut self) -> Self {
+        self.lanes = Intercepts::new(&self);
+        self
     }
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
@@ -411,13 +403,14 @@ pub(crate) struct Band<'a> {
 }
 
 impl Band<'_> {
-    /// Rasterizes the triangle's subtile rows within the band: per subtile row,
-    /// the four pixel rows' spans ([`Lanes::edge_spans`], the intercepts
-    /// stepped from the band's first row, [`exact_spans`]; the next row's
-    /// taken before this row's groups, so that the processor overlaps them),
-    /// then per [`LANES`] subtiles
-    /// in their reach, the masks and depth bounds, merged. With AVX2 the whole
-    /// triangle is one call, so that the steps inline into one loop.
+    /// Rasterizes the triangle's tile rows (two subtile rows each; the band
+    /// starts and ends on a tile row) within the band: per tile row, the
+    /// eight pixel rows' spans ([`Lanes::edge_spans`] from the triangle's
+    /// [`Intercepts`], [`exact_spans`]; the next tile row's taken before this
+    /// one's tiles, so that the processor overlaps them), then per 32x8-pixel
+    /// tile in their reach, the masks and depth bounds of its eight subtiles,
+    /// merged. With AVX2 the whole triangle is one call, so that the steps
+    /// inline into one loop.
     fn draw(&mut self, tri: &ScreenTriangle) {
         match self.avx2 {
             Some(avx2) => avx2.draw(self, tri),
@@ -429,58 +422,75 @@ impl Band<'_> {
     #[inline(always)]
     fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
         let (r0, r1) = tri.subtile_rows();
-        let first = r0.max(self.first);
-        let mut intercepts = lanes.first_intercepts(tri, (first * 4) as i32);
-        let height = self.height as i32;
-        let row_spans = |y: i32, intercepts: &mut L::Intercepts| {
-            let mut spans = lanes.edge_spans(tri, intercepts);
-            if spans.exact != 0 {
-                exact_spans(tri, y, &mut spans);
-            }
-            if y + 4 > height {
-                below_screen(tri, y, height, &mut spans);
-            }
-            spans
-        };
-        let end = r1.min(self.end);
-        let mut next = row_spans((first * 4) as i32, &mut intercepts);
-        for sy in first..end {
+        let top = r0 & !1;
+        let (first, end) = (top.max(self.first), r1.min(self.end));
+        let mut next = self.tile_row_spans(tri, lanes, top, first);
+        let mut sy = first;
+        while sy < end {
             let spans = next;
-            if sy + 1 < end {
-                next = row_spans((sy * 4 + 4) as i32, &mut intercepts);
+            if sy + 2 < end {
+                next = self.tile_row_spans(tri, lanes, top, sy + 2);
             }
-            let Some((left, right)) = lanes.reach(&spans) else { continue };
-            let row = ((sy - self.first) * self.cols) as usize / LANES;
-            let bottom = sy * 4 + 4 > self.height;
-            // Spans lie within the window, so `0 <= left < right`: the groups
-            // by shifts of unsigned values.
-            for g in left as u32 / 64..=(right - 1) as u32 / 64 {
-                let sx = g * LANES as u32;
-                let padded = bottom || (sx + LANES as u32) * 8 > self.width;
-                let outside = padded.then_some((self.width, self.height));
-                let step = GroupStep { tri, spans: &spans, sx, sy, outside };
-                lanes.draw_group(&mut self.groups[row + g as usize], &step, self.merge);
-            }
+            self.draw_tile_row(tri, lanes, sy, &spans);
+            sy += 2;
+        }
+    }
+
+    /// The spans of the tile row from subtile row `sy` of a triangle whose
+    /// first tile row starts at subtile row `top`: the lanes'
+    /// ([`Lanes::edge_spans`]), the edges they leave decided exactly
+    /// ([`exact_spans`]), rows below the screen emptied.
+    #[inline(always)]
+    fn tile_row_spans<L: Lanes>(&self, tri: &ScreenTriangle, lanes: L, top: u32, sy: u32) -> Spans {
+        let y = sy * 4;
+        let mut spans = lanes.edge_spans(tri, ((sy - top) * 4) as f32);
+        if spans.exact != 0 {
+            exact_spans(tri, y as i32, &mut spans);
+        }
+        if y + STEP_ROWS > self.height {
+            below_screen(tri, y, self.height, &mut spans);
+        }
+        spans
+    }
+
+    /// The tiles of the tile row from subtile row `sy` (even) in the reach of
+    /// its `spans`.
+    #[inline(always)]
+    fn draw_tile_row<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L, sy: u32, spans: &Spans) {
+        let Some((left, right)) = lanes.reach(spans) else { return };
+        let groups_per_row = self.cols as usize / LANES;
+        let row = (sy - self.first) as usize * groups_per_row;
+        // The band holds whole tile rows, so both subtile rows are its.
+        let (upper_row, lower_row) = self.groups[row..].split_at_mut(groups_per_row);
+        let bottom = sy * 4 + STEP_ROWS > self.height;
+        // Spans lie within the window, so `0 <= left < right`: the tiles by
+        // shifts of unsigned values.
+        for tx in left as u32 / TILE_W..=(right - 1) as u32 / TILE_W {
+            let padded = bottom || (tx + 1) * TILE_W > self.width;
+            let outside = padded.then_some((self.width, self.height));
+            let step = TileStep { tri, spans, tx, ty: sy / 2, outside };
+            let (g, half) = ((tx / 2) as usize, (tx % 2) as usize);
+            lanes.draw_tile(&mut upper_row[g], &mut lower_row[g], half, &step, self.merge);
         }
     }
 }
 
 /// Empties the rows from `y` of `spans` that lie below a screen `height`
-/// rows high (padding of the last subtile row, in the last one only).
+/// rows high (padding of the last tile row, in the last one only).
 #[cold]
-fn below_screen(tri: &ScreenTriangle, y: i32, height: i32, spans: &mut Spans) {
-    for r in 0..4 {
-        if y + r as i32 >= height {
+fn below_screen(tri: &ScreenTriangle, y: u32, height: u32, spans: &mut Spans) {
+    for r in 0..STEP_ROWS as usize {
+        if y + r as u32 >= height {
             (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
         }
     }
 }
 
 /// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
-/// to the four rows from `y`, row by row (rarely any).
+/// to the eight rows from `y`, row by row (rarely any).
 #[cold]
 fn exact_spans(tri: &ScreenTriangle, y: i32, spans: &mut Spans) {
-    for r in 0..4 {
+    for r in 0..STEP_ROWS as usize {
         for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
             if spans.exact >> i & 1 == 1 {
                 let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
@@ -691,8 +701,8 @@ mod tests {
                     }
                 }
                 if cover != 0 {
-                    let (gx, by) = (f64::from(sx / 8 * 64), f64::from(sy * 4));
-                    let far = tri.plane.subtile_bound(gx, by, (sx % 8) as usize);
+                    let (gx, by) = (f64::from(sx / 4 * TILE_W), f64::from(sy * 4));
+                    let far = tri.plane.subtile_bound(gx, by, (sx % 4) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
                     let mut s = group.get((sx % 8) as usize);
@@ -776,19 +786,19 @@ mod tests {
                 z0: rng.unit() * [1.0, 1e-6, 10.0][i % 3],
                 zmax: rng.unit() * 2.0,
             };
-            let (g, sy, l) = ((rng.unit() * 40.0) as u32, (rng.unit() * 300.0) as u32, i % LANES);
-            let (bx, by) = (f64::from(g * 64 + 8 * l as u32), f64::from(sy * 4));
+            let (g, sy, l) = ((rng.unit() * 80.0) as u32, (rng.unit() * 300.0) as u32, i % 4);
+            let (bx, by) = (f64::from(g * TILE_W + 8 * l as u32), f64::from(sy * 4));
             let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
             let exact = corners
                 .iter()
                 .map(|&(dx, dy)| plane.zx * (bx + dx) + plane.zy * (by + dy) + plane.z0)
                 .fold(f64::MIN, f64::max)
                 .min(plane.zmax);
-            let bound = f64::from(plane.subtile_bound(f64::from(g * 64), by, l));
+            let bound = f64::from(plane.subtile_bound(f64::from(g * TILE_W), by, l));
             assert!(bound >= exact, "{plane:?} lane {l}: {bound} < {exact}");
             // Looser than the plane by a few f32 units of its terms at most: the
             // base's and the sum's nudges (`2^-22` each), the step's 21 bits
-            // (`2^-20` of up to seven steps, less than the x term).
+            // (`2^-20` of up to three steps, less than the x term).
             let terms = (plane.zx * (bx + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
             assert!(bound - exact <= terms * 2e-6 + 1e-11, "{plane:?} lane {l}: {bound} vs {exact}");
             capped += usize::from(exact == plane.zmax);

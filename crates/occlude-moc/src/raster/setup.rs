@@ -17,7 +17,8 @@ use std::arch::x86_64::*;
 
 use glam::Vec4;
 
-use super::{band_scale, CullMode, DepthPlane, Edge, ScreenTriangle};
+use super::lanes::{Intercepts, F32_SCALE};
+use super::{CullMode, DepthPlane, Edge, ScreenTriangle, BAND_SCALE, FAR_NUDGE};
 use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
 
 /// Triangles set up by one [`setup4`] call.
@@ -40,6 +41,10 @@ pub(crate) struct Batch {
     window: [[i32; SETUP_LANES]; 4],
     /// The plane's `zx`, `zy`, `z0`, `zmax`.
     plane: [[f64; SETUP_LANES]; 4],
+    /// Per edge: [`Intercepts`]' `base`, `slope` and `band`.
+    lanes: [[[f32; SETUP_LANES]; 3]; 3],
+    /// [`Intercepts`]' `t_max`.
+    t_max: [f32; SETUP_LANES],
 }
 
 /// What became of a lane's triangle in [`setup4`].
@@ -84,8 +89,12 @@ impl Batch {
             y0: v[2][l],
             y1: v[3][l],
             bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
-            t_min: f64::from(x0) - 1.5,
-            t_max: f64::from(x1) + 3.5,
+            lanes: Intercepts {
+                base: [self.lanes[0][0][l], self.lanes[1][0][l], self.lanes[2][0][l]],
+                slope: [self.lanes[0][1][l], self.lanes[1][1][l], self.lanes[2][1][l]],
+                band: [self.lanes[0][2][l], self.lanes[1][2][l], self.lanes[2][2][l]],
+                t_max: self.t_max[l],
+            },
         }
     }
 }
@@ -166,6 +175,8 @@ pub(crate) unsafe fn setup4(
         on: [0; 3],
         window: [[0; SETUP_LANES]; 4],
         plane: [[0.0; SETUP_LANES]; 4],
+        lanes: [[[0.0; SETUP_LANES]; 3]; 3],
+        t_max: [0.0; SETUP_LANES],
     };
     if common == 0 {
         return batch;
@@ -208,8 +219,18 @@ pub(crate) unsafe fn setup4(
     rejected =
         _mm256_or_pd(rejected, _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
     batch.rejected = _mm256_movemask_pd(rejected);
-    // The edges (Edge::new with no margin) and their bands (Edge::band).
-    let scale = _mm256_set1_pd(band_scale(h));
+    // The rows of the lanes' intercepts (Intercepts::new): from the top of
+    // the first tile row (subtile row `top`), through the last subtile row
+    // `r1 - 1` and one more.
+    let top = _mm256_mul_pd(_mm256_floor_pd(_mm256_mul_pd(y0, _mm256_set1_pd(0.125))), _mm256_set1_pd(2.0));
+    let r1 = _mm256_add_pd(_mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(y1, one), _mm256_set1_pd(0.25))), one);
+    let four = _mm256_set1_pd(4.0);
+    let py = _mm256_add_pd(_mm256_mul_pd(top, four), half);
+    let rows = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(r1, top), one), four);
+    _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm_add_ps(_mm256_cvtpd_ps(_mm256_sub_pd(x1, x0)), _mm_set1_ps(3.5)));
+    // The edges (Edge::new with no margin), their bands (Edge::band) and
+    // their lanes' intercepts (Intercepts::new).
+    let scale = _mm256_set1_pd(BAND_SCALE);
     for (i, e) in batch.edges.iter_mut().enumerate() {
         let (p, q) = (i, (i + 1) % 3);
         let a = _mm256_sub_pd(vy[p], vy[q]);
@@ -231,6 +252,23 @@ pub(crate) unsafe fn setup4(
         let band = _mm256_mul_pd(scale, _mm256_add_pd(intercept, function));
         for (out, v) in e.iter_mut().zip([a, b, c, slope, offset, band]) {
             _mm256_storeu_pd(out.as_mut_ptr(), v);
+        }
+        let u = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(slope, py), offset), half), x0);
+        let allowance = _mm256_add_pd(
+            _mm256_add_pd(
+                _mm256_mul_pd(_mm256_set1_pd(2.0), abs(u)),
+                _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(3.0), abs(slope)), rows),
+            ),
+            one,
+        );
+        let lane_band = _mm256_add_pd(band, _mm256_mul_pd(_mm256_set1_pd(F32_SCALE), allowance));
+        // round_far.
+        let lane_band = _mm256_add_pd(
+            _mm256_add_pd(lane_band, _mm256_mul_pd(abs(lane_band), _mm256_set1_pd(FAR_NUDGE))),
+            _mm256_set1_pd(1e-12),
+        );
+        for (out, v) in batch.lanes[i].iter_mut().zip([u, slope, lane_band]) {
+            _mm_storeu_ps(out.as_mut_ptr(), _mm256_cvtpd_ps(v));
         }
     }
     // The depth plane (DepthPlane::new), raised by one grid step.
@@ -295,8 +333,18 @@ mod tests {
             .flat_map(|e| [e.a, e.b, e.c, e.slope, e.offset].map(f64::to_bits).into_iter().chain([u64::from(e.on)]))
             .collect();
         let p = &t.plane;
-        out.extend([p.zx, p.zy, p.z0, p.zmax, t.t_min, t.t_max].map(f64::to_bits));
+        out.extend([p.zx, p.zy, p.z0, p.zmax].map(f64::to_bits));
         out.extend(t.bands.map(f64::to_bits));
+        let lanes = &t.lanes;
+        out.extend(
+            lanes
+                .base
+                .iter()
+                .chain(&lanes.slope)
+                .chain(&lanes.band)
+                .chain([&lanes.t_max])
+                .map(|v| u64::from(v.to_bits())),
+        );
         out.extend([t.x0, t.x1, t.y0, t.y1].map(|v| v as u64));
         out
     }
