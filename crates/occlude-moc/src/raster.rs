@@ -321,7 +321,8 @@ impl ScreenTriangle {
     /// `tolerance.edge` pixels and its depth plane raised by `tolerance.depth`
     /// ([`DepthPlane::new`]), or `None` when it is not drawn: a non-finite or
     /// negative depth coordinate, zero area, culled by winding, or no pixel
-    /// centre on screen within its bounding box.
+    /// centre on screen within its bounding box (on the inner side of a
+    /// horizontal edge).
     #[inline]
     pub(crate) fn new(
         mut t: [DVec3; 3],
@@ -360,6 +361,22 @@ impl ScreenTriangle {
         }
         let m = tolerance.edge;
         let edges = [Edge::new(t[0], t[1], m), Edge::new(t[1], t[2], m), Edge::new(t[2], t[0], m)];
+        // A horizontal edge covers whole rows on one side of it: the window
+        // keeps only the rows it covers (it may leave out the row whose
+        // centres lie on it, or within the margin), and the lanes leave it
+        // out ([`Intercepts::new`]).
+        let (mut y0, mut y1) = (y0, y1);
+        for edge in edges.iter().filter(|e| e.a == 0.0) {
+            while y0 < y1 && !edge.covers(0.5, f64::from(y0) + 0.5) {
+                y0 += 1;
+            }
+            while y1 > y0 && !edge.covers(0.5, f64::from(y1) - 0.5) {
+                y1 -= 1;
+            }
+        }
+        if y0 >= y1 {
+            return None;
+        }
         let bands = edges.map(|e| e.band(w, h));
         let plane = DepthPlane::new(&t, tolerance.depth);
         Some(ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, lanes: Intercepts::EMPTY }.with_lanes())
@@ -447,6 +464,9 @@ impl Band<'_> {
         if spans.exact != 0 {
             exact_spans(tri, y as i32, &mut spans);
         }
+        if tri.lanes.flat && (y < tri.y0 as u32 || y + STEP_ROWS > tri.y1 as u32) {
+            beyond_flat_edge(tri, y, &mut spans);
+        }
         if y + STEP_ROWS > self.height {
             below_screen(tri, y, self.height, &mut spans);
         }
@@ -481,6 +501,18 @@ impl Band<'_> {
 fn below_screen(tri: &ScreenTriangle, y: u32, height: u32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
         if y + r as u32 >= height {
+            (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
+        }
+    }
+}
+
+/// Empties the rows from `y` of `spans` outside the rows `y0..y1` of a
+/// triangle with a horizontal edge, which the lanes leave out
+/// ([`Intercepts::new`]): the rows beyond it.
+#[cold]
+fn beyond_flat_edge(tri: &ScreenTriangle, y: u32, spans: &mut Spans) {
+    for r in 0..STEP_ROWS as usize {
+        if !(tri.y0..tri.y1).contains(&(y as i32 + r as i32)) {
             (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
         }
     }

@@ -23,9 +23,11 @@
 //! on one side and those from `floor(t)` on the other, exactly as
 //! [`Edge::covers`](super::Edge) decides them. The floor itself is then the end
 //! of the row's span the edge sets. When any of the eight rows is within the
-//! band (rare), or the edge is horizontal (band infinite), the edge is reported
-//! in [`Spans::exact`] and the caller decides its rows with the scalar,
-//! pixel-exact [`Edge::span`](super::Edge). A row's span is the intersection of
+//! band (rare), the edge is reported in [`Spans::exact`] and the caller
+//! decides its rows with the scalar, pixel-exact [`Edge::span`](super::Edge).
+//! A horizontal edge covers whole rows on one side of it: the set-up keeps
+//! only those rows in the triangle's window, and the lanes leave the edge out
+//! ([`Intercepts::new`]). A row's span is the intersection of
 //! its edges' half-lines with the triangle's pixel window, so the order in which
 //! edges are applied does not matter. Masks are therefore exactly the per-pixel
 //! definition.
@@ -37,9 +39,11 @@
 //! lies outside the closed triangle, so one of its edge functions is negative
 //! there (exactly, in `f64`), and the edges' half-lines, decided exactly as
 //! above, leave the row empty. The bands hold on every row of the screen that
-//! a draw's steps reach, inside the triangle or not. Only the padding rows
-//! below the screen, where the band is not proven and pixels are not the
-//! triangle's, are emptied by the traversal.
+//! a draw's steps reach, inside the triangle or not. Where the edge that
+//! leaves a row out is horizontal, which the lanes leave out, the traversal
+//! empties the rows outside `y0..y1` itself (`Intercepts::flat`); it also
+//! empties the padding rows below the screen, where the band is not proven
+//! and pixels are not the triangle's.
 //!
 //! # Intercepts in `f32`
 //! At set-up ([`Intercepts::new`], or `raster::setup` for four triangles at
@@ -132,11 +136,16 @@ pub(crate) struct Intercepts {
     pub band: [f32; 3],
     /// The upper end of the clamped intercepts, `x1 - x0 + 3.5`.
     pub t_max: f32,
+    /// Whether an edge is horizontal: left out of the lanes (its intercept
+    /// `t_max` on every row, which bounds nothing), its rows kept by the
+    /// window, and the rows beyond it emptied by the traversal.
+    pub flat: bool,
 }
 
 impl Intercepts {
     /// Placeholder of a triangle under construction.
-    pub(crate) const EMPTY: Self = Intercepts { base: [0.0; 3], slope: [0.0; 3], band: [0.0; 3], t_max: 0.0 };
+    pub(crate) const EMPTY: Self =
+        Intercepts { base: [0.0; 3], slope: [0.0; 3], band: [0.0; 3], t_max: 0.0, flat: false };
 
     /// The intercepts of `tri` from the top pixel row of its first tile row,
     /// over every row a draw of it steps through: those of its tile rows.
@@ -147,13 +156,19 @@ impl Intercepts {
         let py = f64::from(top * 4) + 0.5;
         let (x0, rows) = (f64::from(tri.x0), f64::from((r1 - top + 1) * 4));
         let mut out = Self::EMPTY;
+        out.t_max = (tri.x1 - tri.x0) as f32 + 3.5;
         for (i, edge) in tri.edges.iter().enumerate() {
+            if edge.a == 0.0 {
+                // Horizontal: `t_max` bounds `hi` (`a` is not positive)
+                // beyond the window, half a pixel from a whole number.
+                (out.base[i], out.flat) = (out.t_max, true);
+                continue;
+            }
             let u = edge.slope * py + edge.offset + 0.5 - x0;
             out.base[i] = u as f32;
             out.slope[i] = edge.slope as f32;
             out.band[i] = round_far(tri.bands[i] + F32_SCALE * (2.0 * u.abs() + 3.0 * edge.slope.abs() * rows + 1.0));
         }
-        out.t_max = (tri.x1 - tri.x0) as f32 + 3.5;
         out
     }
 }
@@ -435,7 +450,7 @@ mod tests {
                 }
             }
         }
-        // The exact rule is taken (horizontal edges, centres on edges), and
+        // The exact rule is taken (near-horizontal edges, centres on edges), and
         // the lanes decide most steps.
         assert!(subtiles > 10_000 && exact > 100, "{subtiles} {exact}");
     }

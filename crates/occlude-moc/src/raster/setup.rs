@@ -45,6 +45,9 @@ pub(crate) struct Batch {
     lanes: [[[f32; SETUP_LANES]; 3]; 3],
     /// [`Intercepts`]' `t_max`.
     t_max: [f32; SETUP_LANES],
+    /// Bit `l` set: lane `l`'s triangle has a horizontal edge
+    /// ([`Intercepts`]' `flat`).
+    flat: i32,
 }
 
 /// What became of a lane's triangle in [`setup4`].
@@ -94,6 +97,7 @@ impl Batch {
                 slope: [self.lanes[0][1][l], self.lanes[1][1][l], self.lanes[2][1][l]],
                 band: [self.lanes[0][2][l], self.lanes[1][2][l], self.lanes[2][2][l]],
                 t_max: self.t_max[l],
+                flat: self.flat >> l & 1 == 1,
             },
         }
     }
@@ -177,6 +181,7 @@ pub(crate) unsafe fn setup4(
         plane: [[0.0; SETUP_LANES]; 4],
         lanes: [[[0.0; SETUP_LANES]; 3]; 3],
         t_max: [0.0; SETUP_LANES],
+        flat: 0,
     };
     if common == 0 {
         return batch;
@@ -218,20 +223,10 @@ pub(crate) unsafe fn setup4(
     let (x0, x1, y0, y1) = (first(lo_x, wv), end(hi_x, wv), first(lo_y, hv), end(hi_y, hv));
     rejected =
         _mm256_or_pd(rejected, _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
-    batch.rejected = _mm256_movemask_pd(rejected);
-    // The rows of the lanes' intercepts (Intercepts::new): from the top of
-    // the first tile row (subtile row `top`), through the last subtile row
-    // `r1 - 1` and one more.
-    let top = _mm256_mul_pd(_mm256_floor_pd(_mm256_mul_pd(y0, _mm256_set1_pd(0.125))), _mm256_set1_pd(2.0));
-    let r1 = _mm256_add_pd(_mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(y1, one), _mm256_set1_pd(0.25))), one);
-    let four = _mm256_set1_pd(4.0);
-    let py = _mm256_add_pd(_mm256_mul_pd(top, four), half);
-    let rows = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(r1, top), one), four);
-    _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm_add_ps(_mm256_cvtpd_ps(_mm256_sub_pd(x1, x0)), _mm_set1_ps(3.5)));
-    // The edges (Edge::new with no margin), their bands (Edge::band) and
-    // their lanes' intercepts (Intercepts::new).
+    // The edges (Edge::new with no margin) and their bands (Edge::band).
     let scale = _mm256_set1_pd(BAND_SCALE);
-    for (i, e) in batch.edges.iter_mut().enumerate() {
+    let mut edges = [[zero; 6]; 3];
+    for (i, e) in edges.iter_mut().enumerate() {
         let (p, q) = (i, (i + 1) % 3);
         let a = _mm256_sub_pd(vy[p], vy[q]);
         let b = _mm256_sub_pd(vx[q], vx[p]);
@@ -250,9 +245,47 @@ pub(crate) unsafe fn setup4(
             abs(a),
         );
         let band = _mm256_mul_pd(scale, _mm256_add_pd(intercept, function));
-        for (out, v) in e.iter_mut().zip([a, b, c, slope, offset, band]) {
+        *e = [a, b, c, slope, offset, band];
+        for (out, v) in batch.edges[i].iter_mut().zip(*e) {
             _mm256_storeu_pd(out.as_mut_ptr(), v);
         }
+    }
+    // A horizontal edge (ScreenTriangle::new): the window keeps only the rows
+    // it covers. With no margin the edge lies on a row of the window's end
+    // (a vertex's `y`), so at most that row, whose centres lie on the edge,
+    // is left out, by one step of each end as the scalar loops take.
+    let flat = edges.iter().fold(zero, |f, e| _mm256_or_pd(f, _mm256_cmp_pd::<_CMP_EQ_OQ>(e[0], zero)));
+    batch.flat = _mm256_movemask_pd(flat);
+    let (mut y0, mut y1) = (y0, y1);
+    if batch.flat != 0 {
+        for &[a, b, c, ..] in &edges {
+            let horizontal = _mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero);
+            // Edge::covers at (0.5, py); `on` is `b > 0` where `a` is zero.
+            let covers = |py: __m256d| {
+                let e = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a, half), _mm256_mul_pd(b, py)), c);
+                _mm256_or_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(e, zero),
+                    _mm256_and_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(b, zero), _mm256_cmp_pd::<_CMP_EQ_OQ>(e, zero)),
+                )
+            };
+            let (first, last) = (covers(_mm256_add_pd(y0, half)), covers(_mm256_sub_pd(y1, half)));
+            y0 = _mm256_add_pd(y0, _mm256_and_pd(_mm256_andnot_pd(first, horizontal), one));
+            y1 = _mm256_sub_pd(y1, _mm256_and_pd(_mm256_andnot_pd(last, horizontal), one));
+        }
+    }
+    batch.rejected = _mm256_movemask_pd(_mm256_or_pd(rejected, _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
+    // The lanes' intercepts (Intercepts::new), over the rows from the top of
+    // the first tile row (subtile row `top`) through the last subtile row
+    // `r1 - 1` and one more; a horizontal edge's are `t_max`, 0 and 0.
+    let top = _mm256_mul_pd(_mm256_floor_pd(_mm256_mul_pd(y0, _mm256_set1_pd(0.125))), _mm256_set1_pd(2.0));
+    let r1 = _mm256_add_pd(_mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(y1, one), _mm256_set1_pd(0.25))), one);
+    let four = _mm256_set1_pd(4.0);
+    let py = _mm256_add_pd(_mm256_mul_pd(top, four), half);
+    let rows = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(r1, top), one), four);
+    // Exact: whole numbers below 2^15 and a half.
+    let t_max = _mm256_add_pd(_mm256_sub_pd(x1, x0), _mm256_set1_pd(3.5));
+    _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm256_cvtpd_ps(t_max));
+    for (i, &[a, _, _, slope, offset, band]) in edges.iter().enumerate() {
         let u = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(slope, py), offset), half), x0);
         let allowance = _mm256_add_pd(
             _mm256_add_pd(
@@ -267,7 +300,14 @@ pub(crate) unsafe fn setup4(
             _mm256_add_pd(lane_band, _mm256_mul_pd(abs(lane_band), _mm256_set1_pd(FAR_NUDGE))),
             _mm256_set1_pd(1e-12),
         );
-        for (out, v) in batch.lanes[i].iter_mut().zip([u, slope, lane_band]) {
+        let mut lanes = [u, slope, lane_band];
+        if batch.flat != 0 {
+            let horizontal = _mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero);
+            for (v, flat) in lanes.iter_mut().zip([t_max, zero, zero]) {
+                *v = _mm256_blendv_pd(*v, flat, horizontal);
+            }
+        }
+        for (out, v) in batch.lanes[i].iter_mut().zip(lanes) {
             _mm_storeu_ps(out.as_mut_ptr(), _mm256_cvtpd_ps(v));
         }
     }
@@ -375,17 +415,22 @@ mod tests {
         };
         let mut rng = Lcg(17);
         let screens = [(64, 48), (83, 45), (1920, 1080), (7, 5)];
-        let (mut batched, mut drawn, mut scalar) = (0, 0, 0);
+        let (mut batched, mut drawn, mut scalar, mut flats, mut on_centres) = (0, 0, 0, 0, 0);
         for round in 0..20_000usize {
             let (width, height) = screens[round % screens.len()];
             let (cull, bits) = ([CullMode::Back, CullMode::None][round % 2], [8, 8, 4, 0][round / 2 % 4]);
-            let centre = Vec4::new(rng.unit() * 2.0 - 1.0, rng.unit() * 2.0 - 1.0, 0.0, 0.0);
+            let mut centre = Vec4::new(rng.unit() * 2.0 - 1.0, rng.unit() * 2.0 - 1.0, 0.0, 0.0);
+            if round.is_multiple_of(10) {
+                // On a row of pixel centres: a horizontal edge through them.
+                let row = (rng.unit() * height as f32).floor() + 0.5;
+                centre.y = 1.0 - 2.0 * row / height as f32;
+            }
             let size = [0.01, 0.1, 1.0][round % 3];
             let clip: [[Vec4; 3]; SETUP_LANES] = std::array::from_fn(|l| {
                 std::array::from_fn(|k| {
                     let v = vertex(&mut rng, round * 7 + l * 3 + k);
                     let v = centre + v * Vec4::new(size, size, 1.0, 1.0);
-                    if round.is_multiple_of(5) && k == 1 {
+                    if round.is_multiple_of(5) && k < 2 && v.w == 1.0 {
                         // A horizontal edge.
                         Vec4::new(v.x, centre.y, v.z, v.w)
                     } else {
@@ -410,8 +455,15 @@ mod tests {
                 let got: Vec<_> = tri.iter().map(fields).collect();
                 assert_eq!(got, expected, "round {round} lane {l}: {c:?}");
                 drawn += got.len();
+                if let Some(t) = &tri {
+                    // A horizontal edge, and one through pixel centres.
+                    let flat = t.edges.iter().filter(|e| e.a == 0.0);
+                    flats += usize::from(t.lanes.flat);
+                    on_centres += flat.filter(|e| (-e.c / e.b - 0.5).fract() == 0.0).count();
+                }
             }
         }
         assert!(batched > 40_000 && drawn > 10_000 && scalar > 10_000, "{batched} {drawn} {scalar}");
+        assert!(flats > 500 && on_centres > 100, "{flats} horizontal, {on_centres} on pixel centres");
     }
 }
