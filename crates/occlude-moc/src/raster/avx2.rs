@@ -204,7 +204,7 @@ unsafe fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
     for (i, (k, _)) in edges.iter().enumerate() {
         if exact >> i & 1 == 0 {
             let bound = _mm256_cvttps_epi32(*k);
-            let right = _mm256_set1_epi32(-i32::from(tri.edges[i].a > 0.0));
+            let right = _mm256_set1_epi32(intercepts.right[i]);
             lo = _mm256_max_epi32(lo, _mm256_blendv_epi8(none_lo, bound, right));
             hi = _mm256_min_epi32(hi, _mm256_blendv_epi8(bound, none_hi, right));
         }

@@ -134,6 +134,9 @@ pub(crate) struct Intercepts {
     pub slope: [f32; 3],
     /// The `f32` band: a fraction farther than this from 0 and 1 decides.
     pub band: [f32; 3],
+    /// All ones where the edge bounds a row's span on the left (inside to
+    /// its right, `a > 0`: its floor is the span's `lo`), else zero.
+    pub right: [i32; 3],
     /// The upper end of the clamped intercepts, `x1 - x0 + 3.5`.
     pub t_max: f32,
     /// Whether an edge is horizontal: left out of the lanes (its intercept
@@ -145,7 +148,7 @@ pub(crate) struct Intercepts {
 impl Intercepts {
     /// Placeholder of a triangle under construction.
     pub(crate) const EMPTY: Self =
-        Intercepts { base: [0.0; 3], slope: [0.0; 3], band: [0.0; 3], t_max: 0.0, flat: false };
+        Intercepts { base: [0.0; 3], slope: [0.0; 3], band: [0.0; 3], right: [0; 3], t_max: 0.0, flat: false };
 
     /// The intercepts of `tri` from the top pixel row of its first tile row,
     /// over every row a draw of it steps through: those of its tile rows.
@@ -158,6 +161,7 @@ impl Intercepts {
         let mut out = Self::EMPTY;
         out.t_max = (tri.x1 - tri.x0) as f32 + 3.5;
         for (i, edge) in tri.edges.iter().enumerate() {
+            out.right[i] = -i32::from(edge.a > 0.0);
             if edge.a == 0.0 {
                 // Horizontal: `t_max` bounds `hi` (`a` is not positive)
                 // beyond the window, half a pixel from a whole number.
@@ -207,7 +211,7 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
             }
             *b = k;
         }
-        let right = tri.edges[i].a > 0.0;
+        let right = intercepts.right[i] != 0;
         let ends = if right { &mut lo } else { &mut hi };
         for (end, b) in ends.iter_mut().zip(bound) {
             *end = if right { (*end).max(b) } else { (*end).min(b) };

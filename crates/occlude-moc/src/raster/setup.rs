@@ -37,6 +37,9 @@ pub(crate) struct Batch {
     edges: [[[f64; SETUP_LANES]; 6]; 3],
     /// Per edge, bit `l`: [`Edge`]'s `on` of lane `l`.
     on: [i32; 3],
+    /// Per edge, bit `l`: whether lane `l`'s edge has `a > 0`
+    /// ([`Intercepts`]' `right`).
+    right: [i32; 3],
     /// `x0`, `x1`, `y0`, `y1`, converted in lanes.
     window: [[i32; SETUP_LANES]; 4],
     /// The plane's `zx`, `zy`, `z0`, `zmax`.
@@ -96,6 +99,7 @@ impl Batch {
                 base: [self.lanes[0][0][l], self.lanes[1][0][l], self.lanes[2][0][l]],
                 slope: [self.lanes[0][1][l], self.lanes[1][1][l], self.lanes[2][1][l]],
                 band: [self.lanes[0][2][l], self.lanes[1][2][l], self.lanes[2][2][l]],
+                right: self.right.map(|bits| -(bits >> l & 1)),
                 t_max: self.t_max[l],
                 flat: self.flat >> l & 1 == 1,
             },
@@ -177,6 +181,7 @@ pub(crate) unsafe fn setup4(
         rejected: 0,
         edges: [[[0.0; SETUP_LANES]; 6]; 3],
         on: [0; 3],
+        right: [0; 3],
         window: [[0; SETUP_LANES]; 4],
         plane: [[0.0; SETUP_LANES]; 4],
         lanes: [[[0.0; SETUP_LANES]; 3]; 3],
@@ -232,8 +237,10 @@ pub(crate) unsafe fn setup4(
         let b = _mm256_sub_pd(vx[q], vx[p]);
         let c = _mm256_xor_pd(_mm256_add_pd(_mm256_mul_pd(a, vx[p]), _mm256_mul_pd(b, vy[p])), sign);
         let r = _mm256_div_pd(one, a);
+        let right = _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero);
+        batch.right[i] = _mm256_movemask_pd(right);
         batch.on[i] = _mm256_movemask_pd(_mm256_or_pd(
-            _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero),
+            right,
             _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero), _mm256_cmp_pd::<_CMP_GT_OQ>(b, zero)),
         ));
         let slope = _mm256_mul_pd(_mm256_xor_pd(b, sign), r);
@@ -385,6 +392,7 @@ mod tests {
                 .chain([&lanes.t_max])
                 .map(|v| u64::from(v.to_bits())),
         );
+        out.extend(lanes.right.iter().map(|&v| v as u64).chain([u64::from(lanes.flat)]));
         out.extend([t.x0, t.x1, t.y0, t.y1].map(|v| v as u64));
         out
     }
