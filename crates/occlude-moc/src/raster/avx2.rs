@@ -227,14 +227,19 @@ unsafe fn tile_lanes(tri: &ScreenTriangle, spans: &Spans, tx: u32, ty: u32) -> (
 
 /// [`DepthPlane::subtile_bound`](super::DepthPlane) of the eight subtiles of
 /// tile `tx` of tile row `ty`: per subtile row, the base at the tile's
-/// first column in `f64` (scalar), then the lanes' steps added and the cap
-/// taken in `f32` lanes, with the portable version's operations in its order.
+/// first column in `f64` (the two rows in two lanes), then the lanes' steps
+/// added and the cap taken in `f32` lanes, with the portable version's
+/// operations in its order.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn depth_bounds(plane: &DepthPlane, tx: u32, ty: u32) -> __m256 {
-    let x = plane.corner_x(f64::from(tx * TILE_W));
-    let base = |by: u32| _mm_set1_ps(plane.far_at(x, plane.row_term(f64::from(by))));
-    let bases = _mm256_set_m128(base(ty * 8 + 4), base(ty * 8));
+    // `far_at` of both subtile rows in the two lanes of one `f64 x 2`.
+    let x = _mm_set1_pd(plane.zx * plane.corner_x(f64::from(tx * TILE_W)));
+    let rows = _mm_set_pd(plane.row_term(f64::from(ty * 8 + 4)), plane.row_term(f64::from(ty * 8)));
+    let v = _mm_add_pd(x, rows);
+    let nudge = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), v), _mm_set1_pd(super::FAR_NUDGE));
+    let far = _mm_cvtpd_ps(_mm_add_pd(_mm_add_pd(v, nudge), _mm_set1_pd(1e-12)));
+    let bases = _mm256_set_m128(_mm_shuffle_ps::<0b01_01_01_01>(far, far), _mm_shuffle_ps::<0>(far, far));
     let steps =
         _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0));
     // `far_sum` on eight lanes.
