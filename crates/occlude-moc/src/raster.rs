@@ -181,13 +181,18 @@ fn floor_in(v: f64, min: f64, max: f64) -> i32 {
     i - i32::from(f64::from(i) > v)
 }
 
-/// A triangle's depth plane `z = zx x + zy y + z0` and its farthest vertex depth.
+/// A triangle's depth plane `z = zx x + zy y + z0`, with the `f32` step of
+/// its bounds from one subtile to the next and their cap, its farthest
+/// vertex depth.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DepthPlane {
     zx: f64,
     zy: f64,
     z0: f64,
-    zmax: f64,
+    /// [`Self::lane_step`], set up with the plane.
+    step: f32,
+    /// [`Self::far_max`], set up with the plane.
+    cap: f32,
 }
 
 impl DepthPlane {
@@ -200,7 +205,16 @@ impl DepthPlane {
         let n = d1.cross(d2);
         let (zx, zy) = (-n.x / n.z, -n.y / n.z);
         let z0 = t[0].z - zx * t[0].x - zy * t[0].y + (zx.abs() + zy.abs()) * slack;
-        DepthPlane { zx, zy, z0, zmax: t[0].z.max(t[1].z).max(t[2].z) }
+        Self::from_terms(zx, zy, z0, t[0].z.max(t[1].z).max(t[2].z))
+    }
+
+    /// The plane `z = zx x + zy y + z0` capped at `zmax`, with its `f32`
+    /// step and cap.
+    pub(crate) fn from_terms(zx: f64, zy: f64, z0: f64, zmax: f64) -> Self {
+        let v = round_far(zx * 8.0);
+        let bits = v.to_bits();
+        let step = f32::from_bits(if v >= 0.0 { (bits + 7) & !7 } else { bits & !7 });
+        DepthPlane { zx, zy, z0, step, cap: round_far(zmax) }
     }
 
     /// The row term `zy y + z0` of the subtile row whose top is `by`, at the
@@ -239,16 +253,14 @@ impl DepthPlane {
     /// or cut (negative) to 21 bits.
     #[inline]
     pub(crate) fn lane_step(&self) -> f32 {
-        let v = round_far(self.zx * 8.0);
-        let bits = v.to_bits();
-        f32::from_bits(if v >= 0.0 { (bits + 7) & !7 } else { bits & !7 })
+        self.step
     }
 
     /// The farthest vertex depth rounded far ([`round_far`]): the cap of every
     /// bound.
     #[inline]
     pub(crate) fn far_max(&self) -> f32 {
-        round_far(self.zmax)
+        self.cap
     }
 
     /// An `f32` bound on the triangle's depth over subtile `l` of the run of
@@ -812,12 +824,13 @@ mod tests {
         for i in 0..200_000 {
             // Planes from flat to steep, depths around 0..1, some far out.
             let scale = [1e-9, 1e-5, 1e-3, 0.1, 1.0][i % 5];
-            let plane = DepthPlane {
-                zx: (rng.unit() - 0.5) * scale,
-                zy: (rng.unit() - 0.5) * scale,
-                z0: rng.unit() * [1.0, 1e-6, 10.0][i % 3],
-                zmax: rng.unit() * 2.0,
-            };
+            let zmax = rng.unit() * 2.0;
+            let plane = DepthPlane::from_terms(
+                (rng.unit() - 0.5) * scale,
+                (rng.unit() - 0.5) * scale,
+                rng.unit() * [1.0, 1e-6, 10.0][i % 3],
+                zmax,
+            );
             let (g, sy, l) = ((rng.unit() * 80.0) as u32, (rng.unit() * 300.0) as u32, i % 4);
             let (bx, by) = (f64::from(g * TILE_W + 8 * l as u32), f64::from(sy * 4));
             let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
@@ -825,7 +838,7 @@ mod tests {
                 .iter()
                 .map(|&(dx, dy)| plane.zx * (bx + dx) + plane.zy * (by + dy) + plane.z0)
                 .fold(f64::MIN, f64::max)
-                .min(plane.zmax);
+                .min(zmax);
             let bound = f64::from(plane.subtile_bound(f64::from(g * TILE_W), by, l));
             assert!(bound >= exact, "{plane:?} lane {l}: {bound} < {exact}");
             // Looser than the plane by a few f32 units of its terms at most: the
@@ -833,7 +846,7 @@ mod tests {
             // (`2^-20` of up to three steps, less than the x term).
             let terms = (plane.zx * (bx + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
             assert!(bound - exact <= terms * 2e-6 + 1e-11, "{plane:?} lane {l}: {bound} vs {exact}");
-            capped += usize::from(exact == plane.zmax);
+            capped += usize::from(exact == zmax);
         }
         assert!(capped > 1000, "{capped}");
     }

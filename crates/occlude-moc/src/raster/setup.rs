@@ -42,8 +42,10 @@ pub(crate) struct Batch {
     right: [i32; 3],
     /// `x0`, `x1`, `y0`, `y1`, converted in lanes.
     window: [[i32; SETUP_LANES]; 4],
-    /// The plane's `zx`, `zy`, `z0`, `zmax`.
-    plane: [[f64; SETUP_LANES]; 4],
+    /// The plane's `zx`, `zy`, `z0`.
+    plane: [[f64; SETUP_LANES]; 3],
+    /// The plane's `f32` step and cap ([`DepthPlane::from_terms`]).
+    plane_f32: [[f32; SETUP_LANES]; 2],
     /// Per edge: [`Intercepts`]' `base`, `slope` and `band`.
     lanes: [[[f32; SETUP_LANES]; 3]; 3],
     /// [`Intercepts`]' `t_max`.
@@ -89,7 +91,13 @@ impl Batch {
         let (x0, x1) = (v[0][l], v[1][l]);
         ScreenTriangle {
             edges: [edge(0), edge(1), edge(2)],
-            plane: DepthPlane { zx: p[0][l], zy: p[1][l], z0: p[2][l], zmax: p[3][l] },
+            plane: DepthPlane {
+                zx: p[0][l],
+                zy: p[1][l],
+                z0: p[2][l],
+                step: self.plane_f32[0][l],
+                cap: self.plane_f32[1][l],
+            },
             x0,
             x1,
             y0: v[2][l],
@@ -183,7 +191,8 @@ pub(crate) unsafe fn setup4(
         on: [0; 3],
         right: [0; 3],
         window: [[0; SETUP_LANES]; 4],
-        plane: [[0.0; SETUP_LANES]; 4],
+        plane: [[0.0; SETUP_LANES]; 3],
+        plane_f32: [[0.0; SETUP_LANES]; 2],
         lanes: [[[0.0; SETUP_LANES]; 3]; 3],
         t_max: [0.0; SETUP_LANES],
         flat: 0,
@@ -339,9 +348,24 @@ pub(crate) unsafe fn setup4(
     for (out, v) in batch.window.iter_mut().zip([x0, x1, y0, y1]) {
         _mm_storeu_si128(out.as_mut_ptr().cast(), _mm256_cvttpd_epi32(v));
     }
-    for (out, v) in batch.plane.iter_mut().zip([zx, zy, z0, zmax]) {
+    for (out, v) in batch.plane.iter_mut().zip([zx, zy, z0]) {
         _mm256_storeu_pd(out.as_mut_ptr(), v);
     }
+    // DepthPlane::from_terms: the step `8 zx` and the cap `zmax`, rounded
+    // far, the step's significand then rounded up (not negative) or cut to
+    // 21 bits.
+    let round_far = |v: __m256d| {
+        let nudged =
+            _mm256_add_pd(_mm256_add_pd(v, _mm256_mul_pd(abs(v), _mm256_set1_pd(FAR_NUDGE))), _mm256_set1_pd(1e-12));
+        _mm256_cvtpd_ps(nudged)
+    };
+    let v = round_far(_mm256_mul_pd(zx, _mm256_set1_pd(8.0)));
+    let bits = _mm_castps_si128(v);
+    let up = _mm_castps_si128(_mm_cmpge_ps(v, _mm_setzero_ps()));
+    let bits = _mm_add_epi32(bits, _mm_and_si128(up, _mm_set1_epi32(7)));
+    let step = _mm_castsi128_ps(_mm_and_si128(bits, _mm_set1_epi32(!7)));
+    _mm_storeu_ps(batch.plane_f32[0].as_mut_ptr(), step);
+    _mm_storeu_ps(batch.plane_f32[1].as_mut_ptr(), round_far(zmax));
     batch
 }
 
@@ -380,7 +404,8 @@ mod tests {
             .flat_map(|e| [e.a, e.b, e.c, e.slope, e.offset].map(f64::to_bits).into_iter().chain([u64::from(e.on)]))
             .collect();
         let p = &t.plane;
-        out.extend([p.zx, p.zy, p.z0, p.zmax].map(f64::to_bits));
+        out.extend([p.zx, p.zy, p.z0].map(f64::to_bits));
+        out.extend([p.step, p.cap].map(|v| u64::from(v.to_bits())));
         out.extend(t.bands.map(f64::to_bits));
         let lanes = &t.lanes;
         out.extend(
