@@ -182,8 +182,8 @@ fn floor_in(v: f64, min: f64, max: f64) -> i32 {
 }
 
 /// A triangle's depth plane `z = zx x + zy y + z0`, with the `f32` step of
-/// its bounds from one subtile to the next and their cap, its farthest
-/// vertex depth.
+/// its subtile bounds from one subtile to the next and their cap (its
+/// farthest vertex depth), both set up with it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DepthPlane {
     zx: f64,
