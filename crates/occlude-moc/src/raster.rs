@@ -450,6 +450,7 @@ impl Band<'_> {
     /// [`Self::draw`] with the steps of `lanes`.
     #[inline(always)]
     fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
+        debug_assert!(self.first.is_multiple_of(2) && self.end.is_multiple_of(2), "bands of whole tile rows");
         let (r0, r1) = tri.subtile_rows();
         let top = r0 & !1;
         let (first, end) = (top.max(self.first), r1.min(self.end));
@@ -468,7 +469,8 @@ impl Band<'_> {
     /// The spans of the tile row from subtile row `sy` of a triangle whose
     /// first tile row starts at subtile row `top`: the lanes'
     /// ([`Lanes::edge_spans`]), the edges they leave decided exactly
-    /// ([`exact_spans`]), rows below the screen emptied.
+    /// ([`exact_spans`]), the rows beyond a horizontal edge
+    /// ([`beyond_flat_edge`]) and below the screen emptied.
     #[inline(always)]
     fn tile_row_spans<L: Lanes>(&self, tri: &ScreenTriangle, lanes: L, top: u32, sy: u32) -> Spans {
         let y = sy * 4;

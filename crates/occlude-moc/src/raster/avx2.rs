@@ -128,7 +128,9 @@ unsafe fn draw_tile(upper: &mut Group, lower: &mut Group, half: usize, step: &Ti
     }
     let d = depth_bounds(&step.tri.plane, step.tx, step.ty);
     // The tile's subtiles: half `half` of each group, the upper one's in the
-    // low 128 bits.
+    // low 128 bits. `half` is 0 or 1 (a tile's column's parity), so the four
+    // lanes from `4 half` lie within each eight-lane field.
+    debug_assert!(half < 2);
     let offset = 4 * half;
     let load = |u: *const u32, l: *const u32| _mm256_set_m128i(_mm_loadu_si128(l.cast()), _mm_loadu_si128(u.cast()));
     let mask = load(upper.mask.as_ptr().add(offset), lower.mask.as_ptr().add(offset));
@@ -233,7 +235,8 @@ unsafe fn tile_lanes(tri: &ScreenTriangle, spans: &Spans, tx: u32, ty: u32) -> (
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn depth_bounds(plane: &DepthPlane, tx: u32, ty: u32) -> __m256 {
-    // `far_at` of both subtile rows in the two lanes of one `f64 x 2`.
+    // `far_at` (the plane, then `round_far`) of both subtile rows in the two
+    // lanes of one `f64 x 2`.
     let x = _mm_set1_pd(plane.zx * plane.corner_x(f64::from(tx * TILE_W)));
     let rows = _mm_set_pd(plane.row_term(f64::from(ty * 8 + 4)), plane.row_term(f64::from(ty * 8)));
     let v = _mm_add_pd(x, rows);
