@@ -130,7 +130,9 @@ pub(crate) const T_MIN: f32 = -1.5;
 /// draw (from its first pixel row) has intercept `base + slope r`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Intercepts {
+    /// Per edge, its intercept on row 0 less `x0`, rounded to `f32`.
     pub base: [f32; 3],
+    /// Per edge, its slope `dx/dy` rounded to `f32`.
     pub slope: [f32; 3],
     /// The `f32` band: a fraction farther than this from 0 and 1 decides.
     pub band: [f32; 3],
@@ -188,8 +190,8 @@ fn floor_f32(v: f32) -> i32 {
 /// [`Intercepts`] (a multiple of 8), each row starting as the triangle's
 /// window `x0..x1`. A row of the screen outside the triangle's rows `y0..y1`
 /// needs no test of its own: no pixel centre of it is inside the triangle,
-/// so its edges leave it empty ("Rows outside the triangle" above); rows
-/// below the screen are the caller's.
+/// so its edges leave it empty ("Rows outside the triangle" above); the rows
+/// beyond a horizontal edge and below the screen are the caller's.
 pub(crate) fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
     const ROWS: usize = STEP_ROWS as usize;
     let intercepts = &tri.lanes;
