@@ -298,6 +298,10 @@ pub(crate) unsafe fn setup4(
     let four = _mm256_set1_pd(4.0);
     let py = _mm256_add_pd(_mm256_mul_pd(top, four), half);
     let rows = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(r1, top), one), four);
+    // round_far before its rounding to `f32`: nudged farther.
+    let nudge_far = |v: __m256d| {
+        _mm256_add_pd(_mm256_add_pd(v, _mm256_mul_pd(abs(v), _mm256_set1_pd(FAR_NUDGE))), _mm256_set1_pd(1e-12))
+    };
     // Exact: whole numbers below 2^15 and a half.
     let t_max = _mm256_add_pd(_mm256_sub_pd(x1, x0), _mm256_set1_pd(3.5));
     _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm256_cvtpd_ps(t_max));
@@ -310,12 +314,7 @@ pub(crate) unsafe fn setup4(
             ),
             one,
         );
-        let lane_band = _mm256_add_pd(band, _mm256_mul_pd(_mm256_set1_pd(F32_SCALE), allowance));
-        // round_far.
-        let lane_band = _mm256_add_pd(
-            _mm256_add_pd(lane_band, _mm256_mul_pd(abs(lane_band), _mm256_set1_pd(FAR_NUDGE))),
-            _mm256_set1_pd(1e-12),
-        );
+        let lane_band = nudge_far(_mm256_add_pd(band, _mm256_mul_pd(_mm256_set1_pd(F32_SCALE), allowance)));
         let mut lanes = [u, slope, lane_band];
         if batch.flat != 0 {
             let horizontal = _mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero);
@@ -354,18 +353,13 @@ pub(crate) unsafe fn setup4(
     // DepthPlane::from_terms: the step `8 zx` and the cap `zmax`, rounded
     // far, the step's significand then rounded up (not negative) or cut to
     // 21 bits.
-    let round_far = |v: __m256d| {
-        let nudged =
-            _mm256_add_pd(_mm256_add_pd(v, _mm256_mul_pd(abs(v), _mm256_set1_pd(FAR_NUDGE))), _mm256_set1_pd(1e-12));
-        _mm256_cvtpd_ps(nudged)
-    };
-    let v = round_far(_mm256_mul_pd(zx, _mm256_set1_pd(8.0)));
+    let v = _mm256_cvtpd_ps(nudge_far(_mm256_mul_pd(zx, _mm256_set1_pd(8.0))));
     let bits = _mm_castps_si128(v);
     let up = _mm_castps_si128(_mm_cmpge_ps(v, _mm_setzero_ps()));
     let bits = _mm_add_epi32(bits, _mm_and_si128(up, _mm_set1_epi32(7)));
     let step = _mm_castsi128_ps(_mm_and_si128(bits, _mm_set1_epi32(!7)));
     _mm_storeu_ps(batch.plane_f32[0].as_mut_ptr(), step);
-    _mm_storeu_ps(batch.plane_f32[1].as_mut_ptr(), round_far(zmax));
+    _mm_storeu_ps(batch.plane_f32[1].as_mut_ptr(), _mm256_cvtpd_ps(nudge_far(zmax)));
     batch
 }
 
