@@ -391,14 +391,9 @@ impl ScreenTriangle {
         }
         let bands = edges.map(|e| e.band(w, h));
         let plane = DepthPlane::new(&t, tolerance.depth);
-        Some(ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, lanes: Intercepts::EMPTY }.with_lanes())
-    }
-
-    /// The triangle with its [`Intercepts`] computed.
-    #[inline]
-    pub(crate) fn with_lanes(mut self) -> Self {
-        self.lanes = Intercepts::new(&self);
-        self
+        let mut tri = ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, lanes: Intercepts::EMPTY };
+        tri.lanes = Intercepts::new(&tri);
+        Some(tri)
     }
 
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
@@ -469,8 +464,8 @@ impl Band<'_> {
     /// The spans of the tile row from subtile row `sy` of a triangle whose
     /// first tile row starts at subtile row `top`: the lanes'
     /// ([`Lanes::edge_spans`]), the edges they leave decided exactly
-    /// ([`exact_spans`]), the rows beyond a horizontal edge
-    /// ([`beyond_flat_edge`]) and below the screen emptied.
+    /// ([`exact_spans`]), the rows beyond a horizontal edge and below the
+    /// screen emptied ([`empty_outside_rows`]).
     #[inline(always)]
     fn tile_row_spans<L: Lanes>(&self, tri: &ScreenTriangle, lanes: L, top: u32, sy: u32) -> Spans {
         let y = sy * 4;
@@ -478,11 +473,9 @@ impl Band<'_> {
         if spans.exact != 0 {
             exact_spans(tri, y as i32, &mut spans);
         }
-        if tri.lanes.flat && (y < tri.y0 as u32 || y + STEP_ROWS > tri.y1 as u32) {
-            beyond_flat_edge(tri, y, &mut spans);
-        }
-        if y + STEP_ROWS > self.height {
-            below_screen(tri, y, self.height, &mut spans);
+        let beyond_flat_edge = tri.lanes.flat && (y < tri.y0 as u32 || y + STEP_ROWS > tri.y1 as u32);
+        if beyond_flat_edge || y + STEP_ROWS > self.height {
+            empty_outside_rows(tri, y, &mut spans);
         }
         spans
     }
@@ -509,22 +502,13 @@ impl Band<'_> {
     }
 }
 
-/// Empties the rows from `y` of `spans` that lie below a screen `height`
-/// rows high (padding of the last tile row, in the last one only).
+/// Empties the rows from `y` of `spans` outside the triangle's rows
+/// `y0..y1`, which lie within the screen: the padding rows below the screen
+/// (in the last tile row only), and the rows beyond a horizontal edge, which
+/// the lanes leave out ([`Intercepts::new`]). Other rows outside `y0..y1`
+/// are already empty (`raster::lanes`, "Rows outside the triangle").
 #[cold]
-fn below_screen(tri: &ScreenTriangle, y: u32, height: u32, spans: &mut Spans) {
-    for r in 0..STEP_ROWS as usize {
-        if y + r as u32 >= height {
-            (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
-        }
-    }
-}
-
-/// Empties the rows from `y` of `spans` outside the rows `y0..y1` of a
-/// triangle with a horizontal edge, which the lanes leave out
-/// ([`Intercepts::new`]): the rows beyond it.
-#[cold]
-fn beyond_flat_edge(tri: &ScreenTriangle, y: u32, spans: &mut Spans) {
+fn empty_outside_rows(tri: &ScreenTriangle, y: u32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
         if !(tri.y0..tri.y1).contains(&(y as i32 + r as i32)) {
             (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
