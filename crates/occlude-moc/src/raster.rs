@@ -27,8 +27,8 @@ mod lanes;
 mod setup;
 
 pub(crate) use avx2::Avx2;
-use lanes::{Intercepts, Lanes, Portable, Spans, TileStep, LANES, STEP_ROWS, TILE_W};
-use setup::{LaneState, SETUP_LANES};
+use lanes::{Intercepts, Lanes, Portable, Spans, TileRow, LANES, STEP_ROWS, TILE_W};
+use setup::{Lane, LaneState, SETUP_LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -309,23 +309,83 @@ pub(crate) fn far_sum(a: f32, b: f32) -> f32 {
     s + s.abs() * FAR_NUDGE_F32
 }
 
+/// What the traversal reads of a set-up triangle on every draw: its pixel
+/// window, its edges' `f32` intercepts and its depth plane. The `f64` edges,
+/// which decide the rare rows the intercepts leave undecided, are read
+/// through [`SetUp::exact`] only then.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Raster {
+    /// Columns `x0..x1` and rows `y0..y1` of pixels whose centres may be inside.
+    pub(crate) x0: i32,
+    pub(crate) x1: i32,
+    pub(crate) y0: i32,
+    pub(crate) y1: i32,
+    pub(crate) plane: DepthPlane,
+    /// The edges' `f32` intercepts from the triangle's first tile row
+    /// ([`Intercepts::new`]).
+    pub(crate) lanes: Intercepts,
+}
+
+impl Raster {
+    /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
+    fn tiles(&self) -> u64 {
+        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= x0 < x1`,
+        // `0 <= y0 < y1`), so unsigned division is shifts.
+        let (tx, ty) = (4 * SUBTILE_W, 2 * SUBTILE_H);
+        let (x0, x1, y0, y1) = (self.x0 as u32, self.x1 as u32, self.y0 as u32, self.y1 as u32);
+        u64::from((x1 - 1) / tx - x0 / tx + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
+    }
+
+    /// The first and one past the last subtile row the triangle touches.
+    fn subtile_rows(&self) -> (u32, u32) {
+        ((self.y0 / 4) as u32, ((self.y1 - 1) / 4 + 1) as u32)
+    }
+}
+
+/// A triangle's edges in `f64` and their intercept bands ([`Edge::band`]):
+/// what decides a row's span pixel by pixel where the `f32` intercepts cannot
+/// ([`exact_spans`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Exact {
+    pub(crate) edges: [Edge; 3],
+    pub(crate) bands: [f64; 3],
+}
+
+/// A set-up triangle as the traversal ([`Band::draw`]) takes it: a
+/// [`ScreenTriangle`], or a lane of the four triangles set up at once
+/// ([`setup::Batch`]), read where the set-up wrote it rather than copied.
+pub(crate) trait SetUp {
+    /// What every draw reads.
+    fn raster(&self) -> Raster;
+    /// The exact edges, for the rows the intercepts leave undecided.
+    fn exact(&self) -> Exact;
+}
+
 /// A triangle ready to rasterize: screen position (pixels, y down; z = NDC
 /// depth) with edge functions positive inside, and the pixels whose centres it
 /// may cover.
 #[derive(Clone, Copy)]
 pub(crate) struct ScreenTriangle {
-    pub(crate) edges: [Edge; 3],
-    pub(crate) plane: DepthPlane,
-    /// Columns `x0..x1` and rows `y0..y1` of pixels whose centres may be inside.
-    x0: i32,
-    x1: i32,
-    y0: i32,
-    y1: i32,
-    /// Intercept bands of the edges ([`Edge::band`]).
-    bands: [f64; 3],
-    /// The edges' `f32` intercepts from the triangle's first tile row
-    /// ([`Intercepts::new`]).
-    lanes: Intercepts,
+    pub(crate) raster: Raster,
+    pub(crate) exact: Exact,
+}
+
+impl ScreenTriangle {
+    /// `tri`'s fields, copied.
+    pub(crate) fn copy_of(tri: &impl SetUp) -> Self {
+        ScreenTriangle { raster: tri.raster(), exact: tri.exact() }
+    }
+}
+
+impl SetUp for ScreenTriangle {
+    #[inline(always)]
+    fn raster(&self) -> Raster {
+        self.raster
+    }
+
+    fn exact(&self) -> Exact {
+        self.exact
+    }
 }
 
 impl ScreenTriangle {
@@ -391,23 +451,10 @@ impl ScreenTriangle {
         }
         let bands = edges.map(|e| e.band(w, h));
         let plane = DepthPlane::new(&t, tolerance.depth);
-        let mut tri = ScreenTriangle { edges, plane, x0, x1, y0, y1, bands, lanes: Intercepts::EMPTY };
-        tri.lanes = Intercepts::new(&tri);
-        Some(tri)
-    }
-
-    /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
-    fn tiles(&self) -> u64 {
-        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= x0 < x1`,
-        // `0 <= y0 < y1`), so unsigned division is shifts.
-        let (tx, ty) = (4 * SUBTILE_W, 2 * SUBTILE_H);
-        let (x0, x1, y0, y1) = (self.x0 as u32, self.x1 as u32, self.y0 as u32, self.y1 as u32);
-        u64::from((x1 - 1) / tx - x0 / tx + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
-    }
-
-    /// The first and one past the last subtile row the triangle touches.
-    fn subtile_rows(&self) -> (u32, u32) {
-        ((self.y0 / 4) as u32, ((self.y1 - 1) / 4 + 1) as u32)
+        let raster = Raster { x0, x1, y0, y1, plane, lanes: Intercepts::EMPTY };
+        let exact = Exact { edges, bands };
+        let lanes = Intercepts::new(&raster, &exact);
+        Some(ScreenTriangle { raster: Raster { lanes, ..raster }, exact })
     }
 }
 
@@ -435,7 +482,7 @@ impl Band<'_> {
     /// tile in their reach, the masks and depth bounds of its eight subtiles,
     /// merged. With AVX2 the whole triangle is one call, so that the steps
     /// inline into one loop.
-    fn draw(&mut self, tri: &ScreenTriangle) {
+    fn draw<T: SetUp>(&mut self, tri: &T) {
         match self.avx2 {
             Some(avx2) => avx2.draw(self, tri),
             None => self.draw_with(tri, Portable),
@@ -444,19 +491,20 @@ impl Band<'_> {
 
     /// [`Self::draw`] with the steps of `lanes`.
     #[inline(always)]
-    fn draw_with<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L) {
+    fn draw_with<L: Lanes, T: SetUp>(&mut self, tri: &T, lanes: L) {
         debug_assert!(self.first.is_multiple_of(2) && self.end.is_multiple_of(2), "bands of whole tile rows");
-        let (r0, r1) = tri.subtile_rows();
+        let raster = tri.raster();
+        let (r0, r1) = raster.subtile_rows();
         let top = r0 & !1;
         let (first, end) = (top.max(self.first), r1.min(self.end));
-        let mut next = self.tile_row_spans(tri, lanes, top, first);
+        let mut next = self.tile_row_spans(tri, &raster, lanes, top, first);
         let mut sy = first;
         while sy < end {
             let spans = next;
             if sy + 2 < end {
-                next = self.tile_row_spans(tri, lanes, top, sy + 2);
+                next = self.tile_row_spans(tri, &raster, lanes, top, sy + 2);
             }
-            self.draw_tile_row(tri, lanes, sy, &spans);
+            self.draw_tile_row(&raster, lanes, sy, &spans);
             sy += 2;
         }
     }
@@ -467,15 +515,15 @@ impl Band<'_> {
     /// ([`exact_spans`]), the rows beyond a horizontal edge and below the
     /// screen emptied ([`empty_outside_rows`]).
     #[inline(always)]
-    fn tile_row_spans<L: Lanes>(&self, tri: &ScreenTriangle, lanes: L, top: u32, sy: u32) -> Spans {
+    fn tile_row_spans<L: Lanes, T: SetUp>(&self, tri: &T, raster: &Raster, lanes: L, top: u32, sy: u32) -> Spans {
         let y = sy * 4;
-        let mut spans = lanes.edge_spans(tri, ((sy - top) * 4) as f32);
+        let mut spans = lanes.edge_spans(raster, ((sy - top) * 4) as f32);
         if spans.exact != 0 {
-            exact_spans(tri, y as i32, &mut spans);
+            exact_spans(&tri.exact(), raster, y as i32, &mut spans);
         }
-        let beyond_flat_edge = tri.lanes.flat && (y < tri.y0 as u32 || y + STEP_ROWS > tri.y1 as u32);
+        let beyond_flat_edge = raster.lanes.flat && (y < raster.y0 as u32 || y + STEP_ROWS > raster.y1 as u32);
         if beyond_flat_edge || y + STEP_ROWS > self.height {
-            empty_outside_rows(tri, y, &mut spans);
+            empty_outside_rows(raster, y, &mut spans);
         }
         spans
     }
@@ -483,22 +531,25 @@ impl Band<'_> {
     /// The tiles of the tile row from subtile row `sy` (even) in the reach of
     /// its `spans`.
     #[inline(always)]
-    fn draw_tile_row<L: Lanes>(&mut self, tri: &ScreenTriangle, lanes: L, sy: u32, spans: &Spans) {
+    fn draw_tile_row<L: Lanes>(&mut self, raster: &Raster, lanes: L, sy: u32, spans: &Spans) {
         let Some((left, right)) = lanes.reach(spans) else { return };
         let groups_per_row = self.cols as usize / LANES;
         let row = (sy - self.first) as usize * groups_per_row;
         // The band holds whole tile rows, so both subtile rows are its.
         let (upper_row, lower_row) = self.groups[row..].split_at_mut(groups_per_row);
-        let bottom = sy * 4 + STEP_ROWS > self.height;
         // Spans lie within the window, so `0 <= left < right`: the tiles by
         // shifts of unsigned values.
-        for tx in left as u32 / TILE_W..=(right - 1) as u32 / TILE_W {
-            let padded = bottom || (tx + 1) * TILE_W > self.width;
-            let outside = padded.then_some((self.width, self.height));
-            let step = TileStep { tri, spans, tx, ty: sy / 2, outside };
-            let (g, half) = ((tx / 2) as usize, (tx % 2) as usize);
-            lanes.draw_tile(&mut upper_row[g], &mut lower_row[g], half, &step, self.merge);
-        }
+        let padded_from = if sy * 4 + STEP_ROWS > self.height { 0 } else { self.width / TILE_W };
+        let row = TileRow {
+            raster,
+            spans,
+            ty: sy / 2,
+            first: left as u32 / TILE_W,
+            last: (right - 1) as u32 / TILE_W,
+            padded_from,
+            screen: (self.width, self.height),
+        };
+        lanes.draw_tiles(upper_row, lower_row, &row, self.merge);
     }
 }
 
@@ -508,10 +559,10 @@ impl Band<'_> {
 /// the lanes leave out ([`Intercepts::new`]). Other rows outside `y0..y1`
 /// are already empty (`raster::lanes`, "Rows outside the triangle").
 #[cold]
-fn empty_outside_rows(tri: &ScreenTriangle, y: u32, spans: &mut Spans) {
+fn empty_outside_rows(raster: &Raster, y: u32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
-        if !(tri.y0..tri.y1).contains(&(y as i32 + r as i32)) {
-            (spans.lo[r], spans.hi[r]) = (tri.x1, tri.x0);
+        if !(raster.y0..raster.y1).contains(&(y as i32 + r as i32)) {
+            (spans.lo[r], spans.hi[r]) = (raster.x1, raster.x0);
         }
     }
 }
@@ -519,15 +570,44 @@ fn empty_outside_rows(tri: &ScreenTriangle, y: u32, spans: &mut Spans) {
 /// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
 /// to the eight rows from `y`, row by row (rarely any).
 #[cold]
-fn exact_spans(tri: &ScreenTriangle, y: i32, spans: &mut Spans) {
+fn exact_spans(exact: &Exact, raster: &Raster, y: i32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
-        for (i, (edge, &band)) in tri.edges.iter().zip(&tri.bands).enumerate() {
+        for (i, (edge, &band)) in exact.edges.iter().zip(&exact.bands).enumerate() {
             if spans.exact >> i & 1 == 1 {
-                let (lo, hi) = edge.span(y + r as i32, tri.x0, tri.x1, band);
+                let (lo, hi) = edge.span(y + r as i32, raster.x0, raster.x1, band);
                 spans.lo[r] = spans.lo[r].max(lo);
                 spans.hi[r] = spans.hi[r].min(hi);
             }
         }
+    }
+}
+
+/// Where [`MaskedBuffer::render`]'s set-up hands its triangles: a band
+/// draws them at once, a chunk of the parallel set-up keeps them for binning.
+trait Sink {
+    /// A triangle of the scalar set-up.
+    fn triangle(&mut self, tri: &ScreenTriangle);
+    /// A triangle of the batched set-up.
+    fn lane(&mut self, lane: &Lane<'_>);
+}
+
+impl Sink for Band<'_> {
+    fn triangle(&mut self, tri: &ScreenTriangle) {
+        self.draw(tri);
+    }
+
+    fn lane(&mut self, lane: &Lane<'_>) {
+        self.draw(lane);
+    }
+}
+
+impl Sink for Vec<ScreenTriangle> {
+    fn triangle(&mut self, tri: &ScreenTriangle) {
+        self.push(*tri);
+    }
+
+    fn lane(&mut self, lane: &Lane<'_>) {
+        self.push(ScreenTriangle::copy_of(lane));
     }
 }
 
@@ -543,7 +623,7 @@ struct Binned {
 impl Binned {
     fn new(tris: Vec<ScreenTriangle>, bands: usize) -> Self {
         let band_range = |t: &ScreenTriangle| {
-            let (r0, r1) = t.subtile_rows();
+            let (r0, r1) = t.raster.subtile_rows();
             (r0 as usize / BAND_ROWS)..((r1 as usize - 1) / BAND_ROWS + 1).min(bands)
         };
         let mut starts = vec![0u32; bands + 1];
@@ -619,17 +699,17 @@ impl MaskedBuffer {
     /// has several threads.
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
         let (width, height, bits, avx2) = (self.width, self.height, self.subpixel_bits, Avx2::detect());
-        let one = |c: Option<[Vec4; 3]>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+        let one = |c: Option<[Vec4; 3]>, work: &mut RenderWork, out: &mut dyn Sink| {
             if let Some(c) = c {
                 work.triangles += screen_triangles(c, cull, width, height, bits, &mut |tri| {
-                    work.tiles += tri.tiles();
-                    out(tri)
+                    work.tiles += tri.raster.tiles();
+                    out.triangle(tri)
                 });
             }
         };
         // Triangles `range` in order: with AVX2, four at a time where all four
         // are in the common case of the batched set-up (`setup`).
-        let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn FnMut(&ScreenTriangle)| {
+        let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn Sink| {
             let mut i = range.start;
             if let Some(avx2) = avx2 {
                 while i + SETUP_LANES <= range.end {
@@ -640,9 +720,9 @@ impl MaskedBuffer {
                         for (l, c) in tris.iter().enumerate() {
                             match set_up.lane(l) {
                                 LaneState::Drawn => {
-                                    let tri = set_up.triangle(l);
-                                    work.tiles += tri.tiles();
-                                    out(&tri);
+                                    let lane = set_up.drawn(l);
+                                    work.tiles += lane.raster().tiles();
+                                    out.lane(&lane);
                                 }
                                 LaneState::Rejected => {}
                                 LaneState::Scalar => {
@@ -662,8 +742,7 @@ impl MaskedBuffer {
         };
         let mut work = RenderWork::default();
         if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
-            let mut whole = self.whole();
-            setup(0..count, &mut work, &mut |tri| whole.draw(tri));
+            setup(0..count, &mut work, &mut self.whole());
             return work;
         }
         let bands = (self.rows as usize).div_ceil(BAND_ROWS);
@@ -671,7 +750,7 @@ impl MaskedBuffer {
             .into_par_iter()
             .map(|c| {
                 let (mut tris, mut work) = (Vec::with_capacity(SETUP_CHUNK), RenderWork::default());
-                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut |t| tris.push(*t));
+                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut tris);
                 (Binned::new(tris, bands), work)
             })
             .collect();
@@ -726,13 +805,13 @@ mod tests {
                 for i in 0..32u32 {
                     let (x, y) = (sx * 8 + i % 8, sy * 4 + i / 8);
                     let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
-                    if x < buffer.width && y < buffer.height && tri.edges.iter().all(|e| e.covers(px, py)) {
+                    if x < buffer.width && y < buffer.height && tri.exact.edges.iter().all(|e| e.covers(px, py)) {
                         cover |= 1 << i;
                     }
                 }
                 if cover != 0 {
                     let (gx, by) = (f64::from(sx / 4 * TILE_W), f64::from(sy * 4));
-                    let far = tri.plane.subtile_bound(gx, by, (sx % 4) as usize);
+                    let far = tri.raster.plane.subtile_bound(gx, by, (sx % 4) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
                     let mut s = group.get((sx % 8) as usize);

@@ -11,9 +11,9 @@
 
 use std::arch::x86_64::*;
 
-use super::lanes::{add_outside, outside, Lanes, Spans, TileStep, LANES, TILE_W, T_MIN};
+use super::lanes::{add_outside, outside, Lanes, Spans, TileRow, LANES, TILE_W, T_MIN};
 use super::setup::{Batch, SETUP_LANES};
-use super::{Band, CullMode, DepthPlane, ScreenTriangle};
+use super::{Band, CullMode, DepthPlane, Raster, SetUp};
 use crate::buffer::{Group, MergeMode};
 use glam::Vec4;
 
@@ -29,22 +29,16 @@ impl Avx2 {
     }
 
     /// [`lanes::tile_lanes`](super::lanes::tile_lanes), in AVX2 (on its own
-    /// for the tests; the rasterizer runs it in [`Lanes::draw_tile`]).
+    /// for the tests; the rasterizer runs it in [`Lanes::draw_tiles`]).
     #[cfg(test)]
-    pub(crate) fn tile_lanes(
-        self,
-        tri: &ScreenTriangle,
-        spans: &Spans,
-        tx: u32,
-        ty: u32,
-    ) -> ([u32; LANES], [f32; LANES]) {
+    pub(crate) fn tile_lanes(self, tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { tile_lanes(tri, spans, tx, ty) }
     }
 
     /// [`Band::draw`](super::Band) of one triangle in one AVX2 function, so
     /// that this module's steps ([`Lanes`]) inline into its loop.
-    pub(crate) fn draw(self, band: &mut Band<'_>, tri: &ScreenTriangle) {
+    pub(crate) fn draw<T: SetUp>(self, band: &mut Band<'_>, tri: &T) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { draw(self, band, tri) }
     }
@@ -63,7 +57,7 @@ impl Avx2 {
     }
 
     /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
-    /// runs it in [`Lanes::draw_tile`]).
+    /// runs it in [`Lanes::draw_tiles`]).
     #[cfg(test)]
     pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
@@ -73,7 +67,7 @@ impl Avx2 {
 
 impl Lanes for Avx2 {
     #[inline(always)]
-    fn edge_spans(self, tri: &ScreenTriangle, row: f32) -> Spans {
+    fn edge_spans(self, tri: &Raster, row: f32) -> Spans {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { edge_spans(tri, row) }
     }
@@ -84,20 +78,21 @@ impl Lanes for Avx2 {
         unsafe { reach(spans) }
     }
 
-    /// The tile's masks and depth bounds
+    /// Per tile, the masks and depth bounds
     /// ([`tile_lanes`](super::lanes::tile_lanes)), the padding pixels added
     /// to the lanes that cover something ([`add_outside`]), then
     /// [`merge_lanes`] on the subtiles loaded from the two groups' halves,
-    /// with the masks and depth bounds kept in registers.
+    /// with the spans, the plane's terms, masks and depth bounds kept in
+    /// registers.
     #[inline(always)]
-    fn draw_tile(self, upper: &mut Group, lower: &mut Group, half: usize, step: &TileStep<'_>, mode: MergeMode) {
+    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { draw_tile(upper, lower, half, step, mode) }
+        unsafe { draw_tiles(upper, lower, row, mode) }
     }
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
+unsafe fn draw<T: SetUp>(avx2: Avx2, band: &mut Band<'_>, tri: &T) {
     band.draw_with(tri, avx2);
 }
 
@@ -116,46 +111,72 @@ unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
     (left < right).then_some((left, right))
 }
 
-#[inline]
-#[target_feature(enable = "avx2")]
-unsafe fn draw_tile(upper: &mut Group, lower: &mut Group, half: usize, step: &TileStep<'_>, mode: MergeMode) {
-    let mut c = tile_cover(step.spans, step.tx);
-    if let Some(screen) = step.outside {
-        let mut cover = [0u32; LANES];
-        _mm256_storeu_si256(cover.as_mut_ptr().cast(), c);
-        add_outside(&mut cover, &outside(screen, step.tx, step.ty));
-        c = _mm256_loadu_si256(cover.as_ptr().cast());
+/// [`Lanes::draw_tiles`] in AVX2. Without a `target_feature` of its own so
+/// that it can be inlined always (which Rust refuses for a `target_feature`
+/// function): its intrinsics compile to AVX2 inside [`draw`], the one
+/// function it is inlined into, which has the feature (per triangle kind).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn draw_tiles(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+    // Once for the row, so that the loop indexes unchecked.
+    assert!(((row.last / 2) as usize) < upper.len().min(lower.len()), "tiles beyond the band's groups");
+    let spans = row.spans;
+    let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
+    let depth = DepthLanes::new(&row.raster.plane, row.ty);
+    let mut x = _mm256_set1_epi32((row.first * TILE_W) as i32);
+    for tx in row.first..=row.last {
+        let mut c = tile_cover(lo, hi, x);
+        if tx >= row.padded_from {
+            c = with_outside(c, row.screen, tx, row.ty);
+        }
+        let d = depth.tile(tx);
+        // The tile's subtiles: half `tx % 2` of each group, the upper one's in
+        // the low 128 bits.
+        let (g, offset) = ((tx / 2) as usize, 4 * (tx % 2) as usize);
+        // SAFETY: `g <= last / 2`, within both rows by the assertion above.
+        let (upper, lower) = (upper.get_unchecked_mut(g), lower.get_unchecked_mut(g));
+        let load =
+            |u: *const u32, l: *const u32| _mm256_set_m128i(_mm_loadu_si128(l.cast()), _mm_loadu_si128(u.cast()));
+        let mask = load(upper.mask.as_ptr().add(offset), lower.mask.as_ptr().add(offset));
+        let working = _mm256_castsi256_ps(load(
+            upper.working.as_ptr().add(offset).cast(),
+            lower.working.as_ptr().add(offset).cast(),
+        ));
+        let reference = _mm256_castsi256_ps(load(
+            upper.reference.as_ptr().add(offset).cast(),
+            lower.reference.as_ptr().add(offset).cast(),
+        ));
+        let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
+        let store = |u: *mut u32, l: *mut u32, v: __m256i| {
+            _mm_storeu_si128(u.cast(), _mm256_castsi256_si128(v));
+            _mm_storeu_si128(l.cast(), _mm256_extracti128_si256::<1>(v));
+        };
+        store(upper.mask.as_mut_ptr().add(offset), lower.mask.as_mut_ptr().add(offset), mask);
+        store(
+            upper.working.as_mut_ptr().add(offset).cast(),
+            lower.working.as_mut_ptr().add(offset).cast(),
+            _mm256_castps_si256(working),
+        );
+        store(
+            upper.reference.as_mut_ptr().add(offset).cast(),
+            lower.reference.as_mut_ptr().add(offset).cast(),
+            _mm256_castps_si256(reference),
+        );
+        x = _mm256_add_epi32(x, _mm256_set1_epi32(TILE_W as i32));
     }
-    let d = depth_bounds(&step.tri.plane, step.tx, step.ty);
-    // The tile's subtiles: half `half` of each group, the upper one's in the
-    // low 128 bits. `half` is 0 or 1 (a tile's column's parity), so the four
-    // lanes from `4 half` lie within each eight-lane field.
-    debug_assert!(half < 2);
-    let offset = 4 * half;
-    let load = |u: *const u32, l: *const u32| _mm256_set_m128i(_mm_loadu_si128(l.cast()), _mm_loadu_si128(u.cast()));
-    let mask = load(upper.mask.as_ptr().add(offset), lower.mask.as_ptr().add(offset));
-    let working =
-        _mm256_castsi256_ps(load(upper.working.as_ptr().add(offset).cast(), lower.working.as_ptr().add(offset).cast()));
-    let reference = _mm256_castsi256_ps(load(
-        upper.reference.as_ptr().add(offset).cast(),
-        lower.reference.as_ptr().add(offset).cast(),
-    ));
-    let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
-    let store = |u: *mut u32, l: *mut u32, v: __m256i| {
-        _mm_storeu_si128(u.cast(), _mm256_castsi256_si128(v));
-        _mm_storeu_si128(l.cast(), _mm256_extracti128_si256::<1>(v));
-    };
-    store(upper.mask.as_mut_ptr().add(offset), lower.mask.as_mut_ptr().add(offset), mask);
-    store(
-        upper.working.as_mut_ptr().add(offset).cast(),
-        lower.working.as_mut_ptr().add(offset).cast(),
-        _mm256_castps_si256(working),
-    );
-    store(
-        upper.reference.as_mut_ptr().add(offset).cast(),
-        lower.reference.as_mut_ptr().add(offset).cast(),
-        _mm256_castps_si256(reference),
-    );
+}
+
+/// `cover` with the padding pixels of tile `tx` of tile row `ty` on a
+/// `screen` added to its lanes that cover something ([`add_outside`]).
+#[cold]
+#[target_feature(enable = "avx2")]
+unsafe fn with_outside(cover: __m256i, screen: (u32, u32), tx: u32, ty: u32) -> __m256i {
+    let mut lanes = [0u32; LANES];
+    _mm256_storeu_si256(lanes.as_mut_ptr().cast(), cover);
+    add_outside(&mut lanes, &outside(screen, tx, ty));
+    _mm256_loadu_si256(lanes.as_ptr().cast())
 }
 
 /// [`lanes::edge_spans`](super::lanes::edge_spans) in AVX2: an edge's
@@ -164,7 +185,7 @@ unsafe fn draw_tile(upper: &mut Group, lower: &mut Group, half: usize, step: &Ti
 /// one fails (rare) the per-edge [`Spans::exact`] bits.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
+unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
     let intercepts = &tri.lanes;
     let rows = _mm256_add_ps(_mm256_set1_ps(row), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0));
     let (t_min, t_max) = (_mm256_set1_ps(T_MIN), _mm256_set1_ps(intercepts.t_max));
@@ -220,50 +241,78 @@ unsafe fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
 
 #[cfg(test)]
 #[target_feature(enable = "avx2")]
-unsafe fn tile_lanes(tri: &ScreenTriangle, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
+unsafe fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
+    let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
     let mut out = ([0u32; LANES], [0f32; LANES]);
-    _mm256_storeu_si256(out.0.as_mut_ptr().cast(), tile_cover(spans, tx));
-    _mm256_storeu_ps(out.1.as_mut_ptr(), depth_bounds(&tri.plane, tx, ty));
+    _mm256_storeu_si256(out.0.as_mut_ptr().cast(), tile_cover(lo, hi, _mm256_set1_epi32((tx * TILE_W) as i32)));
+    _mm256_storeu_ps(out.1.as_mut_ptr(), DepthLanes::new(&tri.plane, ty).tile(tx));
     out
 }
 
 /// [`DepthPlane::subtile_bound`](super::DepthPlane) of the eight subtiles of
-/// tile `tx` of tile row `ty`: per subtile row, the base at the tile's
-/// first column in `f64` (the two rows in two lanes), then the lanes' steps
-/// added and the cap taken in `f32` lanes, with the portable version's
-/// operations in its order.
-#[inline]
-#[target_feature(enable = "avx2")]
-unsafe fn depth_bounds(plane: &DepthPlane, tx: u32, ty: u32) -> __m256 {
-    // `far_at` (the plane, then `round_far`) of both subtile rows in the two
-    // lanes of one `f64 x 2`.
-    let x = _mm_set1_pd(plane.zx * plane.corner_x(f64::from(tx * TILE_W)));
-    let rows = _mm_set_pd(plane.row_term(f64::from(ty * 8 + 4)), plane.row_term(f64::from(ty * 8)));
-    let v = _mm_add_pd(x, rows);
-    let nudge = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), v), _mm_set1_pd(super::FAR_NUDGE));
-    let far = _mm_cvtpd_ps(_mm_add_pd(_mm_add_pd(v, nudge), _mm_set1_pd(1e-12)));
-    let bases = _mm256_set_m128(_mm_shuffle_ps::<0b01_01_01_01>(far, far), _mm_shuffle_ps::<0>(far, far));
-    let steps =
-        _mm256_mul_ps(_mm256_set1_ps(plane.lane_step()), _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0));
-    // `far_sum` on eight lanes.
-    let sum = _mm256_add_ps(bases, steps);
-    let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
-    _mm256_min_ps(_mm256_add_ps(sum, nudge), _mm256_set1_ps(plane.far_max()))
+/// a tile of tile row `ty`: per subtile row, the base at the tile's first
+/// column in `f64` (the two rows in two lanes), then the lanes' steps added
+/// and the cap taken in `f32` lanes, with the portable version's operations
+/// in its order. What does not change along the row is set up once.
+struct DepthLanes {
+    zx: f64,
+    /// The corner's column offset in a subtile ([`DepthPlane::corner_x`]).
+    corner: u32,
+    /// The row terms of the two subtile rows ([`DepthPlane::row_term`]).
+    rows: __m128d,
+    /// The lanes' steps, `0..4` steps in each half.
+    steps: __m256,
+    cap: __m256,
 }
 
-/// The coverage masks of the eight subtiles of tile `tx` (32 pixels wide):
+impl DepthLanes {
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn new(plane: &DepthPlane, ty: u32) -> Self {
+        DepthLanes {
+            zx: plane.zx,
+            corner: plane.corner_x(0.0) as u32,
+            rows: _mm_set_pd(plane.row_term(f64::from(ty * 8 + 4)), plane.row_term(f64::from(ty * 8))),
+            steps: _mm256_mul_ps(
+                _mm256_set1_ps(plane.lane_step()),
+                _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0),
+            ),
+            cap: _mm256_set1_ps(plane.far_max()),
+        }
+    }
+
+    /// The bounds of tile `tx`'s eight subtiles.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn tile(&self, tx: u32) -> __m256 {
+        // `far_at` (the plane, then `round_far`) of both subtile rows in the
+        // two lanes of one `f64 x 2`; the corner's column is a whole number,
+        // so converted exactly.
+        let x = _mm_set1_pd(self.zx * f64::from(tx * TILE_W + self.corner));
+        let v = _mm_add_pd(x, self.rows);
+        let nudge = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), v), _mm_set1_pd(super::FAR_NUDGE));
+        let far = _mm_cvtpd_ps(_mm_add_pd(_mm_add_pd(v, nudge), _mm_set1_pd(1e-12)));
+        let bases = _mm256_set_m128(_mm_shuffle_ps::<0b01_01_01_01>(far, far), _mm_shuffle_ps::<0>(far, far));
+        // `far_sum` on eight lanes.
+        let sum = _mm256_add_ps(bases, self.steps);
+        let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
+        _mm256_min_ps(_mm256_add_ps(sum, nudge), self.cap)
+    }
+}
+
+/// The coverage masks of the eight subtiles of the tile whose first column
+/// is `x` (in every lane), from the eight rows' span ends `lo` and `hi`:
 /// each pixel row's span as one 32-bit row of the tile, a lane a row (ones
 /// from `lo` on, less ones from `hi` on: variable shifts, which give 0 from
 /// 32 on), then each 128-bit half's 4 x 4 bytes transposed so that subtile
 /// column `c` takes byte `c` of each of its four rows.
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn tile_cover(spans: &Spans, tx: u32) -> __m256i {
-    let (x, zero) = (_mm256_set1_epi32((tx * TILE_W) as i32), _mm256_setzero_si256());
-    let column = |v: &[i32; 8]| _mm256_max_epi32(_mm256_sub_epi32(_mm256_load_si256(v.as_ptr().cast()), x), zero);
+unsafe fn tile_cover(lo: __m256i, hi: __m256i, x: __m256i) -> __m256i {
+    let zero = _mm256_setzero_si256();
+    let column = |v: __m256i| _mm256_max_epi32(_mm256_sub_epi32(v, x), zero);
     let ones = _mm256_set1_epi32(-1);
-    let rows =
-        _mm256_andnot_si256(_mm256_sllv_epi32(ones, column(&spans.hi)), _mm256_sllv_epi32(ones, column(&spans.lo)));
+    let rows = _mm256_andnot_si256(_mm256_sllv_epi32(ones, column(hi)), _mm256_sllv_epi32(ones, column(lo)));
     _mm256_shuffle_epi8(
         rows,
         _mm256_setr_epi8(

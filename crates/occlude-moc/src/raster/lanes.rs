@@ -78,7 +78,7 @@
 //! a whole number, so a clamped intercept passes the band test wherever the
 //! band is under half a pixel, and the window's pixels keep their side.
 
-use super::{round_far, ScreenTriangle};
+use super::{round_far, Exact, Raster};
 use crate::buffer::{outside_mask, Group, MergeMode};
 
 /// Subtiles handled by one [`tile_lanes`] call: a tile's.
@@ -155,14 +155,14 @@ impl Intercepts {
     /// The intercepts of `tri` from the top pixel row of its first tile row,
     /// over every row a draw of it steps through: those of its tile rows.
     #[inline]
-    pub(crate) fn new(tri: &ScreenTriangle) -> Self {
+    pub(crate) fn new(tri: &Raster, exact: &Exact) -> Self {
         let (r0, r1) = tri.subtile_rows();
         let top = r0 & !1;
         let py = f64::from(top * 4) + 0.5;
         let (x0, rows) = (f64::from(tri.x0), f64::from((r1 - top + 1) * 4));
         let mut out = Self::EMPTY;
         out.t_max = (tri.x1 - tri.x0) as f32 + 3.5;
-        for (i, edge) in tri.edges.iter().enumerate() {
+        for (i, edge) in exact.edges.iter().enumerate() {
             out.right[i] = -i32::from(edge.a > 0.0);
             if edge.a == 0.0 {
                 // Horizontal: `t_max` bounds `hi` (`a` is not positive)
@@ -173,7 +173,7 @@ impl Intercepts {
             let u = edge.slope * py + edge.offset + 0.5 - x0;
             out.base[i] = u as f32;
             out.slope[i] = edge.slope as f32;
-            out.band[i] = round_far(tri.bands[i] + F32_SCALE * (2.0 * u.abs() + 3.0 * edge.slope.abs() * rows + 1.0));
+            out.band[i] = round_far(exact.bands[i] + F32_SCALE * (2.0 * u.abs() + 3.0 * edge.slope.abs() * rows + 1.0));
         }
         out
     }
@@ -192,7 +192,7 @@ fn floor_f32(v: f32) -> i32 {
 /// needs no test of its own: no pixel centre of it is inside the triangle,
 /// so its edges leave it empty ("Rows outside the triangle" above); the rows
 /// beyond a horizontal edge and below the screen are the caller's.
-pub(crate) fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
+pub(crate) fn edge_spans(tri: &Raster, row: f32) -> Spans {
     const ROWS: usize = STEP_ROWS as usize;
     let intercepts = &tri.lanes;
     let (mut lo, mut hi) = ([0i32; ROWS], [tri.x1 - tri.x0; ROWS]);
@@ -229,7 +229,7 @@ pub(crate) fn edge_spans(tri: &ScreenTriangle, row: f32) -> Spans {
 /// inside `spans` (a row's bits by shifts of its span's ends), its depth
 /// [`DepthPlane::subtile_bound`](super::DepthPlane) (lane `l % 4` of the
 /// run from the tile's first column, which the AVX2 version's lanes share).
-pub(crate) fn tile_lanes(tri: &ScreenTriangle, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
+pub(crate) fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
     let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
     let gx = f64::from(tx * TILE_W);
     for l in 0..LANES {
@@ -245,17 +245,23 @@ pub(crate) fn tile_lanes(tri: &ScreenTriangle, spans: &Spans, tx: u32, ty: u32) 
     (cover, depth)
 }
 
-/// One tile's step of a tile row: what [`tile_lanes`] reads, and whether the
-/// tile has padding pixels.
-pub(crate) struct TileStep<'a> {
-    pub tri: &'a ScreenTriangle,
+/// The tiles of one tile row of a triangle in the reach of its spans: what
+/// [`Lanes::draw_tiles`] reads.
+pub(crate) struct TileRow<'a> {
+    pub raster: &'a Raster,
     pub spans: &'a Spans,
-    pub tx: u32,
+    /// The tile row: subtile rows `2 ty` and `2 ty + 1`.
     pub ty: u32,
-    /// The screen's width and height where the tile reaches beyond it (its
-    /// lanes' padding pixels are [`outside`]); `None` where it lies wholly on
-    /// screen.
-    pub outside: Option<(u32, u32)>,
+    /// The tile columns `first..=last` in the spans' reach.
+    pub first: u32,
+    pub last: u32,
+    /// The first tile column whose tiles have padding pixels (beyond the
+    /// screen's right side; every column on a tile row reaching below the
+    /// screen): from it on, a tile's lanes that cover something take their
+    /// padding ([`outside`], [`add_outside`]).
+    pub padded_from: u32,
+    /// The screen's width and height.
+    pub screen: (u32, u32),
 }
 
 /// Per lane of tile `tx` of tile row `ty`, its subtile's pixels beyond a
@@ -307,15 +313,16 @@ pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
 pub(crate) trait Lanes: Copy {
     /// The [`Spans`] of the tile row from row `row` of the triangle's
     /// [`Intercepts`] ([`edge_spans`]).
-    fn edge_spans(self, tri: &ScreenTriangle, row: f32) -> Spans;
+    fn edge_spans(self, tri: &Raster, row: f32) -> Spans;
     /// [`Spans::reach`].
     fn reach(self, spans: &Spans) -> Option<(i32, i32)> {
         spans.reach()
     }
-    /// One tile's masks and depth bounds ([`tile_lanes`]), its padding added
-    /// ([`add_outside`]), merged ([`Group::merge`]) into its subtiles: half
-    /// `half` of the groups `upper` and `lower` ([`tile_of`]).
-    fn draw_tile(self, upper: &mut Group, lower: &mut Group, half: usize, step: &TileStep<'_>, mode: MergeMode);
+    /// The tiles of `row`, each one's masks and depth bounds ([`tile_lanes`]),
+    /// its padding added ([`add_outside`]), merged ([`Group::merge`]) into
+    /// its subtiles: half `tx % 2` of groups `tx / 2` of `upper` and `lower`
+    /// (the tile row's two subtile rows, [`tile_of`]).
+    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode);
 }
 
 /// The portable [`Lanes`]: this module's functions.
@@ -324,19 +331,22 @@ pub(crate) struct Portable;
 
 impl Lanes for Portable {
     #[inline]
-    fn edge_spans(self, tri: &ScreenTriangle, row: f32) -> Spans {
+    fn edge_spans(self, tri: &Raster, row: f32) -> Spans {
         edge_spans(tri, row)
     }
 
     #[inline]
-    fn draw_tile(self, upper: &mut Group, lower: &mut Group, half: usize, step: &TileStep<'_>, mode: MergeMode) {
-        let (mut cover, depth) = tile_lanes(step.tri, step.spans, step.tx, step.ty);
-        if let Some(screen) = step.outside {
-            add_outside(&mut cover, &outside(screen, step.tx, step.ty));
+    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+        for tx in row.first..=row.last {
+            let (mut cover, depth) = tile_lanes(row.raster, row.spans, tx, row.ty);
+            if tx >= row.padded_from {
+                add_outside(&mut cover, &outside(row.screen, tx, row.ty));
+            }
+            let (g, half) = ((tx / 2) as usize, (tx % 2) as usize);
+            let mut tile = tile_of(&upper[g], &lower[g], half);
+            tile.merge(&cover, &depth, mode);
+            put_tile(&tile, &mut upper[g], &mut lower[g], half);
         }
-        let mut tile = tile_of(upper, lower, half);
-        tile.merge(&cover, &depth, mode);
-        put_tile(&tile, upper, lower, half);
     }
 }
 
@@ -344,7 +354,7 @@ impl Lanes for Portable {
 mod tests {
     use super::*;
     use crate::buffer::Subtile;
-    use crate::raster::CullMode;
+    use crate::raster::{CullMode, ScreenTriangle};
     use glam::DVec3;
 
     struct Lcg(u64);
@@ -439,17 +449,17 @@ mod tests {
         };
         let (mut subtiles, mut exact) = (0, 0);
         for (_, _, tri) in triangles(11, 4000) {
-            let (r0, r1) = tri.subtile_rows();
+            let (r0, r1) = tri.raster.subtile_rows();
             let top = r0 & !1;
             for sy in (top..r1).step_by(2) {
                 let row = ((sy - top) * 4) as f32;
-                let spans = edge_spans(&tri, row);
-                assert_eq!(avx2.edge_spans(&tri, row), spans, "{:?} row {sy}", tri.edges);
+                let spans = edge_spans(&tri.raster, row);
+                assert_eq!(avx2.edge_spans(&tri.raster, row), spans, "{:?} row {sy}", tri.exact.edges);
                 assert_eq!(avx2.reach(&spans), spans.reach());
                 exact += usize::from(spans.exact != 0);
-                for tx in tri.x0 as u32 / TILE_W..=(tri.x1 - 1) as u32 / TILE_W {
-                    let (c, d) = tile_lanes(&tri, &spans, tx, sy / 2);
-                    let (ac, ad) = avx2.tile_lanes(&tri, &spans, tx, sy / 2);
+                for tx in tri.raster.x0 as u32 / TILE_W..=(tri.raster.x1 - 1) as u32 / TILE_W {
+                    let (c, d) = tile_lanes(&tri.raster, &spans, tx, sy / 2);
+                    let (ac, ad) = avx2.tile_lanes(&tri.raster, &spans, tx, sy / 2);
                     assert_eq!(ac, c);
                     assert_eq!(ad.map(f32::to_bits), d.map(f32::to_bits));
                     subtiles += c.iter().filter(|&&m| m != 0).count();
@@ -486,11 +496,11 @@ mod tests {
             let Some(tri) = ScreenTriangle::new(t, CullMode::None, w, h, super::super::Tolerance::NONE) else {
                 continue;
             };
-            let (r0, r1) = tri.subtile_rows();
+            let (r0, r1) = tri.raster.subtile_rows();
             let (top, count) = ((r0 & !1) as i32 * 4, (r1 - (r0 & !1) + 1) * 4);
-            let intercepts = &tri.lanes;
-            for (i, edge) in tri.edges.iter().enumerate() {
-                let u = edge.slope * (f64::from(top) + 0.5) + edge.offset + 0.5 - f64::from(tri.x0);
+            let intercepts = &tri.raster.lanes;
+            for (i, edge) in tri.exact.edges.iter().enumerate() {
+                let u = edge.slope * (f64::from(top) + 0.5) + edge.offset + 0.5 - f64::from(tri.raster.x0);
                 let allowance = super::F32_SCALE * (2.0 * u.abs() + 3.0 * edge.slope.abs() * f64::from(count) + 1.0);
                 for r in 0..count as i32 {
                     let y = f64::from(top + r) + 0.5;
@@ -499,7 +509,7 @@ mod tests {
                     if !evaluated.is_finite() || !allowance.is_finite() {
                         continue;
                     }
-                    let error = (f64::from(lane) + f64::from(tri.x0) - evaluated).abs();
+                    let error = (f64::from(lane) + f64::from(tri.raster.x0) - evaluated).abs();
                     assert!(error <= allowance, "{t:?} edge {i} row {}: {error} > {allowance}", top + r);
                     worst = worst.max(error / allowance);
                     rounded += usize::from(error > 0.0);

@@ -18,20 +18,20 @@ use std::arch::x86_64::*;
 use glam::Vec4;
 
 use super::lanes::{Intercepts, F32_SCALE};
-use super::{CullMode, DepthPlane, Edge, ScreenTriangle, BAND_SCALE, FAR_NUDGE};
+use super::{CullMode, DepthPlane, Edge, Exact, Raster, SetUp, BAND_SCALE, FAR_NUDGE};
 use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
 
 /// Triangles set up by one [`setup4`] call.
 pub(crate) const SETUP_LANES: usize = 4;
 
 /// Four triangles set up by [`setup4`], lane by lane, in the registers'
-/// layout: [`Batch::triangle`] takes one out.
+/// layout, where the traversal reads them ([`Batch::drawn`]).
 pub(crate) struct Batch {
     /// Bit `l` set: lane `l` was set up here (else it is for the scalar
     /// set-up).
     common: i32,
     /// Bit `l` set: lane `l`'s triangle is not drawn (culled, zero area, or no
-    /// pixel centre on screen, as [`ScreenTriangle::new`] rejects).
+    /// pixel centre on screen, as [`ScreenTriangle::new`](super::ScreenTriangle::new) rejects).
     rejected: i32,
     /// Per edge: `a`, `b`, `c`, `slope`, `offset`, `band`.
     edges: [[[f64; SETUP_LANES]; 6]; 3],
@@ -58,10 +58,10 @@ pub(crate) struct Batch {
 /// What became of a lane's triangle in [`setup4`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum LaneState {
-    /// Set up: [`Batch::triangle`] is the triangle to draw.
+    /// Set up: [`Batch::drawn`] is the triangle to draw.
     Drawn,
     /// Not drawn: culled, zero area, or no pixel centre on screen, as
-    /// [`ScreenTriangle::new`] rejects.
+    /// [`ScreenTriangle::new`](super::ScreenTriangle::new) rejects.
     Rejected,
     /// Outside the common case: for the scalar set-up.
     Scalar,
@@ -82,36 +82,48 @@ impl Batch {
 
     /// Lane `l`'s triangle, where it is [`LaneState::Drawn`].
     #[inline]
-    pub(crate) fn triangle(&self, l: usize) -> ScreenTriangle {
-        let edge = |i: usize| {
-            let e = &self.edges[i];
-            Edge { a: e[0][l], b: e[1][l], c: e[2][l], on: self.on[i] >> l & 1 == 1, slope: e[3][l], offset: e[4][l] }
-        };
-        let (v, p) = (&self.window, &self.plane);
-        let (x0, x1) = (v[0][l], v[1][l]);
-        ScreenTriangle {
-            edges: [edge(0), edge(1), edge(2)],
-            plane: DepthPlane {
-                zx: p[0][l],
-                zy: p[1][l],
-                z0: p[2][l],
-                step: self.plane_f32[0][l],
-                cap: self.plane_f32[1][l],
-            },
-            x0,
-            x1,
+    pub(crate) fn drawn(&self, l: usize) -> Lane<'_> {
+        Lane { batch: self, l }
+    }
+}
+
+/// A triangle of a [`Batch`], read in place: the traversal loads its fields
+/// from the batch's lanes, where the set-up stored them.
+pub(crate) struct Lane<'a> {
+    batch: &'a Batch,
+    l: usize,
+}
+
+impl SetUp for Lane<'_> {
+    #[inline(always)]
+    fn raster(&self) -> Raster {
+        let (b, l) = (self.batch, self.l);
+        let (v, p, f) = (&b.window, &b.plane, &b.plane_f32);
+        let lanes = &b.lanes;
+        Raster {
+            x0: v[0][l],
+            x1: v[1][l],
             y0: v[2][l],
             y1: v[3][l],
-            bands: [self.edges[0][5][l], self.edges[1][5][l], self.edges[2][5][l]],
+            plane: DepthPlane { zx: p[0][l], zy: p[1][l], z0: p[2][l], step: f[0][l], cap: f[1][l] },
             lanes: Intercepts {
-                base: [self.lanes[0][0][l], self.lanes[1][0][l], self.lanes[2][0][l]],
-                slope: [self.lanes[0][1][l], self.lanes[1][1][l], self.lanes[2][1][l]],
-                band: [self.lanes[0][2][l], self.lanes[1][2][l], self.lanes[2][2][l]],
-                right: self.right.map(|bits| -(bits >> l & 1)),
-                t_max: self.t_max[l],
-                flat: self.flat >> l & 1 == 1,
+                base: [lanes[0][0][l], lanes[1][0][l], lanes[2][0][l]],
+                slope: [lanes[0][1][l], lanes[1][1][l], lanes[2][1][l]],
+                band: [lanes[0][2][l], lanes[1][2][l], lanes[2][2][l]],
+                right: b.right.map(|bits| -(bits >> l & 1)),
+                t_max: b.t_max[l],
+                flat: b.flat >> l & 1 == 1,
             },
         }
+    }
+
+    fn exact(&self) -> Exact {
+        let (b, l) = (self.batch, self.l);
+        let edge = |i: usize| {
+            let e = &b.edges[i];
+            Edge { a: e[0][l], b: e[1][l], c: e[2][l], on: b.on[i] >> l & 1 == 1, slope: e[3][l], offset: e[4][l] }
+        };
+        Exact { edges: [edge(0), edge(1), edge(2)], bands: [b.edges[0][5][l], b.edges[1][5][l], b.edges[2][5][l]] }
     }
 }
 
@@ -381,6 +393,7 @@ mod tests {
     use super::*;
     use crate::project::screen_triangles;
     use crate::raster::avx2::Avx2;
+    use crate::raster::ScreenTriangle;
 
     struct Lcg(u64);
     impl Lcg {
@@ -392,16 +405,17 @@ mod tests {
 
     /// Every field of a set-up triangle, as bits.
     fn fields(t: &ScreenTriangle) -> Vec<u64> {
-        let mut out: Vec<u64> = t
+        let (r, e) = (&t.raster, &t.exact);
+        let mut out: Vec<u64> = e
             .edges
             .iter()
             .flat_map(|e| [e.a, e.b, e.c, e.slope, e.offset].map(f64::to_bits).into_iter().chain([u64::from(e.on)]))
             .collect();
-        let p = &t.plane;
+        let p = &r.plane;
         out.extend([p.zx, p.zy, p.z0].map(f64::to_bits));
         out.extend([p.step, p.cap].map(|v| u64::from(v.to_bits())));
-        out.extend(t.bands.map(f64::to_bits));
-        let lanes = &t.lanes;
+        out.extend(e.bands.map(f64::to_bits));
+        let lanes = &r.lanes;
         out.extend(
             lanes
                 .base
@@ -412,7 +426,7 @@ mod tests {
                 .map(|v| u64::from(v.to_bits())),
         );
         out.extend(lanes.right.iter().map(|&v| v as u64).chain([u64::from(lanes.flat)]));
-        out.extend([t.x0, t.x1, t.y0, t.y1].map(|v| v as u64));
+        out.extend([r.x0, r.x1, r.y0, r.y1].map(|v| v as u64));
         out
     }
 
@@ -473,7 +487,7 @@ mod tests {
                         continue;
                     }
                     LaneState::Rejected => None,
-                    LaneState::Drawn => Some(batch.triangle(l)),
+                    LaneState::Drawn => Some(ScreenTriangle::copy_of(&batch.drawn(l))),
                 };
                 batched += 1;
                 let mut expected = Vec::new();
@@ -484,8 +498,8 @@ mod tests {
                 drawn += got.len();
                 if let Some(t) = &tri {
                     // A horizontal edge, and one through pixel centres.
-                    let flat = t.edges.iter().filter(|e| e.a == 0.0);
-                    flats += usize::from(t.lanes.flat);
+                    let flat = t.exact.edges.iter().filter(|e| e.a == 0.0);
+                    flats += usize::from(t.raster.lanes.flat);
                     on_centres += flat.filter(|e| (-e.c / e.b - 0.5).fract() == 0.0).count();
                 }
             }
