@@ -519,11 +519,11 @@ impl Band<'_> {
         let y = sy * 4;
         let mut spans = lanes.edge_spans(raster, ((sy - top) * 4) as f32);
         if spans.exact != 0 {
-            exact_spans(&tri.exact(), raster, y as i32, &mut spans);
+            exact_spans(&tri.exact(), (raster.x0, raster.x1), y as i32, &mut spans);
         }
         let beyond_flat_edge = raster.lanes.flat && (y < raster.y0 as u32 || y + STEP_ROWS > raster.y1 as u32);
         if beyond_flat_edge || y + STEP_ROWS > self.height {
-            empty_outside_rows(raster, y, &mut spans);
+            empty_outside_rows((raster.x0, raster.x1), (raster.y0, raster.y1), y, &mut spans);
         }
         spans
     }
@@ -554,27 +554,30 @@ impl Band<'_> {
 }
 
 /// Empties the rows from `y` of `spans` outside the triangle's rows
-/// `y0..y1`, which lie within the screen: the padding rows below the screen
+/// `y0..y1` (its window is `x0..x1` by `y0..y1`; passed by value, so that
+/// the caller's copy of the triangle stays in registers), which lie within
+/// the screen: the padding rows below the screen
 /// (in the last tile row only), and the rows beyond a horizontal edge, which
 /// the lanes leave out ([`Intercepts::new`]). Other rows outside `y0..y1`
 /// are already empty (`raster::lanes`, "Rows outside the triangle").
 #[cold]
-fn empty_outside_rows(raster: &Raster, y: u32, spans: &mut Spans) {
+fn empty_outside_rows((x0, x1): (i32, i32), (y0, y1): (i32, i32), y: u32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
-        if !(raster.y0..raster.y1).contains(&(y as i32 + r as i32)) {
-            (spans.lo[r], spans.hi[r]) = (raster.x1, raster.x0);
+        if !(y0..y1).contains(&(y as i32 + r as i32)) {
+            (spans.lo[r], spans.hi[r]) = (x1, x0);
         }
     }
 }
 
 /// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
-/// to the eight rows from `y`, row by row (rarely any).
+/// to the eight rows from `y` of a triangle whose window's columns are
+/// `x0..x1`, row by row (rarely any).
 #[cold]
-fn exact_spans(exact: &Exact, raster: &Raster, y: i32, spans: &mut Spans) {
+fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, spans: &mut Spans) {
     for r in 0..STEP_ROWS as usize {
         for (i, (edge, &band)) in exact.edges.iter().zip(&exact.bands).enumerate() {
             if spans.exact >> i & 1 == 1 {
-                let (lo, hi) = edge.span(y + r as i32, raster.x0, raster.x1, band);
+                let (lo, hi) = edge.span(y + r as i32, x0, x1, band);
                 spans.lo[r] = spans.lo[r].max(lo);
                 spans.hi[r] = spans.hi[r].min(hi);
             }
