@@ -129,7 +129,7 @@ impl Edge {
     /// ([`BAND_SCALE`]). Infinite or NaN when the intercept cannot be trusted.
     fn band(&self, x_max: f64, y_max: f64) -> f64 {
         let intercept = self.slope.abs() * y_max + self.offset.abs() + x_max + 1.0;
-        let function = (self.a.abs() * x_max + self.b.abs() * y_max + self.c.abs()) / self.a.abs();
+        let function = (self.a.abs() * x_max + self.b.abs() * y_max + self.c.abs()) * (1.0 / self.a).abs();
         BAND_SCALE * (intercept + function)
     }
 
@@ -203,7 +203,8 @@ impl DepthPlane {
     fn new(t: &[DVec3; 3], slack: f64) -> Self {
         let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
         let n = d1.cross(d2);
-        let (zx, zy) = (-n.x / n.z, -n.y / n.z);
+        let r = 1.0 / n.z;
+        let (zx, zy) = (-n.x * r, -n.y * r);
         let z0 = t[0].z - zx * t[0].x - zy * t[0].y + (zx.abs() + zy.abs()) * slack;
         Self::from_terms(zx, zy, z0, t[0].z.max(t[1].z).max(t[2].z))
     }

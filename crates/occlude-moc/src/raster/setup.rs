@@ -249,45 +249,27 @@ pub(crate) unsafe fn setup4(
     let (x0, x1, y0, y1) = (first(lo_x, wv), end(hi_x, wv), first(lo_y, hv), end(hi_y, hv));
     rejected =
         _mm256_or_pd(rejected, _mm256_or_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(x0, x1), _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
-    // The edges (Edge::new with no margin) and their bands (Edge::band).
-    let scale = _mm256_set1_pd(BAND_SCALE);
-    let mut edges = [[zero; 6]; 3];
-    for (i, e) in edges.iter_mut().enumerate() {
+    // The edge from vertex `i` to the next (Edge::new with no margin):
+    // recomputed where needed rather than kept, which would take more
+    // registers than there are.
+    let edge = |i: usize| {
         let (p, q) = (i, (i + 1) % 3);
         let a = _mm256_sub_pd(vy[p], vy[q]);
         let b = _mm256_sub_pd(vx[q], vx[p]);
         let c = _mm256_xor_pd(_mm256_add_pd(_mm256_mul_pd(a, vx[p]), _mm256_mul_pd(b, vy[p])), sign);
-        let r = _mm256_div_pd(one, a);
-        let right = _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero);
-        batch.right[i] = _mm256_movemask_pd(right);
-        batch.on[i] = _mm256_movemask_pd(_mm256_or_pd(
-            right,
-            _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero), _mm256_cmp_pd::<_CMP_GT_OQ>(b, zero)),
-        ));
-        let slope = _mm256_mul_pd(_mm256_xor_pd(b, sign), r);
-        let offset = _mm256_mul_pd(_mm256_xor_pd(c, sign), r);
-        let intercept =
-            _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(slope), hv), abs(offset)), wv), one);
-        let function = _mm256_div_pd(
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(a), wv), _mm256_mul_pd(abs(b), hv)), abs(c)),
-            abs(a),
-        );
-        let band = _mm256_mul_pd(scale, _mm256_add_pd(intercept, function));
-        *e = [a, b, c, slope, offset, band];
-        for (out, v) in batch.edges[i].iter_mut().zip(*e) {
-            _mm256_storeu_pd(out.as_mut_ptr(), v);
-        }
-    }
+        (a, b, c)
+    };
     // A horizontal edge (ScreenTriangle::new): the window keeps only the rows
     // it covers. With no margin the edge lies on a row of the window's end
     // (a vertex's `y`), so at most that row, whose centres lie on the edge,
     // is left out, by one step of each end as the scalar loops take.
-    let flat = edges.iter().fold(zero, |f, e| _mm256_or_pd(f, _mm256_cmp_pd::<_CMP_EQ_OQ>(e[0], zero)));
+    let horizontal = [0, 1, 2].map(|i| _mm256_cmp_pd::<_CMP_EQ_OQ>(_mm256_sub_pd(vy[i], vy[(i + 1) % 3]), zero));
+    let flat = _mm256_or_pd(_mm256_or_pd(horizontal[0], horizontal[1]), horizontal[2]);
     batch.flat = _mm256_movemask_pd(flat);
     let (mut y0, mut y1) = (y0, y1);
     if batch.flat != 0 {
-        for &[a, b, c, ..] in &edges {
-            let horizontal = _mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero);
+        for (i, &horizontal) in horizontal.iter().enumerate() {
+            let (a, b, c) = edge(i);
             // Edge::covers at (0.5, py); `on` is `b > 0` where `a` is zero.
             let covers = |py: __m256d| {
                 let e = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a, half), _mm256_mul_pd(b, py)), c);
@@ -302,8 +284,9 @@ pub(crate) unsafe fn setup4(
         }
     }
     batch.rejected = _mm256_movemask_pd(_mm256_or_pd(rejected, _mm256_cmp_pd::<_CMP_GE_OQ>(y0, y1)));
-    // The lanes' intercepts (Intercepts::new), over the rows from the top of
-    // the first tile row (subtile row `top`) through the last subtile row
+    // Per edge: its coefficients, intercept and band (Edge::new, Edge::band),
+    // and its lanes' intercepts (Intercepts::new), over the rows from the top
+    // of the first tile row (subtile row `top`) through the last subtile row
     // `r1 - 1` and one more; a horizontal edge's are `t_max`, 0 and 0.
     let top = _mm256_mul_pd(_mm256_floor_pd(_mm256_mul_pd(y0, _mm256_set1_pd(0.125))), _mm256_set1_pd(2.0));
     let r1 = _mm256_add_pd(_mm256_floor_pd(_mm256_mul_pd(_mm256_sub_pd(y1, one), _mm256_set1_pd(0.25))), one);
@@ -317,7 +300,27 @@ pub(crate) unsafe fn setup4(
     // Exact: whole numbers below 2^15 and a half.
     let t_max = _mm256_add_pd(_mm256_sub_pd(x1, x0), _mm256_set1_pd(3.5));
     _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm256_cvtpd_ps(t_max));
-    for (i, &[a, _, _, slope, offset, band]) in edges.iter().enumerate() {
+    for i in 0..3 {
+        let (a, b, c) = edge(i);
+        let r = _mm256_div_pd(one, a);
+        let right = _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero);
+        batch.right[i] = _mm256_movemask_pd(right);
+        batch.on[i] = _mm256_movemask_pd(_mm256_or_pd(
+            right,
+            _mm256_and_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero), _mm256_cmp_pd::<_CMP_GT_OQ>(b, zero)),
+        ));
+        let slope = _mm256_mul_pd(_mm256_xor_pd(b, sign), r);
+        let offset = _mm256_mul_pd(_mm256_xor_pd(c, sign), r);
+        let intercept =
+            _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(slope), hv), abs(offset)), wv), one);
+        let function = _mm256_mul_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(abs(a), wv), _mm256_mul_pd(abs(b), hv)), abs(c)),
+            abs(r),
+        );
+        let band = _mm256_mul_pd(_mm256_set1_pd(BAND_SCALE), _mm256_add_pd(intercept, function));
+        for (out, v) in batch.edges[i].iter_mut().zip([a, b, c, slope, offset, band]) {
+            _mm256_storeu_pd(out.as_mut_ptr(), v);
+        }
         let u = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(slope, py), offset), half), x0);
         let allowance = _mm256_add_pd(
             _mm256_add_pd(
@@ -329,9 +332,8 @@ pub(crate) unsafe fn setup4(
         let lane_band = nudge_far(_mm256_add_pd(band, _mm256_mul_pd(_mm256_set1_pd(F32_SCALE), allowance)));
         let mut lanes = [u, slope, lane_band];
         if batch.flat != 0 {
-            let horizontal = _mm256_cmp_pd::<_CMP_EQ_OQ>(a, zero);
             for (v, flat) in lanes.iter_mut().zip([t_max, zero, zero]) {
-                *v = _mm256_blendv_pd(*v, flat, horizontal);
+                *v = _mm256_blendv_pd(*v, flat, horizontal[i]);
             }
         }
         for (out, v) in batch.lanes[i].iter_mut().zip(lanes) {
@@ -348,8 +350,9 @@ pub(crate) unsafe fn setup4(
     let nx = cross(d1[1], d2[2], d2[1], d1[2]);
     let ny = cross(d1[2], d2[0], d2[2], d1[0]);
     let nz = cross(d1[0], d2[1], d2[0], d1[1]);
-    let zx = _mm256_div_pd(_mm256_xor_pd(nx, sign), nz);
-    let zy = _mm256_div_pd(_mm256_xor_pd(ny, sign), nz);
+    let rz = _mm256_div_pd(one, nz);
+    let zx = _mm256_mul_pd(_mm256_xor_pd(nx, sign), rz);
+    let zy = _mm256_mul_pd(_mm256_xor_pd(ny, sign), rz);
     let z0 = _mm256_add_pd(
         _mm256_sub_pd(_mm256_sub_pd(vz[0], _mm256_mul_pd(zx, vx[0])), _mm256_mul_pd(zy, vy[0])),
         _mm256_mul_pd(_mm256_add_pd(abs(zx), abs(zy)), step),
@@ -376,16 +379,18 @@ pub(crate) unsafe fn setup4(
 }
 
 /// `crate::project`'s rounding (halves away from zero) on four lanes of
-/// magnitude below `2^52`.
+/// magnitude below `2^52`: the truncation `t`, plus the truncation of twice
+/// the fraction (exact: `x - t` by Sterbenz's lemma, doubling by the
+/// exponent), which is `±1` exactly where the fraction is at least a half
+/// away from zero; `+ 0` gives a zero result the scalar rounding's positive
+/// sign.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn round(x: __m256d) -> __m256d {
     let t = _mm256_round_pd::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(x);
     let fraction = _mm256_sub_pd(x, t);
-    let one = _mm256_set1_pd(1.0);
-    let up = _mm256_and_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(fraction, _mm256_set1_pd(0.5)), one);
-    let down = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(fraction, _mm256_set1_pd(-0.5)), one);
-    _mm256_sub_pd(_mm256_add_pd(t, up), down)
+    let away = _mm256_round_pd::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(_mm256_add_pd(fraction, fraction));
+    _mm256_add_pd(_mm256_add_pd(t, away), _mm256_setzero_pd())
 }
 
 #[cfg(test)]
