@@ -126,44 +126,33 @@ unsafe fn draw_tiles(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
     let depth = DepthLanes::new(&row.raster.plane, row.ty);
     let mut x = _mm256_set1_epi32((row.first * TILE_W) as i32);
-    for tx in row.first..=row.last {
+    // A tile's subtiles are half `tx % 2` of group `tx / 2` in each row:
+    // from `words(tx)` on, in `u32`s, each field (mask, working, reference)
+    // one group field (`LANES` words) after the other.
+    let words = |tx: u32| (tx / 2) as usize * 3 * LANES + 4 * (tx % 2) as usize;
+    let (upper, lower) = (upper.as_mut_ptr().cast::<u32>(), lower.as_mut_ptr().cast::<u32>());
+    for tx in row.first..row.last + 1 {
         let mut c = tile_cover(lo, hi, x);
         if tx >= row.padded_from {
             c = with_outside(c, row.screen, tx, row.ty);
         }
         let d = depth.tile(tx);
-        // The tile's subtiles: half `tx % 2` of each group, the upper one's in
-        // the low 128 bits.
-        let (g, offset) = ((tx / 2) as usize, 4 * (tx % 2) as usize);
-        // SAFETY: `g <= last / 2`, within both rows by the assertion above.
-        let (upper, lower) = (upper.get_unchecked_mut(g), lower.get_unchecked_mut(g));
+        // SAFETY: `tx / 2 <= last / 2`, a group of both rows by the
+        // assertion above; `Group` is `repr(C)`, its fields `LANES` words
+        // each. The upper row's four subtiles go in the low 128 bits.
+        let (u, l) = (upper.add(words(tx)), lower.add(words(tx)));
         let load =
-            |u: *const u32, l: *const u32| _mm256_set_m128i(_mm_loadu_si128(l.cast()), _mm_loadu_si128(u.cast()));
-        let mask = load(upper.mask.as_ptr().add(offset), lower.mask.as_ptr().add(offset));
-        let working = _mm256_castsi256_ps(load(
-            upper.working.as_ptr().add(offset).cast(),
-            lower.working.as_ptr().add(offset).cast(),
-        ));
-        let reference = _mm256_castsi256_ps(load(
-            upper.reference.as_ptr().add(offset).cast(),
-            lower.reference.as_ptr().add(offset).cast(),
-        ));
-        let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
-        let store = |u: *mut u32, l: *mut u32, v: __m256i| {
-            _mm_storeu_si128(u.cast(), _mm256_castsi256_si128(v));
-            _mm_storeu_si128(l.cast(), _mm256_extracti128_si256::<1>(v));
+            |field: usize| _mm256_set_m128i(_mm_loadu_si128(l.add(field).cast()), _mm_loadu_si128(u.add(field).cast()));
+        let store = |field: usize, v: __m256i| {
+            _mm_storeu_si128(u.add(field).cast(), _mm256_castsi256_si128(v));
+            _mm_storeu_si128(l.add(field).cast(), _mm256_extracti128_si256::<1>(v));
         };
-        store(upper.mask.as_mut_ptr().add(offset), lower.mask.as_mut_ptr().add(offset), mask);
-        store(
-            upper.working.as_mut_ptr().add(offset).cast(),
-            lower.working.as_mut_ptr().add(offset).cast(),
-            _mm256_castps_si256(working),
-        );
-        store(
-            upper.reference.as_mut_ptr().add(offset).cast(),
-            lower.reference.as_mut_ptr().add(offset).cast(),
-            _mm256_castps_si256(reference),
-        );
+        let (mask, working, reference) =
+            (load(0), _mm256_castsi256_ps(load(LANES)), _mm256_castsi256_ps(load(2 * LANES)));
+        let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
+        store(0, mask);
+        store(LANES, _mm256_castps_si256(working));
+        store(2 * LANES, _mm256_castps_si256(reference));
         x = _mm256_add_epi32(x, _mm256_set1_epi32(TILE_W as i32));
     }
 }
@@ -312,13 +301,30 @@ unsafe fn tile_cover(lo: __m256i, hi: __m256i, x: __m256i) -> __m256i {
     let zero = _mm256_setzero_si256();
     let column = |v: __m256i| _mm256_max_epi32(_mm256_sub_epi32(v, x), zero);
     let ones = _mm256_set1_epi32(-1);
-    let rows = _mm256_andnot_si256(_mm256_sllv_epi32(ones, column(hi)), _mm256_sllv_epi32(ones, column(lo)));
+    let rows = _mm256_andnot_si256(shift_left(ones, column(hi)), shift_left(ones, column(lo)));
     _mm256_shuffle_epi8(
         rows,
         _mm256_setr_epi8(
             0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15, 0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15,
         ),
     )
+}
+
+/// `v << count` per lane, 0 where `count` is 32 or more: `vpsllvd` itself,
+/// in assembly because LLVM adds a compare and a blend to the intrinsic for
+/// the counts beyond 31, for which the instruction already gives 0.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn shift_left(v: __m256i, count: __m256i) -> __m256i {
+    let out;
+    std::arch::asm!(
+        "vpsllvd {out}, {v}, {count}",
+        out = lateout(ymm_reg) out,
+        v = in(ymm_reg) v,
+        count = in(ymm_reg) count,
+        options(pure, nomem, nostack, preserves_flags),
+    );
+    out
 }
 
 /// [`Subtile::merge`](crate::buffer::Subtile::merge) on eight lanes, each
