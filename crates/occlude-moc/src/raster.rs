@@ -28,7 +28,7 @@ mod setup;
 
 pub(crate) use avx2::Avx2;
 use lanes::{Intercepts, Lanes, Portable, Spans, TileRow, LANES, STEP_ROWS, TILE_W};
-use setup::{Lane, LaneState, SETUP_LANES};
+use setup::{Batch, SETUP_LANES};
 
 /// What a [`MaskedBuffer::render_triangles`] call rasterized: the measure of
 /// its cost.
@@ -483,10 +483,21 @@ impl Band<'_> {
     /// tile in their reach, the masks and depth bounds of its eight subtiles,
     /// merged. With AVX2 the whole triangle is one call, so that the steps
     /// inline into one loop.
-    fn draw<T: SetUp>(&mut self, tri: &T) {
+    fn draw(&mut self, tri: &ScreenTriangle) {
         match self.avx2 {
             Some(avx2) => avx2.draw(self, tri),
             None => self.draw_with(tri, Portable),
+        }
+    }
+
+    /// [`Self::draw`] of the lanes of `batch` whose bits `lanes` has, in
+    /// lane order, read where the set-up stored them.
+    fn draw_lanes(&mut self, batch: &Batch, lanes: u32) {
+        for l in (0..SETUP_LANES).filter(|l| lanes >> l & 1 == 1) {
+            match self.avx2 {
+                Some(avx2) => avx2.draw_lane(self, batch, l),
+                None => self.draw_with(&batch.drawn(l), Portable),
+            }
         }
     }
 
@@ -591,8 +602,9 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, spans: &mut Spans) {
 trait Sink {
     /// A triangle of the scalar set-up.
     fn triangle(&mut self, tri: &ScreenTriangle);
-    /// A triangle of the batched set-up.
-    fn lane(&mut self, lane: &Lane<'_>);
+    /// The triangles of the batched set-up in the lanes of `batch` whose
+    /// bits `lanes` has, in lane order.
+    fn lanes(&mut self, batch: &Batch, lanes: u32);
 }
 
 impl Sink for Band<'_> {
@@ -600,8 +612,8 @@ impl Sink for Band<'_> {
         self.draw(tri);
     }
 
-    fn lane(&mut self, lane: &Lane<'_>) {
-        self.draw(lane);
+    fn lanes(&mut self, batch: &Batch, lanes: u32) {
+        self.draw_lanes(batch, lanes);
     }
 }
 
@@ -610,8 +622,9 @@ impl Sink for Vec<ScreenTriangle> {
         self.push(*tri);
     }
 
-    fn lane(&mut self, lane: &Lane<'_>) {
-        self.push(ScreenTriangle::copy_of(lane));
+    fn lanes(&mut self, batch: &Batch, lanes: u32) {
+        let drawn = (0..SETUP_LANES).filter(|l| lanes >> l & 1 == 1);
+        self.extend(drawn.map(|l| ScreenTriangle::copy_of(&batch.drawn(l))));
     }
 }
 
@@ -717,27 +730,27 @@ impl MaskedBuffer {
             let mut i = range.start;
             if let Some(avx2) = avx2 {
                 while i + SETUP_LANES <= range.end {
-                    let batch: [_; SETUP_LANES] = std::array::from_fn(|l| clip(i + l));
-                    if let [Some(a), Some(b), Some(c), Some(d)] = &batch {
-                        let tris = [*a, *b, *c, *d];
-                        let set_up = avx2.setup4(&tris, cull, width, height, bits);
-                        for (l, c) in tris.iter().enumerate() {
-                            match set_up.lane(l) {
-                                LaneState::Drawn => {
-                                    let lane = set_up.drawn(l);
-                                    work.tiles += lane.raster().tiles();
-                                    out.lane(&lane);
-                                }
-                                LaneState::Rejected => {}
-                                LaneState::Scalar => {
-                                    one(Some(*c), work, out);
-                                    continue;
-                                }
-                            }
-                            work.triangles += 1;
-                        }
+                    let Some(tris) = (|| Some([clip(i)?, clip(i + 1)?, clip(i + 2)?, clip(i + 3)?]))() else {
+                        (i..i + SETUP_LANES).for_each(|i| one(clip(i), work, out));
+                        i += SETUP_LANES;
+                        continue;
+                    };
+                    let set_up = avx2.setup4(&tris, cull, width, height, bits);
+                    let (drawn, scalar) = (set_up.drawn_lanes(), set_up.scalar_lanes());
+                    work.triangles += u64::from(SETUP_LANES as u32 - scalar.count_ones());
+                    work.tiles += set_up.tiles(drawn);
+                    if scalar == 0 {
+                        out.lanes(&set_up, drawn);
                     } else {
-                        batch.into_iter().for_each(|c| one(c, work, out));
+                        // In order: the scalar set-up's triangles between
+                        // the batch's.
+                        for (l, c) in tris.iter().enumerate() {
+                            if scalar >> l & 1 == 1 {
+                                one(Some(*c), work, out);
+                            } else if drawn >> l & 1 == 1 {
+                                out.lanes(&set_up, 1 << l);
+                            }
+                        }
                     }
                     i += SETUP_LANES;
                 }

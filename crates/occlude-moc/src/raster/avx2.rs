@@ -13,7 +13,7 @@ use std::arch::x86_64::*;
 
 use super::lanes::{add_outside, outside, Lanes, Spans, TileRow, LANES, TILE_W, T_MIN};
 use super::setup::{Batch, SETUP_LANES};
-use super::{Band, CullMode, DepthPlane, Raster, SetUp};
+use super::{Band, CullMode, DepthPlane, Raster, ScreenTriangle};
 use crate::buffer::{Group, MergeMode};
 use glam::Vec4;
 
@@ -38,9 +38,15 @@ impl Avx2 {
 
     /// [`Band::draw`](super::Band) of one triangle in one AVX2 function, so
     /// that this module's steps ([`Lanes`]) inline into its loop.
-    pub(crate) fn draw<T: SetUp>(self, band: &mut Band<'_>, tri: &T) {
+    pub(crate) fn draw(self, band: &mut Band<'_>, tri: &ScreenTriangle) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
         unsafe { draw(self, band, tri) }
+    }
+
+    /// [`Band::draw`](super::Band) of lane `l` of `batch`, read in place.
+    pub(crate) fn draw_lane(self, band: &mut Band<'_>, batch: &Batch, l: usize) {
+        // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
+        unsafe { draw_lane(self, band, batch, l) }
     }
 
     /// Four triangles set up at once ([`setup::setup4`](super::setup::setup4)).
@@ -92,8 +98,13 @@ impl Lanes for Avx2 {
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn draw<T: SetUp>(avx2: Avx2, band: &mut Band<'_>, tri: &T) {
+unsafe fn draw(avx2: Avx2, band: &mut Band<'_>, tri: &ScreenTriangle) {
     band.draw_with(tri, avx2);
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn draw_lane(avx2: Avx2, band: &mut Band<'_>, batch: &Batch, l: usize) {
+    band.draw_with(&batch.drawn(l), avx2);
 }
 
 /// [`Spans::reach`] in lanes: the smallest `lo` and the largest `hi` of the

@@ -53,34 +53,34 @@ pub(crate) struct Batch {
     /// Bit `l` set: lane `l`'s triangle has a horizontal edge
     /// ([`Intercepts`]' `flat`).
     flat: i32,
-}
-
-/// What became of a lane's triangle in [`setup4`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum LaneState {
-    /// Set up: [`Batch::drawn`] is the triangle to draw.
-    Drawn,
-    /// Not drawn: culled, zero area, or no pixel centre on screen, as
-    /// [`ScreenTriangle::new`](super::ScreenTriangle::new) rejects.
-    Rejected,
-    /// Outside the common case: for the scalar set-up.
-    Scalar,
+    /// Per lane, the 32x8-pixel tiles its window overlaps
+    /// ([`Raster::tiles`](super::Raster)), where it is drawn.
+    tiles: [i32; SETUP_LANES],
 }
 
 impl Batch {
-    /// What became of lane `l`'s triangle.
+    /// Bit `l` set: lane `l`'s triangle is drawn (set up here, and not
+    /// rejected).
     #[inline]
-    pub(crate) fn lane(&self, l: usize) -> LaneState {
-        if self.common >> l & 1 == 0 {
-            LaneState::Scalar
-        } else if self.rejected >> l & 1 == 1 {
-            LaneState::Rejected
-        } else {
-            LaneState::Drawn
-        }
+    pub(crate) fn drawn_lanes(&self) -> u32 {
+        (self.common & !self.rejected) as u32
     }
 
-    /// Lane `l`'s triangle, where it is [`LaneState::Drawn`].
+    /// Bit `l` set: lane `l`'s triangle is outside the common case, for the
+    /// scalar set-up.
+    #[inline]
+    pub(crate) fn scalar_lanes(&self) -> u32 {
+        !self.common as u32 & ((1 << SETUP_LANES) - 1)
+    }
+
+    /// The tiles the windows of the lanes whose bits `lanes` has overlap,
+    /// where those lanes are drawn.
+    #[inline]
+    pub(crate) fn tiles(&self, lanes: u32) -> u64 {
+        (0..SETUP_LANES).filter(|l| lanes >> l & 1 == 1).map(|l| self.tiles[l] as u64).sum()
+    }
+
+    /// Lane `l`'s triangle, where it is drawn ([`Self::drawn_lanes`]).
     #[inline]
     pub(crate) fn drawn(&self, l: usize) -> Lane<'_> {
         Lane { batch: self, l }
@@ -208,6 +208,7 @@ pub(crate) unsafe fn setup4(
         lanes: [[[0.0; SETUP_LANES]; 3]; 3],
         t_max: [0.0; SETUP_LANES],
         flat: 0,
+        tiles: [0; SETUP_LANES],
     };
     if common == 0 {
         return batch;
@@ -300,7 +301,7 @@ pub(crate) unsafe fn setup4(
     // Exact: whole numbers below 2^15 and a half.
     let t_max = _mm256_add_pd(_mm256_sub_pd(x1, x0), _mm256_set1_pd(3.5));
     _mm_storeu_ps(batch.t_max.as_mut_ptr(), _mm256_cvtpd_ps(t_max));
-    for i in 0..3 {
+    for (i, &horizontal) in horizontal.iter().enumerate() {
         let (a, b, c) = edge(i);
         let r = _mm256_div_pd(one, a);
         let right = _mm256_cmp_pd::<_CMP_GT_OQ>(a, zero);
@@ -333,7 +334,7 @@ pub(crate) unsafe fn setup4(
         let mut lanes = [u, slope, lane_band];
         if batch.flat != 0 {
             for (v, flat) in lanes.iter_mut().zip([t_max, zero, zero]) {
-                *v = _mm256_blendv_pd(*v, flat, horizontal[i]);
+                *v = _mm256_blendv_pd(*v, flat, horizontal);
             }
         }
         for (out, v) in batch.lanes[i].iter_mut().zip(lanes) {
@@ -362,6 +363,14 @@ pub(crate) unsafe fn setup4(
     for (out, v) in batch.window.iter_mut().zip([x0, x1, y0, y1]) {
         _mm_storeu_si128(out.as_mut_ptr().cast(), _mm256_cvttpd_epi32(v));
     }
+    // Raster::tiles: the tile columns and rows from the first pixel's to the
+    // last one's (divisions by powers of two, exact).
+    let span = |lo: __m256d, end: __m256d, size: f64| {
+        let of = |v: __m256d| _mm256_floor_pd(_mm256_mul_pd(v, _mm256_set1_pd(1.0 / size)));
+        _mm256_add_pd(_mm256_sub_pd(of(_mm256_sub_pd(end, one)), of(lo)), one)
+    };
+    let tiles = _mm256_mul_pd(span(x0, x1, 32.0), span(y0, y1, 8.0));
+    _mm_storeu_si128(batch.tiles.as_mut_ptr().cast(), _mm256_cvttpd_epi32(tiles));
     for (out, v) in batch.plane.iter_mut().zip([zx, zy, z0]) {
         _mm256_storeu_pd(out.as_mut_ptr(), v);
     }
@@ -486,14 +495,13 @@ mod tests {
             });
             let batch = avx2.setup4(&clip, cull, width, height, bits);
             for (l, c) in clip.iter().enumerate() {
-                let tri = match batch.lane(l) {
-                    LaneState::Scalar => {
-                        scalar += 1;
-                        continue;
-                    }
-                    LaneState::Rejected => None,
-                    LaneState::Drawn => Some(ScreenTriangle::copy_of(&batch.drawn(l))),
-                };
+                if batch.scalar_lanes() >> l & 1 == 1 {
+                    scalar += 1;
+                    continue;
+                }
+                let tri = (batch.drawn_lanes() >> l & 1 == 1).then(|| ScreenTriangle::copy_of(&batch.drawn(l)));
+                let tiles = tri.as_ref().map_or(0, |t| t.raster.tiles());
+                assert_eq!(batch.tiles(1 << l & batch.drawn_lanes()), tiles, "round {round} lane {l}: {c:?}");
                 batched += 1;
                 let mut expected = Vec::new();
                 let count = screen_triangles(*c, cull, width, height, bits, &mut |t| expected.push(fields(t)));
