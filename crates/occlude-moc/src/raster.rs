@@ -509,16 +509,20 @@ impl Band<'_> {
         let (r0, r1) = raster.subtile_rows();
         let top = r0 & !1;
         let (first, end) = (top.max(self.first), r1.min(self.end));
-        let mut next = self.tile_row_spans(tri, &raster, lanes, top, first);
+        if first >= end {
+            return;
+        }
+        let mut spans = self.tile_row_spans(tri, &raster, lanes, top, first);
         let mut sy = first;
-        while sy < end {
-            let spans = next;
-            if sy + 2 < end {
-                next = self.tile_row_spans(tri, &raster, lanes, top, sy + 2);
-            }
+        // One test per tile row says whether another follows: the last row
+        // costs one mispredicted branch, not one here and one in a loop test.
+        while sy + 2 < end {
+            let next = self.tile_row_spans(tri, &raster, lanes, top, sy + 2);
             self.draw_tile_row(&raster, lanes, sy, &spans);
+            spans = next;
             sy += 2;
         }
+        self.draw_tile_row(&raster, lanes, sy, &spans);
     }
 
     /// The spans of the tile row from subtile row `sy` of a triangle whose
@@ -728,6 +732,7 @@ impl MaskedBuffer {
         // are in the common case of the batched set-up (`setup`).
         let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn Sink| {
             let mut i = range.start;
+            let mut set_up = Batch::EMPTY;
             if let Some(avx2) = avx2 {
                 while i + SETUP_LANES <= range.end {
                     let Some(tris) = (|| Some([clip(i)?, clip(i + 1)?, clip(i + 2)?, clip(i + 3)?]))() else {
@@ -735,7 +740,7 @@ impl MaskedBuffer {
                         i += SETUP_LANES;
                         continue;
                     };
-                    let set_up = avx2.setup4(&tris, cull, width, height, bits);
+                    avx2.setup4(&tris, cull, width, height, bits, &mut set_up);
                     let (drawn, scalar) = (set_up.drawn_lanes(), set_up.scalar_lanes());
                     work.triangles += u64::from(SETUP_LANES as u32 - scalar.count_ones());
                     work.tiles += set_up.tiles(drawn);

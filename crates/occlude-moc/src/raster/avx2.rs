@@ -57,9 +57,10 @@ impl Avx2 {
         width: u32,
         height: u32,
         subpixel_bits: u32,
-    ) -> Batch {
+        batch: &mut Batch,
+    ) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { super::setup::setup4(clip, cull, width, height, subpixel_bits) }
+        unsafe { super::setup::setup4(clip, cull, width, height, subpixel_bits, batch) }
     }
 
     /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer

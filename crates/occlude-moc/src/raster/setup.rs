@@ -59,6 +59,22 @@ pub(crate) struct Batch {
 }
 
 impl Batch {
+    /// A batch of no triangles, for [`setup4`] to fill.
+    pub(crate) const EMPTY: Batch = Batch {
+        common: 0,
+        rejected: 0,
+        edges: [[[0.0; SETUP_LANES]; 6]; 3],
+        on: [0; 3],
+        right: [0; 3],
+        window: [[0; SETUP_LANES]; 4],
+        plane: [[0.0; SETUP_LANES]; 3],
+        plane_f32: [[0.0; SETUP_LANES]; 2],
+        lanes: [[[0.0; SETUP_LANES]; 3]; 3],
+        t_max: [0.0; SETUP_LANES],
+        flat: 0,
+        tiles: [0; SETUP_LANES],
+    };
+
     /// Bit `l` set: lane `l`'s triangle is drawn (set up here, and not
     /// rejected).
     #[inline]
@@ -130,7 +146,10 @@ impl SetUp for Lane<'_> {
 /// The four clip-space triangles `clip` set up on a `width` x `height` screen
 /// with vertices snapped to `1 / 2^subpixel_bits` pixel, as the scalar
 /// [`screen_triangles`](crate::project::screen_triangles) sets up a triangle
-/// that needs no clipping.
+/// that needs no clipping, into `batch` (written in place, not returned: a
+/// batch is large, and a returned one may be copied). Every field the
+/// lanes set up here are read by is written; the others keep the last
+/// call's values, which nothing reads.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -141,7 +160,8 @@ pub(crate) unsafe fn setup4(
     width: u32,
     height: u32,
     subpixel_bits: u32,
-) -> Batch {
+    batch: &mut Batch,
+) {
     let (w, h) = (f64::from(width), f64::from(height));
     let (wv, hv) = (_mm256_set1_pd(w), _mm256_set1_pd(h));
     let grid = _mm256_set1_pd(f64::from(1u32 << subpixel_bits));
@@ -196,22 +216,9 @@ pub(crate) unsafe fn setup4(
         common = _mm256_and_pd(common, _mm256_cmp_pd::<_CMP_LT_OQ>(vz[k], _mm256_set1_pd(f64::INFINITY)));
     }
     let common = _mm256_movemask_pd(common);
-    let mut batch = Batch {
-        common,
-        rejected: 0,
-        edges: [[[0.0; SETUP_LANES]; 6]; 3],
-        on: [0; 3],
-        right: [0; 3],
-        window: [[0; SETUP_LANES]; 4],
-        plane: [[0.0; SETUP_LANES]; 3],
-        plane_f32: [[0.0; SETUP_LANES]; 2],
-        lanes: [[[0.0; SETUP_LANES]; 3]; 3],
-        t_max: [0.0; SETUP_LANES],
-        flat: 0,
-        tiles: [0; SETUP_LANES],
-    };
+    batch.common = common;
     if common == 0 {
-        return batch;
+        return;
     }
     // ScreenTriangle::new: signed area, rejection, winding.
     let area = _mm256_sub_pd(
@@ -384,7 +391,6 @@ pub(crate) unsafe fn setup4(
     let step = _mm_castsi128_ps(_mm_and_si128(bits, _mm_set1_epi32(!7)));
     _mm_storeu_ps(batch.plane_f32[0].as_mut_ptr(), step);
     _mm_storeu_ps(batch.plane_f32[1].as_mut_ptr(), _mm256_cvtpd_ps(nudge_far(zmax)));
-    batch
 }
 
 /// `crate::project`'s rounding (halves away from zero) on four lanes of
@@ -471,6 +477,9 @@ mod tests {
         let mut rng = Lcg(17);
         let screens = [(64, 48), (83, 45), (1920, 1080), (7, 5)];
         let (mut batched, mut drawn, mut scalar, mut flats, mut on_centres) = (0, 0, 0, 0, 0);
+        // One batch for all rounds: what a call leaves from the last one must
+        // not show.
+        let mut batch = Batch::EMPTY;
         for round in 0..20_000usize {
             let (width, height) = screens[round % screens.len()];
             let (cull, bits) = ([CullMode::Back, CullMode::None][round % 2], [8, 8, 4, 0][round / 2 % 4]);
@@ -493,7 +502,7 @@ mod tests {
                     }
                 })
             });
-            let batch = avx2.setup4(&clip, cull, width, height, bits);
+            avx2.setup4(&clip, cull, width, height, bits, &mut batch);
             for (l, c) in clip.iter().enumerate() {
                 if batch.scalar_lanes() >> l & 1 == 1 {
                     scalar += 1;
