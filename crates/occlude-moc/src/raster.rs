@@ -224,7 +224,9 @@ impl DepthPlane {
     /// that is where the rounded plane is largest too).
     #[inline]
     pub(crate) fn row_term(&self, by: f64) -> f64 {
-        let y = if self.zy > 0.0 { by + 4.0 } else { by };
+        // A select of constants, not of sums, which compiles to a branch
+        // that the plane's random orientation mispredicts.
+        let y = by + if self.zy > 0.0 { 4.0 } else { 0.0 };
         self.zy * y + self.z0
     }
 
@@ -535,11 +537,11 @@ impl Band<'_> {
         let y = sy * 4;
         let mut spans = lanes.edge_spans(raster, ((sy - top) * 4) as f32);
         if spans.exact != 0 {
-            exact_spans(&tri.exact(), (raster.x0, raster.x1), y as i32, &mut spans);
+            spans = exact_spans(&tri.exact(), (raster.x0, raster.x1), y as i32, spans);
         }
         let beyond_flat_edge = raster.lanes.flat && (y < raster.y0 as u32 || y + STEP_ROWS > raster.y1 as u32);
         if beyond_flat_edge || y + STEP_ROWS > self.height {
-            empty_outside_rows((raster.x0, raster.x1), (raster.y0, raster.y1), y, &mut spans);
+            spans = empty_outside_rows((raster.x0, raster.x1), (raster.y0, raster.y1), y, spans);
         }
         spans
     }
@@ -569,27 +571,28 @@ impl Band<'_> {
     }
 }
 
-/// Empties the rows from `y` of `spans` outside the triangle's rows
-/// `y0..y1` (its window is `x0..x1` by `y0..y1`; passed by value, so that
-/// the caller's copy of the triangle stays in registers), which lie within
+/// `spans` with its rows from `y` outside the triangle's rows `y0..y1`
+/// emptied (its window is `x0..x1` by `y0..y1`; the window and the spans
+/// passed by value, so that the caller's stay out of memory), which lie within
 /// the screen: the padding rows below the screen
 /// (in the last tile row only), and the rows beyond a horizontal edge, which
 /// the lanes leave out ([`Intercepts::new`]). Other rows outside `y0..y1`
 /// are already empty (`raster::lanes`, "Rows outside the triangle").
 #[cold]
-fn empty_outside_rows((x0, x1): (i32, i32), (y0, y1): (i32, i32), y: u32, spans: &mut Spans) {
+fn empty_outside_rows((x0, x1): (i32, i32), (y0, y1): (i32, i32), y: u32, mut spans: Spans) -> Spans {
     for r in 0..STEP_ROWS as usize {
         if !(y0..y1).contains(&(y as i32 + r as i32)) {
             (spans.lo[r], spans.hi[r]) = (x1, x0);
         }
     }
+    spans
 }
 
-/// Applies the edges `spans` leaves to the exact scalar rule ([`Spans::exact`])
-/// to the eight rows from `y` of a triangle whose window's columns are
-/// `x0..x1`, row by row (rarely any).
+/// `spans` with the edges it leaves to the exact scalar rule
+/// ([`Spans::exact`]) applied to its eight rows from `y`, row by row, of a
+/// triangle whose window's columns are `x0..x1` (rarely any).
 #[cold]
-fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, spans: &mut Spans) {
+fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, mut spans: Spans) -> Spans {
     for r in 0..STEP_ROWS as usize {
         for (i, (edge, &band)) in exact.edges.iter().zip(&exact.bands).enumerate() {
             if spans.exact >> i & 1 == 1 {
@@ -599,6 +602,7 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, spans: &mut Spans) {
             }
         }
     }
+    spans
 }
 
 /// Where [`MaskedBuffer::render`]'s set-up hands its triangles: a band

@@ -183,7 +183,7 @@ unsafe fn with_outside(cover: __m256i, screen: (u32, u32), tx: u32, ty: u32) -> 
 /// [`lanes::edge_spans`](super::lanes::edge_spans) in AVX2: an edge's
 /// eight rows in one `f32` register, the three edges side by side
 /// (unrolled), one test of all 24 rows against their bands, and only where
-/// one fails (rare) the per-edge [`Spans::exact`] bits.
+/// one fails (rare) the portable version ([`undecided_spans`]).
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
@@ -212,13 +212,8 @@ unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
     };
     let edges = [intercept(0), intercept(1), intercept(2)];
     let all_safe = _mm256_and_ps(_mm256_and_ps(edges[0].1, edges[1].1), edges[2].1);
-    let mut exact = 0u8;
     if _mm256_movemask_ps(all_safe) != 0xFF {
-        for (i, (_, safe)) in edges.iter().enumerate() {
-            if _mm256_movemask_ps(*safe) != 0xFF {
-                exact |= 1 << i;
-            }
-        }
+        return undecided_spans(tri, row);
     }
     // Each edge bounds `lo` (inside to its right) or `hi`, chosen by a blend
     // rather than a branch: which it is changes from triangle to triangle, so
@@ -226,18 +221,24 @@ unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
     let (mut lo, mut hi) = (_mm256_setzero_si256(), _mm256_set1_epi32(tri.x1 - tri.x0));
     let (none_lo, none_hi) = (_mm256_set1_epi32(i32::MIN), _mm256_set1_epi32(i32::MAX));
     for (i, (k, _)) in edges.iter().enumerate() {
-        if exact >> i & 1 == 0 {
-            let bound = _mm256_cvttps_epi32(*k);
-            let right = _mm256_set1_epi32(intercepts.right[i]);
-            lo = _mm256_max_epi32(lo, _mm256_blendv_epi8(none_lo, bound, right));
-            hi = _mm256_min_epi32(hi, _mm256_blendv_epi8(bound, none_hi, right));
-        }
+        let bound = _mm256_cvttps_epi32(*k);
+        let right = _mm256_set1_epi32(intercepts.right[i]);
+        lo = _mm256_max_epi32(lo, _mm256_blendv_epi8(none_lo, bound, right));
+        hi = _mm256_min_epi32(hi, _mm256_blendv_epi8(bound, none_hi, right));
     }
     let x0 = _mm256_set1_epi32(tri.x0);
-    let mut spans = Spans { lo: [0; 8], hi: [0; 8], exact };
+    let mut spans = Spans { lo: [0; 8], hi: [0; 8], exact: 0 };
     _mm256_store_si256(spans.lo.as_mut_ptr().cast(), _mm256_add_epi32(lo, x0));
     _mm256_store_si256(spans.hi.as_mut_ptr().cast(), _mm256_add_epi32(hi, x0));
     spans
+}
+
+/// [`edge_spans`] of a tile row where an intercept lies within its band of
+/// a pixel boundary (rare): the portable version's, which is the same but
+/// for the edges it leaves to the exact rule ([`Spans::exact`]).
+#[cold]
+fn undecided_spans(tri: &Raster, row: f32) -> Spans {
+    super::lanes::edge_spans(tri, row)
 }
 
 #[cfg(test)]
