@@ -554,7 +554,7 @@ impl Band<'_> {
         let groups_per_row = self.cols as usize / LANES;
         let row = (sy - self.first) as usize * groups_per_row;
         // The band holds whole tile rows, so both subtile rows are its.
-        let (upper_row, lower_row) = self.groups[row..].split_at_mut(groups_per_row);
+        let (upper_row, lower_row) = self.groups[row..row + 2 * groups_per_row].split_at_mut(groups_per_row);
         // Spans lie within the window, so `0 <= left < right`: the tiles by
         // shifts of unsigned values.
         let padded_from = if sy * 4 + STEP_ROWS > self.height { 0 } else { self.width / TILE_W };

@@ -274,7 +274,7 @@ impl DepthLanes {
         DepthLanes {
             zx: plane.zx,
             corner: plane.corner_x(0.0) as u32,
-            rows: _mm_set_pd(plane.row_term(f64::from(ty * 8 + 4)), plane.row_term(f64::from(ty * 8))),
+            rows: row_terms(plane, ty),
             steps: _mm256_mul_ps(
                 _mm256_set1_ps(plane.lane_step()),
                 _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0),
@@ -300,6 +300,17 @@ impl DepthLanes {
         let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
         _mm256_min_ps(_mm256_add_ps(sum, nudge), self.cap)
     }
+}
+
+/// [`DepthPlane::row_term`](super::DepthPlane) of the two subtile rows of
+/// tile row `ty` (the upper one in the low lane), in the lanes of one
+/// `f64 x 2`: the same sum, product and sum.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn row_terms(plane: &DepthPlane, ty: u32) -> __m128d {
+    let by = _mm_cvtepi32_pd(_mm_setr_epi32((ty * 8) as i32, (ty * 8 + 4) as i32, 0, 0));
+    let y = _mm_add_pd(by, _mm_set1_pd(if plane.zy > 0.0 { 4.0 } else { 0.0 }));
+    _mm_add_pd(_mm_mul_pd(_mm_set1_pd(plane.zy), y), _mm_set1_pd(plane.z0))
 }
 
 /// The coverage masks of the eight subtiles of the tile whose first column
