@@ -373,6 +373,7 @@ pub(crate) struct ScreenTriangle {
     pub(crate) exact: Exact,
 }
 
+#[cfg(test)]
 impl ScreenTriangle {
     /// `tri`'s fields, copied.
     pub(crate) fn copy_of(tri: &impl SetUp) -> Self {
@@ -625,35 +626,71 @@ impl Sink for Band<'_> {
     }
 }
 
-impl Sink for Vec<ScreenTriangle> {
-    fn triangle(&mut self, tri: &ScreenTriangle) {
-        self.push(*tri);
+/// A chunk of the parallel set-up's triangles, in order, as the set-up
+/// made them: batches of four, whose drawn lanes are read in place, and the
+/// scalar set-up's single triangles.
+#[derive(Default)]
+struct Chunk {
+    batches: Vec<Batch>,
+    singles: Vec<ScreenTriangle>,
+    /// The triangles in order: `4 batch + lane`, or `SINGLE | index`.
+    items: Vec<u32>,
+}
+
+/// The bit of [`Chunk::items`] that marks a single triangle.
+const SINGLE: u32 = 1 << 31;
+
+impl Chunk {
+    /// The first and one past the last subtile row item `item` touches.
+    fn subtile_rows(&self, item: u32) -> (u32, u32) {
+        if item & SINGLE != 0 {
+            self.singles[(item & !SINGLE) as usize].raster.subtile_rows()
+        } else {
+            self.batches[item as usize / SETUP_LANES].drawn(item as usize % SETUP_LANES).raster().subtile_rows()
+        }
     }
 
-    fn lanes(&mut self, batch: &Batch, lanes: u32) {
-        let drawn = (0..SETUP_LANES).filter(|l| lanes >> l & 1 == 1);
-        self.extend(drawn.map(|l| ScreenTriangle::copy_of(&batch.drawn(l))));
+    /// Draws item `item` in `band`.
+    fn draw(&self, item: u32, band: &mut Band<'_>) {
+        if item & SINGLE != 0 {
+            band.draw(&self.singles[(item & !SINGLE) as usize]);
+        } else {
+            band.draw_lanes(&self.batches[item as usize / SETUP_LANES], 1 << (item as usize % SETUP_LANES));
+        }
     }
 }
 
-/// A chunk of set-up triangles and, per band, the indices of those touching
+impl Sink for Chunk {
+    fn triangle(&mut self, tri: &ScreenTriangle) {
+        self.items.push(SINGLE | self.singles.len() as u32);
+        self.singles.push(*tri);
+    }
+
+    fn lanes(&mut self, batch: &Batch, lanes: u32) {
+        let b = (self.batches.len() * SETUP_LANES) as u32;
+        self.batches.push(batch.clone());
+        self.items.extend((0..SETUP_LANES as u32).filter(|l| lanes >> l & 1 == 1).map(|l| b + l));
+    }
+}
+
+/// A chunk of set-up triangles and, per band, the items of those touching
 /// it, in order (a counting sort): a band reads only its own triangles.
 struct Binned {
-    tris: Vec<ScreenTriangle>,
-    /// Band `b`'s indices are `order[starts[b]..starts[b + 1]]`.
+    chunk: Chunk,
+    /// Band `b`'s items are `order[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
     order: Vec<u32>,
 }
 
 impl Binned {
-    fn new(tris: Vec<ScreenTriangle>, bands: usize) -> Self {
-        let band_range = |t: &ScreenTriangle| {
-            let (r0, r1) = t.raster.subtile_rows();
+    fn new(chunk: Chunk, bands: usize) -> Self {
+        let band_range = |item: u32| {
+            let (r0, r1) = chunk.subtile_rows(item);
             (r0 as usize / BAND_ROWS)..((r1 as usize - 1) / BAND_ROWS + 1).min(bands)
         };
         let mut starts = vec![0u32; bands + 1];
-        for t in &tris {
-            for b in band_range(t) {
+        for &item in &chunk.items {
+            for b in band_range(item) {
                 starts[b + 1] += 1;
             }
         }
@@ -662,16 +699,16 @@ impl Binned {
         }
         let mut next = starts.clone();
         let mut order = vec![0u32; starts[bands] as usize];
-        for (i, t) in tris.iter().enumerate() {
-            for b in band_range(t) {
-                order[next[b] as usize] = i as u32;
+        for &item in &chunk.items {
+            for b in band_range(item) {
+                order[next[b] as usize] = item;
                 next[b] += 1;
             }
         }
-        Binned { tris, starts, order }
+        Binned { chunk, starts, order }
     }
 
-    /// The indices of the triangles touching band `b`, in order.
+    /// The items of the triangles touching band `b`, in order.
     fn in_band(&self, b: usize) -> &[u32] {
         &self.order[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
@@ -775,9 +812,9 @@ impl MaskedBuffer {
         let chunks: Vec<(Binned, RenderWork)> = (0..count.div_ceil(SETUP_CHUNK))
             .into_par_iter()
             .map(|c| {
-                let (mut tris, mut work) = (Vec::with_capacity(SETUP_CHUNK), RenderWork::default());
-                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut tris);
-                (Binned::new(tris, bands), work)
+                let (mut chunk, mut work) = (Chunk::default(), RenderWork::default());
+                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut chunk);
+                (Binned::new(chunk, bands), work)
             })
             .collect();
         chunks.iter().for_each(|(_, w)| work += *w);
@@ -787,8 +824,8 @@ impl MaskedBuffer {
             let end = first + (groups.len() * LANES) as u32 / cols;
             let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
             for (chunk, _) in &chunks {
-                for &i in chunk.in_band(b) {
-                    band.draw(&chunk.tris[i as usize]);
+                for &item in chunk.in_band(b) {
+                    chunk.chunk.draw(item, &mut band);
                 }
             }
         });
