@@ -213,7 +213,7 @@ unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
     let edges = [intercept(0), intercept(1), intercept(2)];
     let all_safe = _mm256_and_ps(_mm256_and_ps(edges[0].1, edges[1].1), edges[2].1);
     if _mm256_movemask_ps(all_safe) != 0xFF {
-        return undecided_spans(tri, row);
+        return undecided_spans(*tri, row);
     }
     // Each edge bounds `lo` (inside to its right) or `hi`, chosen by a blend
     // rather than a branch: which it is changes from triangle to triangle, so
@@ -235,10 +235,11 @@ unsafe fn edge_spans(tri: &Raster, row: f32) -> Spans {
 
 /// [`edge_spans`] of a tile row where an intercept lies within its band of
 /// a pixel boundary (rare): the portable version's, which is the same but
-/// for the edges it leaves to the exact rule ([`Spans::exact`]).
+/// for the edges it leaves to the exact rule ([`Spans::exact`]). The
+/// triangle by value, so that the caller's stays out of memory.
 #[cold]
-fn undecided_spans(tri: &Raster, row: f32) -> Spans {
-    super::lanes::edge_spans(tri, row)
+fn undecided_spans(tri: Raster, row: f32) -> Spans {
+    super::lanes::edge_spans(&tri, row)
 }
 
 #[cfg(test)]
