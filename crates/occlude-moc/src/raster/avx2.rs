@@ -132,6 +132,19 @@ unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
 /// The CPU must support AVX2.
 #[inline(always)]
 unsafe fn draw_tiles(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+    // One loop per merge rule, so that no tile tests it.
+    match mode {
+        MergeMode::LayerMerge => tile_loop(upper, lower, row, MergeMode::LayerMerge),
+        MergeMode::QuickMask => tile_loop(upper, lower, row, MergeMode::QuickMask),
+    }
+}
+
+/// [`draw_tiles`]' loop, for one merge rule.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+unsafe fn tile_loop(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
     // Once for the row, so that the loop indexes unchecked.
     assert!(((row.last / 2) as usize) < upper.len().min(lower.len()), "tiles beyond the band's groups");
     let spans = row.spans;
