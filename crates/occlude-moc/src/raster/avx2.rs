@@ -125,8 +125,8 @@ unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
 
 /// [`Lanes::draw_tiles`] in AVX2. Without a `target_feature` of its own so
 /// that it can be inlined always (which Rust refuses for a `target_feature`
-/// function): its intrinsics compile to AVX2 inside [`draw`], the one
-/// function it is inlined into, which has the feature (per triangle kind).
+/// function): its intrinsics compile to AVX2 inside [`draw`] and
+/// [`draw_lane`], the functions it is inlined into, which have the feature.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -282,6 +282,7 @@ struct DepthLanes {
 }
 
 impl DepthLanes {
+    /// The bounds' terms for the tiles of tile row `ty`.
     #[inline]
     #[target_feature(enable = "avx2")]
     unsafe fn new(plane: &DepthPlane, ty: u32) -> Self {

@@ -32,7 +32,8 @@ pub(crate) struct Batch {
     /// set-up).
     common: i32,
     /// Bit `l` set: lane `l`'s triangle is not drawn (culled, zero area, or no
-    /// pixel centre on screen, as [`ScreenTriangle::new`](super::ScreenTriangle::new) rejects).
+    /// pixel centre on screen, as
+    /// [`ScreenTriangle::new`](super::ScreenTriangle::new) rejects).
     rejected: i32,
     /// Per edge: `a`, `b`, `c`, `slope`, `offset`, `band`.
     edges: [[[f64; SETUP_LANES]; 6]; 3],
@@ -148,9 +149,9 @@ impl SetUp for Lane<'_> {
 /// with vertices snapped to `1 / 2^subpixel_bits` pixel, as the scalar
 /// [`screen_triangles`](crate::project::screen_triangles) sets up a triangle
 /// that needs no clipping, into `batch` (written in place, not returned: a
-/// batch is large, and a returned one may be copied). Every field the
-/// lanes set up here are read by is written; the others keep the last
-/// call's values, which nothing reads.
+/// batch is large, and a returned one may be copied). It writes every
+/// field that the lanes it sets up are read from; the other lanes' fields
+/// keep the last call's values, which nothing reads.
 ///
 /// # Safety
 /// The CPU must support AVX2.
