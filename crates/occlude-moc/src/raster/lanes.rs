@@ -152,8 +152,9 @@ impl Intercepts {
     pub(crate) const EMPTY: Self =
         Intercepts { base: [0.0; 3], slope: [0.0; 3], band: [0.0; 3], right: [0; 3], t_max: 0.0, flat: false };
 
-    /// The intercepts of `tri` from the top pixel row of its first tile row,
-    /// over every row a draw of it steps through: those of its tile rows.
+    /// The intercepts of the triangle with window `tri` and edges `exact`
+    /// from the top pixel row of its first tile row, over every row a draw
+    /// of it steps through: those of its tile rows.
     #[inline]
     pub(crate) fn new(tri: &Raster, exact: &Exact) -> Self {
         let (r0, r1) = tri.subtile_rows();
