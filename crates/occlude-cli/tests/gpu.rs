@@ -233,9 +233,10 @@ fn no_adapter_is_a_clear_error_with_exit_code_2() {
 
 #[test]
 fn without_a_vulkan_driver_other_apis_are_refused_or_absent_with_exit_code_2() {
-    // No Vulkan driver: what is left is a GL driver where the machine has one
-    // (Mesa's llvmpipe here, which cannot copy depth textures, so cannot run
-    // the correctness rule) or nothing. Either way the run must not start.
+    // No Vulkan driver: OpenGL is searched only where `WGPU_BACKEND` names it
+    // (no GL adapter can copy depth textures, which the correctness rule
+    // needs; its refusal is `occlude-wgpu`'s unit test), so nothing is left
+    // here, and the run must not start.
     let no_vulkan = [("VK_DRIVER_FILES", "/nonexistent/icd.json"), ("VK_ICD_FILENAMES", "/nonexistent/icd.json")];
     let out = occlude(&["bench", "--backend", "wgpu", "--frames", "2"], &no_vulkan);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -63,9 +63,17 @@ impl GpuContext {
     /// Opens the most capable adapter that can run the backend (see
     /// `choose`); the `WGPU_BACKEND` environment variable narrows the
     /// graphics APIs searched and `WGPU_ADAPTER_NAME` the adapters' names.
+    /// OpenGL is searched only where `WGPU_BACKEND` names it: wgpu's GL
+    /// adapters all lack copies of depth textures to buffers, so the search
+    /// could only refuse them, and loading the GL driver to do so is not
+    /// free (Mesa's libEGL, unloaded at exit while its own threads end, has
+    /// crashed the process after the refusal was printed).
     pub fn new() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        Self::open(&best_adapter(&instance, None)?)
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if wgpu::Backends::from_env().is_none() {
+            descriptor.backends.remove(wgpu::Backends::GL);
+        }
+        Self::open(&best_adapter(&wgpu::Instance::new(descriptor), None)?)
     }
 
     /// The GPU a test named `test` runs on. Without one the test is skipped,
