@@ -497,10 +497,16 @@ impl Band<'_> {
     /// lane order, read where the set-up stored them.
     fn draw_lanes(&mut self, batch: &Batch, lanes: u32) {
         for l in (0..SETUP_LANES).filter(|l| lanes >> l & 1 == 1) {
-            match self.avx2 {
-                Some(avx2) => avx2.draw_lane(self, batch, l),
-                None => self.draw_with(&batch.drawn(l), Portable),
-            }
+            self.draw_lane(batch, l);
+        }
+    }
+
+    /// [`Self::draw`] of lane `l` of `batch`, read where the set-up stored it.
+    #[inline(always)]
+    fn draw_lane(&mut self, batch: &Batch, l: usize) {
+        match self.avx2 {
+            Some(avx2) => avx2.draw_lane(self, batch, l),
+            None => self.draw_with(&batch.drawn(l), Portable),
         }
     }
 
@@ -655,7 +661,7 @@ impl Chunk {
         if item & SINGLE != 0 {
             band.draw(&self.singles[(item & !SINGLE) as usize]);
         } else {
-            band.draw_lanes(&self.batches[item as usize / SETUP_LANES], 1 << (item as usize % SETUP_LANES));
+            band.draw_lane(&self.batches[item as usize / SETUP_LANES], item as usize % SETUP_LANES);
         }
     }
 }
