@@ -4,7 +4,10 @@
 //! occluder triangles of several sizes are rendered and the time per call is
 //! fitted as `a * triangles + b * tiles` by least squares; boxes of several
 //! sizes and depths are tested against a filled buffer and the time per batch
-//! is fitted as `a * boxes + b * subtiles read` the same way.
+//! is fitted as `a * boxes + b * subtiles read` the same way. Everything runs
+//! on one thread, as the simulated clock charges it to the frame's one CPU
+//! timeline (outside a pool of one thread, calls of more than 2,048 triangles
+//! would take the parallel path on the machine's cores).
 //!
 //! `cargo run --release -p occlude-moc --example moc_costs`
 
@@ -75,6 +78,12 @@ fn fit(rows: &[(f64, f64, f64)]) -> (f64, f64) {
 }
 
 fn main() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool of one thread");
+    pool.install(measure);
+}
+
+/// Prints the per-call times and the two fits.
+fn measure() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let mut buffer = MaskedBuffer::new(WIDTH, HEIGHT).unwrap();
     // Rows of (triangles, tiles, ns) per call.
