@@ -98,9 +98,11 @@
 //! four triangles are also set up at once (projection, snapping, edges, depth
 //! plane, the `f32` intercepts: the `raster::setup` module), bit for bit as
 //! the scalar set-up does each. Inside a rayon pool of several threads, large
-//! triangle sets are set up and binned to bands of tile rows in parallel
-//! chunks, then drawn in parallel bands, each band taking its triangles in
-//! order: the buffer is the same whatever the threads.
+//! triangle sets are binned by their vertices' rows to bands of tile rows
+//! (four bands a thread) in parallel chunks, keeping only triangle indices;
+//! then the bands are set up and drawn in parallel, each taking its
+//! triangles in order (a triangle touching two bands is set up in both): the
+//! buffer and the work counted are the same whatever the threads.
 
 mod buffer;
 mod clip;

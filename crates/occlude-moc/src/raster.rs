@@ -612,120 +612,190 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, mut spans: Spans) ->
     spans
 }
 
-/// Where [`MaskedBuffer::render`]'s set-up hands its triangles: a band
-/// draws them at once, a chunk of the parallel set-up keeps them for binning.
-trait Sink {
-    /// A triangle of the scalar set-up.
-    fn triangle(&mut self, tri: &ScreenTriangle);
-    /// The triangles of the batched set-up in the lanes of `batch` whose
-    /// bits `lanes` has, in lane order.
-    fn lanes(&mut self, batch: &Batch, lanes: u32);
+/// The bit of a render's item (a triangle index) that marks where the
+/// triangle's work is counted: in the first band it is binned to, so that
+/// it is counted once however many bands set it up (every item, on one
+/// thread).
+const COUNTED: u32 = 1 << 31;
+
+/// Triangles per chunk of the parallel binning, and the fewest a call takes
+/// the parallel path with: below it, the call's fork and join and its
+/// binning cost more than a second thread saves (an object of a few hundred
+/// triangles, the common call of the `moc` method, is seldom spread over
+/// several bands).
+const BIN_CHUNK: usize = 2048;
+
+/// Bands per thread of the parallel rasterization: several, so that threads
+/// even out bands of uneven work, and few, so that few triangles straddle
+/// two (each band sets up its own triangles).
+const BANDS_PER_THREAD: u32 = 4;
+
+/// The set-up of one render call: turns its triangles into set-up
+/// triangles and draws them in a band. On several threads each band runs
+/// it on the triangles binned to it ([`Bins`]).
+struct SetUpPass<'a, C> {
+    /// Triangle `i` in clip space, `None` where it is not drawn.
+    clip: &'a C,
+    /// The index of item 0's triangle: items index a part of the call.
+    offset: usize,
+    cull: CullMode,
+    width: u32,
+    height: u32,
+    subpixel_bits: u32,
+    avx2: Option<Avx2>,
 }
 
-impl Sink for Band<'_> {
-    fn triangle(&mut self, tri: &ScreenTriangle) {
-        self.draw(tri);
+impl<C: Fn(usize) -> Option<[Vec4; 3]>> SetUpPass<'_, C> {
+    /// The triangle of `item`, in clip space.
+    #[inline]
+    fn clip(&self, item: u32) -> Option<[Vec4; 3]> {
+        (self.clip)(self.offset + (item & !COUNTED) as usize)
     }
 
-    fn lanes(&mut self, batch: &Batch, lanes: u32) {
-        self.draw_lanes(batch, lanes);
+    /// Sets up the triangles `items` (indices, in order, [`COUNTED`] set on
+    /// those whose work is counted here) and draws them in `band`: with
+    /// AVX2 four at a time ([`Self::four`]); returns the work counted.
+    fn run(&self, mut items: impl Iterator<Item = u32>, band: &mut Band<'_>) -> RenderWork {
+        let mut work = RenderWork::default();
+        if let Some(avx2) = self.avx2 {
+            let mut batch = Batch::EMPTY;
+            loop {
+                let (mut quad, mut taken) = ([0u32; SETUP_LANES], 0);
+                while taken < SETUP_LANES {
+                    let Some(item) = items.next() else { break };
+                    (quad[taken], taken) = (item, taken + 1);
+                }
+                if taken < SETUP_LANES {
+                    for &item in &quad[..taken] {
+                        self.one(self.clip(item), item & COUNTED != 0, &mut work, band);
+                    }
+                    return work;
+                }
+                self.four(avx2, quad, &mut batch, &mut work, band);
+            }
+        }
+        for item in items {
+            self.one(self.clip(item), item & COUNTED != 0, &mut work, band);
+        }
+        work
     }
-}
 
-/// A chunk of the parallel set-up's triangles, in order, as the set-up
-/// made them: batches of four, whose drawn lanes are read in place, and the
-/// scalar set-up's single triangles.
-#[derive(Default)]
-struct Chunk {
-    batches: Vec<Batch>,
-    singles: Vec<ScreenTriangle>,
-    /// The triangles in order: `4 batch + lane`, or `SINGLE | index`.
-    items: Vec<u32>,
-}
-
-/// The bit of [`Chunk::items`] that marks a single triangle.
-const SINGLE: u32 = 1 << 31;
-
-impl Chunk {
-    /// The first and one past the last subtile row item `item` touches.
-    fn subtile_rows(&self, item: u32) -> (u32, u32) {
-        if item & SINGLE != 0 {
-            self.singles[(item & !SINGLE) as usize].raster.subtile_rows()
-        } else {
-            self.batches[item as usize / SETUP_LANES].drawn(item as usize % SETUP_LANES).raster().subtile_rows()
+    /// The four triangles `quad` set up at once into `batch` where all four
+    /// are in the common case of the batched set-up ([`setup`]), each lane
+    /// that is not by the scalar set-up ([`Self::one`]), drawn in order.
+    #[inline(always)]
+    fn four(
+        &self,
+        avx2: Avx2,
+        quad: [u32; SETUP_LANES],
+        batch: &mut Batch,
+        work: &mut RenderWork,
+        band: &mut Band<'_>,
+    ) {
+        let [a, b, c, d] = quad;
+        let Some(tris) = (|| Some([self.clip(a)?, self.clip(b)?, self.clip(c)?, self.clip(d)?]))() else {
+            for item in quad {
+                self.one(self.clip(item), item & COUNTED != 0, work, band);
+            }
+            return;
+        };
+        let counted = quad.iter().enumerate().fold(0, |m, (l, &item)| m | u32::from(item & COUNTED != 0) << l);
+        avx2.setup4(&tris, self.cull, self.width, self.height, self.subpixel_bits, batch);
+        let (drawn, scalar) = (batch.drawn_lanes(), batch.scalar_lanes());
+        work.triangles += u64::from((counted & !scalar).count_ones());
+        work.tiles += batch.tiles(drawn & counted);
+        if scalar == 0 {
+            band.draw_lanes(batch, drawn);
+            return;
+        }
+        // In order: the scalar set-up's triangles between the batch's.
+        for (l, c) in tris.into_iter().enumerate() {
+            if scalar >> l & 1 == 1 {
+                self.one(Some(c), counted >> l & 1 == 1, work, band);
+            } else if drawn >> l & 1 == 1 {
+                band.draw_lane(batch, l);
+            }
         }
     }
 
-    /// Draws item `item` in `band`.
-    fn draw(&self, item: u32, band: &mut Band<'_>) {
-        if item & SINGLE != 0 {
-            band.draw(&self.singles[(item & !SINGLE) as usize]);
-        } else {
-            band.draw_lane(&self.batches[item as usize / SETUP_LANES], item as usize % SETUP_LANES);
+    /// Triangle `clip` by the scalar set-up ([`screen_triangles`]), drawn in
+    /// `band`, its work added to `work` where `counted`.
+    fn one(&self, clip: Option<[Vec4; 3]>, counted: bool, work: &mut RenderWork, band: &mut Band<'_>) {
+        let Some(clip) = clip else { return };
+        let (width, height, bits) = (self.width, self.height, self.subpixel_bits);
+        let triangles = screen_triangles(clip, self.cull, width, height, bits, &mut |tri| {
+            if counted {
+                work.tiles += tri.raster.tiles();
+            }
+            band.draw(tri);
+        });
+        if counted {
+            work.triangles += triangles;
         }
     }
 }
 
-impl Sink for Chunk {
-    fn triangle(&mut self, tri: &ScreenTriangle) {
-        self.items.push(SINGLE | self.singles.len() as u32);
-        self.singles.push(*tri);
+/// The bands of `rows` pixel rows each, `first..=last` of `0..bands`, that
+/// triangle `clip` may touch: where it lies in front of the near plane, those
+/// its vertices' rows reach and a pixel more either way (the set-up projects
+/// them with the same `f64` operations, `crate::project`, then moves them by
+/// half a grid step at most, and draws only the tile rows of pixel centres
+/// between them); every band where it reaches behind the near plane
+/// (clipping moves its vertices) or has a NaN depth or `w`. A row that is
+/// NaN counts as band 0, and `last` is at least `first`, so that every
+/// triangle is binned somewhere: the set-up counts even those it does not
+/// draw.
+#[inline]
+fn bands_of(clip: &[Vec4; 3], height: u32, rows: u32, bands: u32) -> (u32, u32) {
+    // Written so that NaN fails.
+    if !clip.iter().all(|c| c.z >= 0.0 && c.w > 0.0) {
+        return (0, bands - 1);
     }
-
-    fn lanes(&mut self, batch: &Batch, lanes: u32) {
-        let b = (self.batches.len() * SETUP_LANES) as u32;
-        self.batches.push(batch.clone());
-        self.items.extend((0..SETUP_LANES as u32).filter(|l| lanes >> l & 1 == 1).map(|l| b + l));
-    }
+    let y = clip.map(|c| (1.0 - f64::from(c.y) / f64::from(c.w)) * 0.5 * f64::from(height));
+    let (lo, hi) = (y[0].min(y[1]).min(y[2]) - 1.0, y[0].max(y[1]).max(y[2]) + 1.0);
+    let (scale, last) = (1.0 / f64::from(rows), f64::from(bands - 1));
+    let first = floor_in(lo * scale, 0.0, last);
+    (first as u32, floor_in(hi * scale, 0.0, last).max(first) as u32)
 }
 
-/// A chunk of set-up triangles and, per band, the items of those touching
-/// it, in order (a counting sort): a band reads only its own triangles.
-struct Binned {
-    chunk: Chunk,
+/// A chunk of a render's triangles binned to the bands they may touch
+/// ([`bands_of`]; a counting sort): a band reads only its own triangles, in
+/// order, each marked [`COUNTED`] in its first band.
+struct Bins {
     /// Band `b`'s items are `order[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
     order: Vec<u32>,
 }
 
-impl Binned {
-    fn new(chunk: Chunk, bands: usize) -> Self {
-        let band_range = |item: u32| {
-            let (r0, r1) = chunk.subtile_rows(item);
-            (r0 as usize / BAND_ROWS)..((r1 as usize - 1) / BAND_ROWS + 1).min(bands)
-        };
+impl Bins {
+    /// Triangles `range`, binned to `bands` bands by `bands_of(i)` (first and
+    /// last band; `None` where triangle `i` is not drawn).
+    fn new(range: std::ops::Range<usize>, bands: usize, bands_of: impl Fn(usize) -> Option<(u32, u32)>) -> Self {
+        // Triangles not drawn take the empty span (1, 0).
+        let spans: Vec<(u32, u32)> = range.clone().map(|i| bands_of(i).unwrap_or((1, 0))).collect();
         let mut starts = vec![0u32; bands + 1];
-        for &item in &chunk.items {
-            for b in band_range(item) {
-                starts[b + 1] += 1;
-            }
+        for &(first, last) in &spans {
+            (first..last + 1).for_each(|b| starts[b as usize + 1] += 1);
         }
         for b in 0..bands {
             starts[b + 1] += starts[b];
         }
         let mut next = starts.clone();
         let mut order = vec![0u32; starts[bands] as usize];
-        for &item in &chunk.items {
-            for b in band_range(item) {
-                order[next[b] as usize] = item;
-                next[b] += 1;
+        for (i, &(first, last)) in range.zip(&spans) {
+            for b in first..last + 1 {
+                order[next[b as usize] as usize] = i as u32 | if b == first { COUNTED } else { 0 };
+                next[b as usize] += 1;
             }
         }
-        Binned { chunk, starts, order }
+        Bins { starts, order }
     }
 
-    /// The items of the triangles touching band `b`, in order.
+    /// The items of the triangles binned to band `b`, in order.
     fn in_band(&self, b: usize) -> &[u32] {
         &self.order[self.starts[b] as usize..self.starts[b + 1] as usize]
     }
 }
-
-/// Triangles per chunk of the parallel set-up.
-const SETUP_CHUNK: usize = 2048;
-
-/// Subtile rows per band of the parallel rasterization (two 32x8-pixel tile
-/// rows): small enough for several bands per thread to even out the work.
-const BAND_ROWS: usize = 4;
 
 impl MaskedBuffer {
     /// Renders indexed occluder triangles, `model_to_clip` taking `positions` to
@@ -734,10 +804,11 @@ impl MaskedBuffer {
     /// "Coverage"); triangles crossing the near plane are clipped; index
     /// triples with an out-of-range index, NaN vertices and zero-area
     /// triangles are skipped. Cost: per triangle, its pixel rows and the
-    /// subtiles its rows touch. Run inside a rayon pool of several threads, large
-    /// sets are set up in parallel and rasterized in parallel over bands of rows;
-    /// the buffer is the same whatever the threads. Returns the work done, for
-    /// callers that account for it (a simulated clock).
+    /// subtiles its rows touch. Run inside a rayon pool of several threads,
+    /// large sets are binned to bands of rows in parallel, then set up and
+    /// rasterized in parallel bands (a triangle touching two bands is set up
+    /// in both); the buffer is the same whatever the threads. Returns the
+    /// work done, for callers that account for it (a simulated clock).
     pub fn render_triangles(
         &mut self,
         positions: &[Vec3],
@@ -761,81 +832,60 @@ impl MaskedBuffer {
         self.render(triangles.len(), |i| Some(triangles[i]), cull)
     }
 
-    /// Renders triangles `0..count`, `clip(i)` giving triangle `i` in clip space:
-    /// one after the other on one thread, or set up and binned to bands in
-    /// parallel chunks, then drawn in parallel bands, when the current rayon pool
-    /// has several threads.
+    /// Renders triangles `0..count`, `clip(i)` giving triangle `i` in clip
+    /// space, in parts of at most [`COUNTED`] triangles (an item carries its
+    /// index in the bits below it).
     fn render(&mut self, count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]> + Sync, cull: CullMode) -> RenderWork {
-        let (width, height, bits, avx2) = (self.width, self.height, self.subpixel_bits, Avx2::detect());
-        let one = |c: Option<[Vec4; 3]>, work: &mut RenderWork, out: &mut dyn Sink| {
-            if let Some(c) = c {
-                work.triangles += screen_triangles(c, cull, width, height, bits, &mut |tri| {
-                    work.tiles += tri.raster.tiles();
-                    out.triangle(tri)
-                });
-            }
-        };
-        // Triangles `range` in order: with AVX2, four at a time where all four
-        // are in the common case of the batched set-up (`setup`).
-        let setup = |range: std::ops::Range<usize>, work: &mut RenderWork, out: &mut dyn Sink| {
-            let mut i = range.start;
-            let mut set_up = Batch::EMPTY;
-            if let Some(avx2) = avx2 {
-                while i + SETUP_LANES <= range.end {
-                    let Some(tris) = (|| Some([clip(i)?, clip(i + 1)?, clip(i + 2)?, clip(i + 3)?]))() else {
-                        (i..i + SETUP_LANES).for_each(|i| one(clip(i), work, out));
-                        i += SETUP_LANES;
-                        continue;
-                    };
-                    avx2.setup4(&tris, cull, width, height, bits, &mut set_up);
-                    let (drawn, scalar) = (set_up.drawn_lanes(), set_up.scalar_lanes());
-                    work.triangles += u64::from(SETUP_LANES as u32 - scalar.count_ones());
-                    work.tiles += set_up.tiles(drawn);
-                    if scalar == 0 {
-                        out.lanes(&set_up, drawn);
-                    } else {
-                        // In order: the scalar set-up's triangles between
-                        // the batch's.
-                        for (l, c) in tris.iter().enumerate() {
-                            if scalar >> l & 1 == 1 {
-                                one(Some(*c), work, out);
-                            } else if drawn >> l & 1 == 1 {
-                                out.lanes(&set_up, 1 << l);
-                            }
-                        }
-                    }
-                    i += SETUP_LANES;
-                }
-            }
-            (i..range.end).for_each(|i| one(clip(i), work, out));
-        };
         let mut work = RenderWork::default();
-        if rayon::current_num_threads() < 2 || count <= SETUP_CHUNK {
-            setup(0..count, &mut work, &mut self.whole());
-            return work;
+        for offset in (0..count).step_by(COUNTED as usize) {
+            work += self.render_part(offset, (count - offset).min(COUNTED as usize), &clip, cull);
         }
-        let bands = (self.rows as usize).div_ceil(BAND_ROWS);
-        let chunks: Vec<(Binned, RenderWork)> = (0..count.div_ceil(SETUP_CHUNK))
+        work
+    }
+
+    /// Renders triangles `offset..offset + count`: one after the other on one
+    /// thread, or, when the current rayon pool has several threads, binned to
+    /// bands of tile rows in parallel chunks ([`Bins`]), then set up and drawn
+    /// band by band in parallel.
+    fn render_part(
+        &mut self,
+        offset: usize,
+        count: usize,
+        clip: &(impl Fn(usize) -> Option<[Vec4; 3]> + Sync),
+        cull: CullMode,
+    ) -> RenderWork {
+        let (width, height, subpixel_bits) = (self.width, self.height, self.subpixel_bits);
+        let pass = SetUpPass { clip, offset, cull, width, height, subpixel_bits, avx2: Avx2::detect() };
+        let threads = rayon::current_num_threads();
+        if threads < 2 || count <= BIN_CHUNK {
+            return pass.run((0..count as u32).map(|i| i | COUNTED), &mut self.whole());
+        }
+        // Bands of whole tile rows (two subtile rows).
+        let tile_rows = self.rows / 2;
+        let band_rows = 2 * tile_rows.div_ceil(BANDS_PER_THREAD * threads as u32);
+        let bands = self.rows.div_ceil(band_rows);
+        let bins: Vec<Bins> = (0..count.div_ceil(BIN_CHUNK))
             .into_par_iter()
             .map(|c| {
-                let (mut chunk, mut work) = (Chunk::default(), RenderWork::default());
-                setup(c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(count), &mut work, &mut chunk);
-                (Binned::new(chunk, bands), work)
+                let range = c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(count);
+                let bands_of = |i: usize| clip(offset + i).map(|t| bands_of(&t, height, band_rows * 4, bands));
+                Bins::new(range, bands as usize, bands_of)
             })
             .collect();
-        chunks.iter().for_each(|(_, w)| work += *w);
-        let (cols, merge) = (self.cols, self.merge);
-        self.groups.par_chunks_mut(cols as usize / LANES * BAND_ROWS).enumerate().for_each(|(b, groups)| {
-            let first = (b * BAND_ROWS) as u32;
-            let end = first + (groups.len() * LANES) as u32 / cols;
-            let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
-            for (chunk, _) in &chunks {
-                for &item in chunk.in_band(b) {
-                    chunk.chunk.draw(item, &mut band);
-                }
-            }
-        });
-        work
+        let (cols, merge, avx2) = (self.cols, self.merge, pass.avx2);
+        self.groups
+            .par_chunks_mut((band_rows * cols) as usize / LANES)
+            .enumerate()
+            .map(|(b, groups)| {
+                let first = b as u32 * band_rows;
+                let end = first + (groups.len() * LANES) as u32 / cols;
+                let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
+                pass.run(bins.iter().flat_map(|bin| bin.in_band(b).iter().copied()), &mut band)
+            })
+            .reduce(RenderWork::default, |mut a, b| {
+                a += b;
+                a
+            })
     }
 
     /// The whole buffer as one band.
@@ -986,30 +1036,42 @@ mod tests {
     }
 
     #[test]
-    fn threads_give_the_buffer_of_one_thread() {
+    fn threads_give_the_buffer_and_work_of_one_thread() {
         let (w, h) = (300u32, 200u32);
         let mut rng = Lcg(9);
-        let tris: Vec<[Vec4; 3]> = (0..3 * SETUP_CHUNK + 17)
-            .map(|_| {
+        let tris: Vec<[Vec4; 3]> = (0..3 * BIN_CHUNK + 17)
+            .map(|i| {
                 let c = Vec4::new(rng.unit() as f32 * 2.2 - 1.1, rng.unit() as f32 * 2.2 - 1.1, 0.0, 1.0);
-                [0; 3].map(|_| {
+                let mut t = [0; 3].map(|_| {
                     let d = Vec4::new(rng.unit() as f32 - 0.5, rng.unit() as f32 - 0.5, 0.0, 0.0) * 0.3;
-                    c + d + Vec4::new(0.0, 0.0, rng.unit() as f32 * 1.1 - 0.1, 0.0)
-                })
+                    // The same point at another `w`: the bins divide as the set-up does.
+                    (c + d + Vec4::new(0.0, 0.0, rng.unit() as f32 * 1.1 - 0.1, 0.0)) * (0.5 + rng.unit() as f32 * 2.0)
+                });
+                // Now and then a vertex far above or below the screen, or a NaN.
+                match i % 97 {
+                    0 => t[1].y *= 100.0,
+                    1 => t[2].y = f32::NAN,
+                    _ => {}
+                }
+                t
             })
             .collect();
         let run = |threads: usize, mode: MergeMode| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let mut buffer = MaskedBuffer::new(w, h).unwrap();
             buffer.merge = mode;
-            pool.install(|| buffer.render_clip_triangles(&tris, CullMode::Back));
-            buffer
+            let work = pool.install(|| buffer.render_clip_triangles(&tris, CullMode::Back));
+            (buffer, work)
         };
         for mode in [MergeMode::LayerMerge, MergeMode::QuickMask] {
-            let one = run(1, mode);
+            let (one, work) = run(1, mode);
             assert!(subtiles(&one).filter(|s| s.reference < 1.0).count() > 500);
+            // Clipped triangles are counted as the fans they become.
+            assert!(work.triangles > tris.len() as u64 && work.tiles > work.triangles, "{work:?}");
             for threads in [2, 3] {
-                assert_same(&run(threads, mode), &one, &format!("{threads} threads, {mode:?}"));
+                let (buffer, threads_work) = run(threads, mode);
+                assert_same(&buffer, &one, &format!("{threads} threads, {mode:?}"));
+                assert_eq!(threads_work, work, "{threads} threads, {mode:?}");
             }
         }
     }

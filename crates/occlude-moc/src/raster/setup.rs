@@ -26,7 +26,6 @@ pub(crate) const SETUP_LANES: usize = 4;
 
 /// Four triangles set up by [`setup4`], lane by lane, in the registers'
 /// layout, where the traversal reads them ([`Batch::drawn`]).
-#[derive(Clone)]
 pub(crate) struct Batch {
     /// Bit `l` set: lane `l` was set up here (else it is for the scalar
     /// set-up).
