@@ -131,13 +131,13 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 122.0;
+const MOC_TRIANGLE_NS: f64 = 89.3;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 9.0;
+const MOC_TILE_NS: f64 = 6.1;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 59.5;
+const MOC_BOX_NS: f64 = 63.9;
 /// See [`GpuModel::cpu_moc_subtile_read_ns`].
-const MOC_SUBTILE_READ_NS: f64 = 0.24;
+const MOC_SUBTILE_READ_NS: f64 = 0.21;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
