@@ -618,11 +618,11 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, mut spans: Spans) ->
 /// thread).
 const COUNTED: u32 = 1 << 31;
 
-/// Triangles per chunk of the parallel binning, and the fewest a call takes
-/// the parallel path with: below it, the call's fork and join and its
-/// binning cost more than a second thread saves (an object of a few hundred
-/// triangles, the common call of the `moc` method, is seldom spread over
-/// several bands).
+/// Triangles per chunk of the parallel binning, and the most a call renders
+/// on one thread whatever the pool: a smaller call is mostly one object, seldom
+/// spread over several bands, and its binning, fork and join would cost more
+/// than another thread saves (docs/benchmarks.md: with 512, the `moc`
+/// method's per-object calls took 40 % more time on the teapots).
 const BIN_CHUNK: usize = 2048;
 
 /// Bands per thread of the parallel rasterization: several, so that threads
