@@ -6,8 +6,8 @@
 //! sizes and depths are tested against a filled buffer and the time per batch
 //! is fitted as `a * boxes + b * subtiles read` the same way. Everything runs
 //! on one thread, as the simulated clock charges it to the frame's one CPU
-//! timeline (outside a pool of one thread, calls of more than 2,048 triangles
-//! would take the parallel path on the machine's cores).
+//! timeline (outside a pool of one thread, large calls would take the
+//! parallel path on the machine's cores).
 //!
 //! `cargo run --release -p occlude-moc --example moc_costs`
 

@@ -618,12 +618,53 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, mut spans: Spans) ->
 /// thread).
 const COUNTED: u32 = 1 << 31;
 
-/// Triangles per chunk of the parallel binning, and the most a call renders
-/// on one thread whatever the pool: a smaller call is mostly one object, seldom
-/// spread over several bands, and its binning, fork and join would cost more
-/// than another thread saves (docs/benchmarks.md: with 512, the `moc`
-/// method's per-object calls took 40 % more time on the teapots).
+/// Triangles per chunk of the parallel binning, and the most a call of
+/// small triangles renders on one thread whatever the pool
+/// ([`worth_threads`]).
 const BIN_CHUNK: usize = 2048;
+
+/// A triangle's set-up in the time of 32x8-pixel tiles drawn: the buffer's
+/// cost per triangle over its cost per tile on one thread (89.3 and 6.1 ns
+/// on the machine of docs/gpu-models.md), for [`worth_threads`]' estimate.
+const SETUP_TILES: usize = 15;
+
+/// The tiles of a small triangle's screen box for [`worth_threads`]: one
+/// of a few pixels takes up to four where it straddles tile edges.
+const SMALL_TILES: usize = 4;
+
+/// Triangles of a call of at most [`BIN_CHUNK`] that [`worth_threads`]
+/// looks at, evenly spaced.
+const WORK_SAMPLES: usize = 32;
+
+/// Whether `count` triangles (`clip(i)`, `offset` on) on a `width` x
+/// `height` screen are worth the parallel path: more work than
+/// [`BIN_CHUNK`] small triangles ([`SMALL_TILES`]), estimated from up to
+/// [`WORK_SAMPLES`] of them as [`SETUP_TILES`] plus the tiles of their
+/// vertices' screen box (the whole screen's for one reaching behind the
+/// near plane). Less work is mostly one object, seldom spread over several
+/// bands, and its binning, fork and join cost more than another thread
+/// saves (docs/benchmarks.md: with every call of more than 512 triangles
+/// parallel, the `moc` method's per-object calls took 40 % more time on the
+/// teapots); a few large occluders are worth it.
+fn worth_threads(count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]>, width: u32, height: u32) -> bool {
+    if count > BIN_CHUNK {
+        return true;
+    }
+    let screen = |v: f32, size: u32| v.clamp(0.0, size as f32) as usize;
+    let tiles = |t: [Vec4; 3]| {
+        if !t.iter().all(|c| c.z >= 0.0 && c.w > 0.0) {
+            return width.div_ceil(TILE_W) as usize * height.div_ceil(STEP_ROWS) as usize;
+        }
+        let x = t.map(|c| screen((c.x / c.w + 1.0) * 0.5 * width as f32, width));
+        let y = t.map(|c| screen((1.0 - c.y / c.w) * 0.5 * height as f32, height));
+        let across = |v: [usize; 3], size: usize| v[0].max(v[1]).max(v[2]) / size - v[0].min(v[1]).min(v[2]) / size + 1;
+        across(x, TILE_W as usize) * across(y, STEP_ROWS as usize)
+    };
+    let step = count.div_ceil(WORK_SAMPLES).max(1);
+    let (samples, work) =
+        (0..count).step_by(step).fold((0, 0), |(n, w), i| (n + 1, w + SETUP_TILES + clip(i).map_or(0, tiles)));
+    work * count > BIN_CHUNK * (SETUP_TILES + SMALL_TILES) * samples
+}
 
 /// Bands per thread of the parallel rasterization: several, so that threads
 /// even out bands of uneven work, and few, so that few triangles straddle
@@ -857,7 +898,7 @@ impl MaskedBuffer {
         let (width, height, subpixel_bits) = (self.width, self.height, self.subpixel_bits);
         let pass = SetUpPass { clip, offset, cull, width, height, subpixel_bits, avx2: Avx2::detect() };
         let threads = rayon::current_num_threads();
-        if threads < 2 || count <= BIN_CHUNK {
+        if threads < 2 || !worth_threads(count, |i| clip(offset + i), width, height) {
             return pass.run((0..count as u32).map(|i| i | COUNTED), &mut self.whole());
         }
         // Bands of whole tile rows (two subtile rows).
@@ -1033,6 +1074,24 @@ mod tests {
             capped += usize::from(exact == zmax);
         }
         assert!(capped > 1000, "{capped}");
+    }
+
+    #[test]
+    fn a_few_large_triangles_are_worth_threads_and_many_small_ones_only_beyond_a_chunk() {
+        let (w, h) = (640u32, 480u32);
+        // Right triangles of `size` NDC units with their corner at `x`, `y`.
+        let at = |x: f32, y: f32, size: f32| {
+            [Vec4::new(x, y, 0.5, 1.0), Vec4::new(x + size, y, 0.5, 1.0), Vec4::new(x, y + size, 0.5, 1.0)]
+        };
+        let walls: Vec<_> = (0..40).map(|i| at(-1.0, -1.0 + i as f32 * 0.01, 1.9)).collect();
+        assert!(worth_threads(walls.len(), |i| Some(walls[i]), w, h));
+        let specks: Vec<_> = (0..BIN_CHUNK + 1).map(|i| at(-0.9 + (i % 97) as f32 * 0.018, 0.0, 0.002)).collect();
+        assert!(!worth_threads(BIN_CHUNK, |i| Some(specks[i]), w, h));
+        assert!(worth_threads(BIN_CHUNK + 1, |i| Some(specks[i]), w, h));
+        // Behind the near plane: the whole screen, as the bins take it.
+        let behind: Vec<_> = walls.iter().map(|t| t.map(|v| Vec4::new(v.x * 0.01, v.y * 0.01, -0.5, 1.0))).collect();
+        assert!(worth_threads(behind.len(), |i| Some(behind[i]), w, h));
+        assert!(!worth_threads(0, |_| None, w, h));
     }
 
     #[test]
