@@ -636,7 +636,7 @@ const SMALL_TILES: usize = 4;
 /// looks at, evenly spaced.
 const WORK_SAMPLES: usize = 32;
 
-/// Whether `count` triangles (`clip(i)`, `offset` on) on a `width` x
+/// Whether `count` triangles (`clip(i)`) on a `width` x
 /// `height` screen are worth the parallel path: more work than
 /// [`BIN_CHUNK`] small triangles ([`SMALL_TILES`]), estimated from up to
 /// [`WORK_SAMPLES`] of them as [`SETUP_TILES`] plus the tiles of their
