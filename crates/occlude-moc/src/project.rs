@@ -4,7 +4,7 @@
 
 use crate::clip::clip_near;
 use crate::raster::{CullMode, ScreenTriangle, Tolerance};
-use glam::{DVec3, Vec4};
+use glam::{DVec2, DVec3, DVec4, Vec4};
 
 /// Pixels beyond each side of the screen within which the vertices of a
 /// triangle that does not cross the near plane are snapped: inside the soft
@@ -61,7 +61,7 @@ pub(crate) fn screen_triangles(
     let mut screen = [DVec3::ZERO; 4];
     for (s, c) in screen.iter_mut().zip(&poly[..n]) {
         let c = c.as_dvec4();
-        let (x, y) = ((c.x / c.w + 1.0) * 0.5 * w, (1.0 - c.y / c.w) * 0.5 * h);
+        let DVec2 { x, y } = to_screen(c, w, h);
         // Written so that NaN fails.
         if !(c.w > 0.0 && x.abs() < DRAW_LIMIT && y.abs() < DRAW_LIMIT) {
             return n as u64 - 2;
@@ -86,6 +86,14 @@ pub(crate) fn screen_triangles(
         }
     }
     n as u64 - 2
+}
+
+/// Clip-space point `c` on a `width` x `height` screen (pixels, y down),
+/// divided in `f64`: where the set-up puts a vertex before snapping it, and
+/// where the parallel path's bins take it to be.
+#[inline]
+pub(crate) fn to_screen(c: DVec4, width: f64, height: f64) -> DVec2 {
+    DVec2::new((c.x / c.w + 1.0) * 0.5 * width, (1.0 - c.y / c.w) * 0.5 * height)
 }
 
 /// `x.round()` (halves away from zero) for `|x| < 2^52`, as the soft

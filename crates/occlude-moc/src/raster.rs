@@ -17,9 +17,9 @@
 //! what the pixel-by-pixel definition gives.
 
 use crate::buffer::{Group, MaskedBuffer, MergeMode};
-use crate::project::screen_triangles;
+use crate::project::{screen_triangles, to_screen};
 use crate::{SUBTILE_H, SUBTILE_W};
-use glam::{DVec3, Mat4, Vec3, Vec4};
+use glam::{DVec2, DVec3, Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
 mod avx2;
@@ -650,13 +650,13 @@ fn worth_threads(count: usize, clip: impl Fn(usize) -> Option<[Vec4; 3]>, width:
     if count > BIN_CHUNK {
         return true;
     }
-    let screen = |v: f32, size: u32| v.clamp(0.0, size as f32) as usize;
+    let (w, h) = (f64::from(width), f64::from(height));
     let tiles = |t: [Vec4; 3]| {
-        if !t.iter().all(|c| c.z >= 0.0 && c.w > 0.0) {
+        if !in_front(&t) {
             return width.div_ceil(TILE_W) as usize * height.div_ceil(STEP_ROWS) as usize;
         }
-        let x = t.map(|c| screen((c.x / c.w + 1.0) * 0.5 * width as f32, width));
-        let y = t.map(|c| screen((1.0 - c.y / c.w) * 0.5 * height as f32, height));
+        let s = t.map(|c| to_screen(c.as_dvec4(), w, h).clamp(DVec2::ZERO, DVec2::new(w, h)));
+        let (x, y) = (s.map(|p| p.x as usize), s.map(|p| p.y as usize));
         let across = |v: [usize; 3], size: usize| v[0].max(v[1]).max(v[2]) / size - v[0].min(v[1]).min(v[2]) / size + 1;
         across(x, TILE_W as usize) * across(y, STEP_ROWS as usize)
     };
@@ -779,7 +779,7 @@ impl<C: Fn(usize) -> Option<[Vec4; 3]>> SetUpPass<'_, C> {
 /// The bands of `rows` pixel rows each, `first..=last` of `0..bands`, that
 /// triangle `clip` may touch: where it lies in front of the near plane, those
 /// its vertices' rows reach and a pixel more either way (the set-up projects
-/// them with the same `f64` operations, `crate::project`, then moves them by
+/// them with the same [`to_screen`], then moves them by
 /// half a grid step at most, and draws only the tile rows of pixel centres
 /// between them); every band where it reaches behind the near plane
 /// (clipping moves its vertices) or has a NaN depth or `w`. A row that is
@@ -788,15 +788,23 @@ impl<C: Fn(usize) -> Option<[Vec4; 3]>> SetUpPass<'_, C> {
 /// draw.
 #[inline]
 fn bands_of(clip: &[Vec4; 3], height: u32, rows: u32, bands: u32) -> (u32, u32) {
-    // Written so that NaN fails.
-    if !clip.iter().all(|c| c.z >= 0.0 && c.w > 0.0) {
+    if !in_front(clip) {
         return (0, bands - 1);
     }
-    let y = clip.map(|c| (1.0 - f64::from(c.y) / f64::from(c.w)) * 0.5 * f64::from(height));
+    // The screen's width does not move a vertex's row.
+    let y = clip.map(|c| to_screen(c.as_dvec4(), 0.0, f64::from(height)).y);
     let (lo, hi) = (y[0].min(y[1]).min(y[2]) - 1.0, y[0].max(y[1]).max(y[2]) + 1.0);
     let (scale, last) = (1.0 / f64::from(rows), f64::from(bands - 1));
     let first = floor_in(lo * scale, 0.0, last);
     (first as u32, floor_in(hi * scale, 0.0, last).max(first) as u32)
+}
+
+/// Whether triangle `clip` lies in front of the near plane with a positive
+/// `w` at every vertex (false where a depth or `w` is NaN): the set-up then
+/// projects its vertices as they are, unclipped.
+#[inline]
+fn in_front(clip: &[Vec4; 3]) -> bool {
+    clip.iter().all(|c| c.z >= 0.0 && c.w > 0.0)
 }
 
 /// A chunk of a render's triangles binned to the bands they may touch
