@@ -66,25 +66,33 @@ impl Subtile {
     }
 }
 
-/// Eight horizontally neighbouring subtiles (lane `l` is column `8 g + l` of
-/// group `g` of a row), stored field by field so that the rasterizer loads and
-/// merges all eight in lanes.
+/// The eight subtiles of a 32x8-pixel tile: lanes 0-3 the upper subtile row's
+/// four from left to right, lanes 4-7 the lower row's. Stored field by field,
+/// each field 32 bytes and the tile 96, so that the rasterizer loads, merges
+/// and stores a tile in three registers per field set, and a tile touches two
+/// cache lines.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
-pub(crate) struct Group {
+pub(crate) struct Tile {
     pub mask: [u32; 8],
     pub working: [f32; 8],
     pub reference: [f32; 8],
 }
 
-impl Group {
-    /// Subtile `l` of the group.
+impl Tile {
+    /// The lane of subtile (`sx`, `sy`) in its tile.
+    #[inline]
+    pub(crate) fn lane(sx: u32, sy: u32) -> usize {
+        (sx % 4 + 4 * (sy % 2)) as usize
+    }
+
+    /// Subtile `l` of the tile.
     #[inline]
     pub(crate) fn get(&self, l: usize) -> Subtile {
         Subtile { mask: self.mask[l], working: self.working[l], reference: self.reference[l] }
     }
 
-    /// Replaces subtile `l` of the group.
+    /// Replaces subtile `l` of the tile.
     #[inline]
     pub(crate) fn set(&mut self, l: usize, s: Subtile) {
         (self.mask[l], self.working[l], self.reference[l]) = (s.mask, s.working, s.reference);
@@ -113,7 +121,7 @@ pub(crate) fn outside_mask(width: u32, height: u32, sx: u32, sy: u32) -> u32 {
     !(0..rows).fold(0, |m, r| m | row << (8 * r))
 }
 
-const CLEAR: Group = Group { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8] };
+const CLEAR: Tile = Tile { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8] };
 
 /// A conservative, low-resolution-in-depth occlusion buffer.
 ///
@@ -123,7 +131,7 @@ const CLEAR: Group = Group { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8
 /// [`Occluded`](crate::Visibility::Occluded) for something an exact depth buffer
 /// of the same occluders would show; it may say visible for hidden things.
 ///
-/// Memory: 12 bytes per 32 pixels (the width padded to 64). Cost: proportional to the subtiles each
+/// Memory: 12 bytes per 32 pixels (the width padded to 32 and the height to 8). Cost: proportional to the subtiles each
 /// triangle's bounding box touches.
 ///
 /// ```
@@ -142,13 +150,12 @@ const CLEAR: Group = Group { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8
 pub struct MaskedBuffer {
     pub(crate) width: u32,
     pub(crate) height: u32,
-    /// Subtiles per row (the width padded to whole 64-pixel groups of eight
-    /// subtiles).
+    /// Subtiles per row (the width padded to whole 32-pixel tiles).
     pub(crate) cols: u32,
     /// Subtile rows (the height padded to whole 8-pixel tiles).
     pub(crate) rows: u32,
-    /// Row by row, `cols / 8` groups a row.
-    pub(crate) groups: Vec<Group>,
+    /// Tile row by tile row (two subtile rows), `cols / 4` tiles a row.
+    pub(crate) tiles: Vec<Tile>,
     /// The merge rule used by renders.
     pub merge: MergeMode,
     /// Fractional bits of the grid occluder vertices are snapped to
@@ -164,7 +171,7 @@ impl MaskedBuffer {
             height: 0,
             cols: 0,
             rows: 0,
-            groups: Vec::new(),
+            tiles: Vec::new(),
             merge: MergeMode::default(),
             subpixel_bits: crate::SUBPIXEL_BITS,
         };
@@ -179,10 +186,10 @@ impl MaskedBuffer {
         }
         self.width = width;
         self.height = height;
-        self.cols = width.div_ceil(64) * 8;
+        self.cols = width.div_ceil(32) * 4;
         self.rows = height.div_ceil(8) * 2;
-        self.groups.clear();
-        self.groups.resize((self.cols / 8 * self.rows) as usize, CLEAR);
+        self.tiles.clear();
+        self.tiles.resize((self.cols / 4 * self.rows / 2) as usize, CLEAR);
         Ok(())
     }
 
@@ -208,7 +215,13 @@ impl MaskedBuffer {
     /// Subtile (`sx`, `sy`).
     #[inline]
     pub(crate) fn subtile(&self, sx: u32, sy: u32) -> Subtile {
-        self.groups[(sy * self.cols / 8 + sx / 8) as usize].get((sx % 8) as usize)
+        self.tiles[self.tile_index(sx, sy)].get(Tile::lane(sx, sy))
+    }
+
+    /// The index in `tiles` of the tile of subtile (`sx`, `sy`).
+    #[inline]
+    pub(crate) fn tile_index(&self, sx: u32, sy: u32) -> usize {
+        ((sy / 2) * (self.cols / 4) + sx / 4) as usize
     }
 
     /// Screen width in pixels.
@@ -223,7 +236,7 @@ impl MaskedBuffer {
 
     /// Forgets every occluder: all pixels at the far plane (depth 1).
     pub fn clear(&mut self) {
-        self.groups.fill(CLEAR);
+        self.tiles.fill(CLEAR);
     }
 
     /// The bound on the stored depth of every pixel, row by row (`width * height`

@@ -3,9 +3,8 @@
 //! pixel rows, then per tile in reach the coverage masks of its eight
 //! subtiles by shifts of the rows' spans and their depth bounds from the
 //! triangle's plane, all eight at once ([`lanes`], in AVX2 where the CPU has
-//! it: [`avx2`]). The buffer stores subtiles in groups of eight across
-//! ([`Group`]); a tile is half of two groups one above the other. With AVX2,
-//! triangles are set up four at a time ([`setup`]).
+//! it: [`avx2`]), loaded from and stored to the buffer's [`Tile`] in one go.
+//! With AVX2, triangles are set up four at a time ([`setup`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with the top-left rule on the edge; of
@@ -16,7 +15,7 @@
 //! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
 //! what the pixel-by-pixel definition gives.
 
-use crate::buffer::{Group, MaskedBuffer, MergeMode};
+use crate::buffer::{MaskedBuffer, MergeMode, Tile};
 use crate::project::{screen_triangles, to_screen};
 use crate::{SUBTILE_H, SUBTILE_W};
 use glam::{DVec2, DVec3, Mat4, Vec3, Vec4};
@@ -462,10 +461,10 @@ impl ScreenTriangle {
     }
 }
 
-/// Subtile rows `first..first + groups.len() * 8 / cols` of a buffer, which a
-/// thread rasterizes on its own.
+/// Subtile rows `first..first + tiles.len() * 8 / cols` of a buffer (whole
+/// tile rows), which a thread rasterizes on its own.
 pub(crate) struct Band<'a> {
-    groups: &'a mut [Group],
+    tiles: &'a mut [Tile],
     first: u32,
     /// One past the band's last subtile row.
     end: u32,
@@ -558,10 +557,9 @@ impl Band<'_> {
     #[inline(always)]
     fn draw_tile_row<L: Lanes>(&mut self, raster: &Raster, lanes: L, sy: u32, spans: &Spans) {
         let Some((left, right)) = lanes.reach(spans) else { return };
-        let groups_per_row = self.cols as usize / LANES;
-        let row = (sy - self.first) as usize * groups_per_row;
-        // The band holds whole tile rows, so both subtile rows are its.
-        let (upper_row, lower_row) = self.groups[row..row + 2 * groups_per_row].split_at_mut(groups_per_row);
+        let tiles_per_row = self.cols as usize / 4;
+        let row = (sy - self.first) as usize / 2 * tiles_per_row;
+        let tiles = &mut self.tiles[row..row + tiles_per_row];
         // Spans lie within the window, so `0 <= left < right`: the tiles by
         // shifts of unsigned values.
         let padded_from = if sy * 4 + STEP_ROWS > self.height { 0 } else { self.width / TILE_W };
@@ -574,7 +572,7 @@ impl Band<'_> {
             padded_from,
             screen: (self.width, self.height),
         };
-        lanes.draw_tiles(upper_row, lower_row, &row, self.merge);
+        lanes.draw_tiles(tiles, &row, self.merge);
     }
 }
 
@@ -922,13 +920,13 @@ impl MaskedBuffer {
             })
             .collect();
         let (cols, merge, avx2) = (self.cols, self.merge, pass.avx2);
-        self.groups
+        self.tiles
             .par_chunks_mut((band_rows * cols) as usize / LANES)
             .enumerate()
-            .map(|(b, groups)| {
+            .map(|(b, tiles)| {
                 let first = b as u32 * band_rows;
-                let end = first + (groups.len() * LANES) as u32 / cols;
-                let mut band = Band { groups, first, end, cols, width, height, merge, avx2 };
+                let end = first + (tiles.len() * LANES) as u32 / cols;
+                let mut band = Band { tiles, first, end, cols, width, height, merge, avx2 };
                 pass.run(bins.iter().flat_map(|bin| bin.in_band(b).iter().copied()), &mut band)
             })
             .reduce(RenderWork::default, |mut a, b| {
@@ -945,7 +943,7 @@ impl MaskedBuffer {
     /// The whole buffer as one band, with the AVX2 lanes or the portable ones.
     fn whole_with(&mut self, avx2: Option<Avx2>) -> Band<'_> {
         Band {
-            groups: &mut self.groups,
+            tiles: &mut self.tiles,
             first: 0,
             end: self.rows,
             cols: self.cols,
@@ -981,10 +979,10 @@ mod tests {
                     let (gx, by) = (f64::from(sx / 4 * TILE_W), f64::from(sy * 4));
                     let far = tri.raster.plane.subtile_bound(gx, by, (sx % 4) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
-                    let group = &mut buffer.groups[(sy * buffer.cols + sx) as usize / LANES];
-                    let mut s = group.get((sx % 8) as usize);
+                    let (t, l) = (buffer.tile_index(sx, sy), Tile::lane(sx, sy));
+                    let mut s = buffer.tiles[t].get(l);
                     s.merge(cover | outside, far, mode);
-                    group.set((sx % 8) as usize, s);
+                    buffer.tiles[t].set(l, s);
                 }
             }
         }
@@ -998,9 +996,9 @@ mod tests {
         }
     }
 
-    /// Every subtile of the buffer, padding included, group by group.
+    /// Every subtile of the buffer, padding included, tile by tile.
     fn subtiles(b: &MaskedBuffer) -> impl Iterator<Item = Subtile> + '_ {
-        b.groups.iter().flat_map(|g| (0..LANES).map(|l| g.get(l)))
+        b.tiles.iter().flat_map(|t| (0..LANES).map(|l| t.get(l)))
     }
 
     fn assert_same(a: &MaskedBuffer, b: &MaskedBuffer, what: &str) {

@@ -1,15 +1,15 @@
 //! Occlusion tests against the buffer: screen rectangles and boxes.
 //!
-//! A rectangle is read a row of subtiles at a time straight from the group
-//! storage, eight subtiles (one [`Group`]) per step, compared in lanes (in
-//! AVX2 where the CPU has it, detected at run time: the `avx2` module), and
-//! the test stops at the first group holding a subtile that may show the
-//! rectangle. The count of
-//! subtiles read is what a test's cost follows (`*_counted`).
+//! A rectangle is read a tile row (two subtile rows) at a time straight from
+//! the tile storage, eight subtiles (one [`Tile`]) per step, compared in
+//! lanes (in AVX2 where the CPU has it, detected at run time: the `avx2`
+//! module), and the test stops at the first tile holding a subtile of the
+//! rectangle that may show it. The count of subtiles read is what a test's
+//! cost follows (`*_counted`).
 
 mod avx2;
 
-use crate::buffer::{Group, MaskedBuffer};
+use crate::buffer::{MaskedBuffer, Tile};
 use crate::raster::Avx2;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
@@ -24,29 +24,29 @@ pub enum Visibility {
     ViewCulled,
 }
 
-/// How the eight subtiles of a group are compared with a rectangle's depth:
+/// How the eight subtiles of a tile are compared with a rectangle's depth:
 /// [`Portable`], or [`Avx2`] where the CPU has it (the same answers).
-trait GroupTest: Copy {
-    /// The lanes of `group` (bit `l` for lane `l`) whose bound on their
+trait TileTest: Copy {
+    /// The lanes of `tile` (bit `l` for lane `l`) whose bound on their
     /// pixels' depth lies beyond `nearest`, where something at `nearest` may
     /// be seen. The bound is the reference depth, or the larger layer where
     /// the mask has pixels on the working layer, so a lane is beyond when
     /// `nearest < reference`, or the mask is not empty and `nearest <
     /// working` (the same as `nearest < reference.max(working)` with
     /// `f32::max`, NaN layers included: a NaN compares false).
-    fn lanes_beyond(self, group: &Group, nearest: f32) -> u32;
+    fn lanes_beyond(self, tile: &Tile, nearest: f32) -> u32;
 }
 
-/// The group test in plain Rust.
+/// The tile test in plain Rust.
 #[derive(Clone, Copy, Debug)]
 struct Portable;
 
-impl GroupTest for Portable {
+impl TileTest for Portable {
     #[inline(always)]
-    fn lanes_beyond(self, group: &Group, nearest: f32) -> u32 {
+    fn lanes_beyond(self, tile: &Tile, nearest: f32) -> u32 {
         let mut bits = 0;
         for l in 0..8 {
-            let beyond = nearest < group.reference[l] || (group.mask[l] != 0 && nearest < group.working[l]);
+            let beyond = nearest < tile.reference[l] || (tile.mask[l] != 0 && nearest < tile.working[l]);
             bits |= u32::from(beyond) << l;
         }
         bits
@@ -64,32 +64,42 @@ struct SubtileRect {
 }
 
 impl SubtileRect {
-    /// Reads the rectangle row by row, a group of eight subtiles at a time,
-    /// until a group has a subtile beyond `nearest`: whether one was found,
-    /// and the rectangle's subtiles in the groups read.
+    /// Reads the rectangle tile row by tile row, a tile of eight subtiles at
+    /// a time, until a tile has a subtile of the rectangle beyond `nearest`:
+    /// whether one was found, and the rectangle's subtiles in the tiles read.
     #[inline(always)]
-    fn scan(self, buffer: &MaskedBuffer, nearest: f32, test: impl GroupTest) -> (Visibility, u64) {
-        let (g0, g1) = (self.sx0 / 8, self.sx1 / 8);
-        let (first, last) = (0xff << (self.sx0 % 8), 0xff >> (7 - self.sx1 % 8));
+    fn scan(self, buffer: &MaskedBuffer, nearest: f32, test: impl TileTest) -> (Visibility, u64) {
+        let (t0, t1) = (self.sx0 / 4, self.sx1 / 4);
+        // The rectangle's columns in the first and last tile, as lanes of
+        // either subtile row.
+        let (first, last) = (0xf << (self.sx0 % 4) & 0xf, 0xf >> (3 - self.sx1 % 4));
         let per_row = u64::from(self.sx1 - self.sx0 + 1);
-        let groups_per_row = (buffer.cols / 8) as usize;
-        for sy in self.sy0..=self.sy1 {
-            let row = &buffer.groups[sy as usize * groups_per_row..][g0 as usize..=g1 as usize];
-            for (g, group) in (g0..=g1).zip(row) {
-                let mut lanes = 0xff;
-                if g == g0 {
-                    lanes &= first;
+        let tiles_per_row = (buffer.cols / 4) as usize;
+        let mut read = 0;
+        for ty in self.sy0 / 2..=self.sy1 / 2 {
+            // The tile row's subtile rows in the rectangle: the upper one
+            // (lanes 0-3) unless the rectangle starts below it, the lower one
+            // (lanes 4-7) unless it ends above it.
+            let (upper, lower) = (2 * ty >= self.sy0, 2 * ty < self.sy1);
+            let rows = u64::from(upper) + u64::from(lower);
+            let halves = if upper { 0x0f } else { 0 } | if lower { 0xf0 } else { 0 };
+            let row = &buffer.tiles[ty as usize * tiles_per_row..][t0 as usize..=t1 as usize];
+            for (t, tile) in (t0..=t1).zip(row) {
+                let mut columns = 0xf;
+                if t == t0 {
+                    columns &= first;
                 }
-                if g == g1 {
-                    lanes &= last;
+                if t == t1 {
+                    columns &= last;
                 }
-                if test.lanes_beyond(group, nearest) & lanes != 0 {
-                    let in_row = u64::from((8 * (g + 1)).min(self.sx1 + 1) - self.sx0);
-                    return (Visibility::Visible, u64::from(sy - self.sy0) * per_row + in_row);
+                if test.lanes_beyond(tile, nearest) & (columns | columns << 4) & halves != 0 {
+                    let in_row = u64::from((4 * (t + 1)).min(self.sx1 + 1) - self.sx0);
+                    return (Visibility::Visible, read + rows * in_row);
                 }
             }
+            read += rows * per_row;
         }
-        (Visibility::Occluded, u64::from(self.sy1 - self.sy0 + 1) * per_row)
+        (Visibility::Occluded, read)
     }
 }
 
@@ -102,8 +112,8 @@ impl MaskedBuffer {
     }
 
     /// [`test_rect`](Self::test_rect), with the number of subtiles it read:
-    /// the rectangle's subtiles in the groups of eight read before the answer
-    /// (all of them when occluded; up to the first group with a subtile that
+    /// the rectangle's subtiles in the tiles of eight read before the answer
+    /// (all of them when occluded; up to the first tile with a subtile that
     /// may show it when visible; none when the rectangle is off screen or its
     /// input is not finite). The time of a test follows this count.
     pub fn test_rect_counted(&self, min_px: Vec2, max_px: Vec2, nearest_depth: f32) -> (Visibility, u64) {
@@ -177,7 +187,7 @@ mod tests {
     use crate::buffer::Subtile;
     use proptest::prelude::*;
 
-    /// The rectangle test read subtile by subtile (the definition the group
+    /// The rectangle test read subtile by subtile (the definition the tile
     /// reads must answer as).
     fn scalar_test_rect(b: &MaskedBuffer, min_px: Vec2, max_px: Vec2, nearest: f32) -> Visibility {
         if !(min_px.is_finite() && max_px.is_finite()) || nearest.is_nan() {
@@ -214,7 +224,8 @@ mod tests {
                 let (mask, working, reference) = states[k % states.len()];
                 k += 1;
                 let s = Subtile { mask, working, reference };
-                b.groups[(sy * b.cols / 8 + sx / 8) as usize].set((sx % 8) as usize, s);
+                let t = b.tile_index(sx, sy);
+                b.tiles[t].set(Tile::lane(sx, sy), s);
             }
         }
         b
@@ -222,23 +233,33 @@ mod tests {
 
     #[test]
     fn counts_the_subtiles_of_the_rectangle_it_reads() {
-        // 200 x 40 pixels: 32 subtile columns (4 groups, padded), 10 rows.
+        // 200 x 40 pixels: 28 subtile columns (7 tiles, padded), 10 rows (5
+        // tile rows).
         let mut b = MaskedBuffer::new(200, 40).unwrap();
-        for g in &mut b.groups {
-            g.reference = [0.5; 8];
+        for t in &mut b.tiles {
+            t.reference = [0.5; 8];
         }
-        // Pixels 10..=69 x 5..=14: subtile columns 1..=8 (two groups: 7 + 1
-        // lanes), rows 1..=3, all read when occluded.
-        let r = b.test_rect_counted(Vec2::new(10.0, 5.0), Vec2::new(69.5, 14.5), 0.7);
-        assert_eq!(r, (Visibility::Occluded, 24));
-        // In front: the first group answers after its 7 subtiles.
-        let r = b.test_rect_counted(Vec2::new(10.0, 5.0), Vec2::new(69.5, 14.5), 0.3);
-        assert_eq!(r, (Visibility::Visible, 7));
-        // Visible only through subtile (8, 2): rows 1 (8 reads), then row 2's
-        // first group (7) clean and its second (1) seen.
-        b.groups[2 * 4 + 1].reference[0] = 0.9;
-        let r = b.test_rect_counted(Vec2::new(10.0, 5.0), Vec2::new(69.5, 14.5), 0.7);
-        assert_eq!(r, (Visibility::Visible, 16));
+        // Pixels 10..=69 x 5..=14: subtile columns 1..=8 (three tiles: 3 + 4
+        // + 1 columns), rows 1..=3 (the lower row of tile row 0, both of tile
+        // row 1), all read when occluded.
+        let rect = (Vec2::new(10.0, 5.0), Vec2::new(69.5, 14.5));
+        assert_eq!(b.test_rect_counted(rect.0, rect.1, 0.7), (Visibility::Occluded, 24));
+        // In front: the first tile answers after its 3 subtiles of row 1.
+        assert_eq!(b.test_rect_counted(rect.0, rect.1, 0.3), (Visibility::Visible, 3));
+        // Visible only through subtile (4, 1): tile row 0's first tile (3)
+        // clean and its second (4) seen; the subtile beside it in the upper
+        // row, outside the rectangle, does not count.
+        let (t, l) = (b.tile_index(4, 1), Tile::lane(4, 1));
+        b.tiles[t].reference[l - 4] = 0.9;
+        assert_eq!(b.test_rect_counted(rect.0, rect.1, 0.7), (Visibility::Occluded, 24));
+        b.tiles[t].reference[l] = 0.9;
+        assert_eq!(b.test_rect_counted(rect.0, rect.1, 0.7), (Visibility::Visible, 7));
+        // Visible only through subtile (8, 2): tile row 0 (8 reads), then
+        // tile row 1's tiles, two rows each: 3 and 4 clean, 1 seen.
+        b.tiles[t].reference[l] = 0.5;
+        let (t, l) = (b.tile_index(8, 2), Tile::lane(8, 2));
+        b.tiles[t].reference[l] = 0.9;
+        assert_eq!(b.test_rect_counted(rect.0, rect.1, 0.7), (Visibility::Visible, 24));
         // Clipped to the screen: columns 24..=24, rows 9..=9.
         let r = b.test_rect_counted(Vec2::new(195.0, 38.0), Vec2::new(400.0, 90.0), 0.7);
         assert_eq!(r, (Visibility::Occluded, 1));
@@ -250,8 +271,8 @@ mod tests {
     #[test]
     fn a_box_counts_the_reads_of_its_rectangle() {
         let mut b = MaskedBuffer::new(64, 48).unwrap();
-        for g in &mut b.groups {
-            g.reference = [0.5; 8];
+        for t in &mut b.tiles {
+            t.reference = [0.5; 8];
         }
         // The whole screen at depth 0.7..0.8: its rectangle, a pixel wider on
         // each side, is clipped to all 8 x 12 subtiles.
@@ -270,7 +291,7 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(512))]
 
         #[test]
-        fn group_reads_answer_as_subtile_reads(
+        fn tile_reads_answer_as_subtile_reads(
             width in 1u32..300,
             height in 1u32..100,
             states in proptest::collection::vec(state(), 1..40),
@@ -281,7 +302,7 @@ mod tests {
                 let (lo, hi) = (Vec2::new(x, y), Vec2::new(x + w, y + h));
                 let scalar = scalar_test_rect(&b, lo, hi, z);
                 prop_assert_eq!(b.test_rect(lo, hi, z), scalar);
-                // Both group compares, whichever the CPU runs.
+                // Both tile compares, whichever the CPU runs.
                 if scalar != Visibility::ViewCulled {
                     let rect = SubtileRect {
                         sx0: lo.x.floor().max(0.0) as u32 / 8,

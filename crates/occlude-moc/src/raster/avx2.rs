@@ -1,9 +1,10 @@
-//! The AVX2 versions of [`super::lanes`]' two steps and of the group merge
-//! ([`Group::merge`]): the eight rows' intercepts of an edge in one `f32 x 8`
+//! The AVX2 versions of [`super::lanes`]' two steps and of the tile merge
+//! ([`Tile::merge`]): the eight rows' intercepts of an edge in one `f32 x 8`
 //! register, a 32x8-pixel tile's eight subtiles' masks (`i32 x 8`, a row's
 //! 32 pixels a lane, then a byte transpose) and depth bounds (`f32 x 8` from
 //! an `f64` base per subtile row) at once, and the eight subtiles merged by
-//! compares and blends. Same operations in the same order as the portable
+//! compares and blends, loaded from and stored to the buffer's [`Tile`] as
+//! three registers. Same operations in the same order as the portable
 //! versions (products and sums rounded separately, never fused; `min` taking
 //! the second operand on NaN as `f64::min` and `f32::min` take the non-NaN
 //! one; `max` of the working depth and the new one in the portable merge's
@@ -14,7 +15,7 @@ use std::arch::x86_64::*;
 use super::lanes::{add_outside, outside, Lanes, Spans, TileRow, LANES, TILE_W, T_MIN};
 use super::setup::{Batch, SETUP_LANES};
 use super::{Band, CullMode, DepthPlane, Raster, ScreenTriangle};
-use crate::buffer::{Group, MergeMode};
+use crate::buffer::{MergeMode, Tile};
 use glam::Vec4;
 
 /// Proof that the running CPU supports AVX2: a value exists only where it does,
@@ -63,12 +64,12 @@ impl Avx2 {
         unsafe { super::setup::setup4(clip, cull, width, height, subpixel_bits, batch) }
     }
 
-    /// [`Group::merge`], in AVX2 (on its own for the tests; the rasterizer
+    /// [`Tile::merge`], in AVX2 (on its own for the tests; the rasterizer
     /// runs it in [`Lanes::draw_tiles`]).
     #[cfg(test)]
-    pub(crate) fn merge(self, group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
+    pub(crate) fn merge(self, tile: &mut Tile, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { merge(group, cover, depth, mode) }
+        unsafe { merge(tile, cover, depth, mode) }
     }
 }
 
@@ -88,13 +89,12 @@ impl Lanes for Avx2 {
     /// Per tile, the masks and depth bounds
     /// ([`tile_lanes`](super::lanes::tile_lanes)), the padding pixels added
     /// to the lanes that cover something ([`add_outside`]), then
-    /// [`merge_lanes`] on the subtiles loaded from the two groups' halves,
-    /// with the spans, the plane's terms, masks and depth bounds kept in
-    /// registers.
+    /// [`merge_lanes`] on the tile's subtiles, with the spans, the plane's
+    /// terms, masks and depth bounds kept in registers.
     #[inline(always)]
-    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+    fn draw_tiles(self, tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { draw_tiles(upper, lower, row, mode) }
+        unsafe { draw_tiles(tiles, row, mode) }
     }
 }
 
@@ -131,11 +131,11 @@ unsafe fn reach(spans: &Spans) -> Option<(i32, i32)> {
 /// # Safety
 /// The CPU must support AVX2.
 #[inline(always)]
-unsafe fn draw_tiles(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+unsafe fn draw_tiles(tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
     // One loop per merge rule, so that no tile tests it.
     match mode {
-        MergeMode::LayerMerge => tile_loop(upper, lower, row, MergeMode::LayerMerge),
-        MergeMode::QuickMask => tile_loop(upper, lower, row, MergeMode::QuickMask),
+        MergeMode::LayerMerge => tile_loop(tiles, row, MergeMode::LayerMerge),
+        MergeMode::QuickMask => tile_loop(tiles, row, MergeMode::QuickMask),
     }
 }
 
@@ -144,42 +144,50 @@ unsafe fn draw_tiles(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>
 /// # Safety
 /// The CPU must support AVX2.
 #[inline(always)]
-unsafe fn tile_loop(upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+unsafe fn tile_loop(tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
     // Once for the row, so that the loop indexes unchecked.
-    assert!(((row.last / 2) as usize) < upper.len().min(lower.len()), "tiles beyond the band's groups");
+    assert!((row.last as usize) < tiles.len(), "tiles beyond the band's tile row");
     let spans = row.spans;
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
     let depth = DepthLanes::new(&row.raster.plane, row.ty);
     let mut x = _mm256_set1_epi32((row.first * TILE_W) as i32);
-    // A tile's subtiles are half `tx % 2` of group `tx / 2` in each row:
-    // from `words(tx)` on, in `u32`s, each field (mask, working, reference)
-    // one group field (`LANES` words) after the other.
-    let words = |tx: u32| (tx / 2) as usize * 3 * LANES + 4 * (tx % 2) as usize;
-    let (upper, lower) = (upper.as_mut_ptr().cast::<u32>(), lower.as_mut_ptr().cast::<u32>());
+    let tiles = tiles.as_mut_ptr();
     for tx in row.first..row.last + 1 {
         let mut c = tile_cover(lo, hi, x);
         if tx >= row.padded_from {
             c = with_outside(c, row.screen, tx, row.ty);
         }
         let d = depth.tile(tx);
-        // SAFETY: `tx / 2 <= last / 2`, a group of both rows by the
-        // assertion above; `Group` is `repr(C)`, its fields `LANES` words
-        // each. The upper row's four subtiles go in the low 128 bits.
-        let (u, l) = (upper.add(words(tx)), lower.add(words(tx)));
-        let load =
-            |field: usize| _mm256_set_m128i(_mm_loadu_si128(l.add(field).cast()), _mm_loadu_si128(u.add(field).cast()));
-        let store = |field: usize, v: __m256i| {
-            _mm_storeu_si128(u.add(field).cast(), _mm256_castsi256_si128(v));
-            _mm_storeu_si128(l.add(field).cast(), _mm256_extracti128_si256::<1>(v));
-        };
-        let (mask, working, reference) =
-            (load(0), _mm256_castsi256_ps(load(LANES)), _mm256_castsi256_ps(load(2 * LANES)));
+        // SAFETY: `tx <= last`, a tile of the row by the assertion above;
+        // `Tile` is 32-byte aligned, its fields 32 bytes each.
+        let tile = &mut *tiles.add(tx as usize);
+        let mask = _mm256_load_si256(tile.mask.as_ptr().cast());
+        let (working, reference) = (_mm256_load_ps(tile.working.as_ptr()), _mm256_load_ps(tile.reference.as_ptr()));
         let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
-        store(0, mask);
-        store(LANES, _mm256_castps_si256(working));
-        store(2 * LANES, _mm256_castps_si256(reference));
+        store(tile.mask.as_mut_ptr().cast(), mask);
+        store(tile.working.as_mut_ptr().cast(), _mm256_castps_si256(working));
+        store(tile.reference.as_mut_ptr().cast(), _mm256_castps_si256(reference));
         x = _mm256_add_epi32(x, _mm256_set1_epi32(TILE_W as i32));
     }
+}
+
+/// `v` stored to the 32 bytes at `p` (32-byte aligned), in assembly: LLVM
+/// turns a blend of a loaded value stored back to the same place into a
+/// masked store (`vmaskmovps`), which AMD's processors run slowly (the fill
+/// rate fell by a fifth where it did).
+///
+/// # Safety
+/// The CPU must support AVX2; `p` must be valid for writes of 32 bytes and
+/// aligned to 32.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn store(p: *mut __m256i, v: __m256i) {
+    std::arch::asm!(
+        "vmovdqa ymmword ptr [{p}], {v}",
+        p = in(reg) p,
+        v = in(ymm_reg) v,
+        options(nostack, preserves_flags),
+    );
 }
 
 /// `cover` with the padding pixels of tile `tx` of tile row `ty` on a
@@ -406,15 +414,15 @@ unsafe fn merge_lanes(
     )
 }
 
-/// [`merge_lanes`] on a group in memory (for the tests).
+/// [`merge_lanes`] on a tile in memory (for the tests).
 #[cfg(test)]
 #[target_feature(enable = "avx2")]
-unsafe fn merge(group: &mut Group, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
+unsafe fn merge(tile: &mut Tile, cover: &[u32; LANES], depth: &[f32; LANES], mode: MergeMode) {
     let (c, d) = (_mm256_loadu_si256(cover.as_ptr().cast()), _mm256_loadu_ps(depth.as_ptr()));
-    let mask = _mm256_load_si256(group.mask.as_ptr().cast());
-    let (working, reference) = (_mm256_load_ps(group.working.as_ptr()), _mm256_load_ps(group.reference.as_ptr()));
+    let mask = _mm256_load_si256(tile.mask.as_ptr().cast());
+    let (working, reference) = (_mm256_load_ps(tile.working.as_ptr()), _mm256_load_ps(tile.reference.as_ptr()));
     let (mask, working, reference) = merge_lanes(mask, working, reference, c, d, mode);
-    _mm256_store_si256(group.mask.as_mut_ptr().cast(), mask);
-    _mm256_store_ps(group.working.as_mut_ptr(), working);
-    _mm256_store_ps(group.reference.as_mut_ptr(), reference);
+    _mm256_store_si256(tile.mask.as_mut_ptr().cast(), mask);
+    _mm256_store_ps(tile.working.as_mut_ptr(), working);
+    _mm256_store_ps(tile.reference.as_mut_ptr(), reference);
 }

@@ -79,7 +79,7 @@
 //! band is under half a pixel, and the window's pixels keep their side.
 
 use super::{round_far, Exact, Raster};
-use crate::buffer::{outside_mask, Group, MergeMode};
+use crate::buffer::{outside_mask, MergeMode, Tile};
 
 /// Subtiles handled by one [`tile_lanes`] call: a tile's.
 pub(crate) const LANES: usize = 8;
@@ -272,30 +272,6 @@ pub(crate) fn outside((width, height): (u32, u32), tx: u32, ty: u32) -> [u32; LA
     std::array::from_fn(|l| outside_mask(width, height, 4 * tx + (l % 4) as u32, 2 * ty + (l / 4) as u32))
 }
 
-/// The tile `half` (0: subtiles 0-3, 1: subtiles 4-7) of the groups `upper`
-/// and `lower` (the same columns of two neighbouring subtile rows): lanes
-/// 0-3 from `upper`, 4-7 from `lower`, as [`tile_lanes`] orders them.
-#[inline]
-pub(crate) fn tile_of(upper: &Group, lower: &Group, half: usize) -> Group {
-    fn pick<T: Copy>(upper: &[T; LANES], lower: &[T; LANES], half: usize) -> [T; LANES] {
-        std::array::from_fn(|l| if l < 4 { upper[4 * half + l] } else { lower[4 * half + l - 4] })
-    }
-    Group {
-        mask: pick(&upper.mask, &lower.mask, half),
-        working: pick(&upper.working, &lower.working, half),
-        reference: pick(&upper.reference, &lower.reference, half),
-    }
-}
-
-/// Writes `tile` back into the groups it was taken from ([`tile_of`]).
-#[inline]
-pub(crate) fn put_tile(tile: &Group, upper: &mut Group, lower: &mut Group, half: usize) {
-    for l in 0..4 {
-        upper.set(4 * half + l, tile.get(l));
-        lower.set(4 * half + l, tile.get(4 + l));
-    }
-}
-
 /// Adds the padding pixels `outside` (per lane: the pixels of its subtile
 /// beyond the screen) to the lanes of `cover` that cover something: padding
 /// counts as covered by every triangle touching its subtile (the crate doc).
@@ -320,10 +296,9 @@ pub(crate) trait Lanes: Copy {
         spans.reach()
     }
     /// The tiles of `row`, each one's masks and depth bounds ([`tile_lanes`]),
-    /// its padding added ([`add_outside`]), merged ([`Group::merge`]) into
-    /// its subtiles: half `tx % 2` of groups `tx / 2` of `upper` and `lower`
-    /// (the tile row's two subtile rows, [`tile_of`]).
-    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode);
+    /// its padding added ([`add_outside`]), merged ([`Tile::merge`]) into
+    /// its subtiles: tile `tx` of `tiles` (the tile row).
+    fn draw_tiles(self, tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode);
 }
 
 /// The portable [`Lanes`]: this module's functions.
@@ -337,16 +312,13 @@ impl Lanes for Portable {
     }
 
     #[inline]
-    fn draw_tiles(self, upper: &mut [Group], lower: &mut [Group], row: &TileRow<'_>, mode: MergeMode) {
+    fn draw_tiles(self, tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
         for tx in row.first..=row.last {
             let (mut cover, depth) = tile_lanes(row.raster, row.spans, tx, row.ty);
             if tx >= row.padded_from {
                 add_outside(&mut cover, &outside(row.screen, tx, row.ty));
             }
-            let (g, half) = ((tx / 2) as usize, (tx % 2) as usize);
-            let mut tile = tile_of(&upper[g], &lower[g], half);
-            tile.merge(&cover, &depth, mode);
-            put_tile(&tile, &mut upper[g], &mut lower[g], half);
+            tiles[tx as usize].merge(&cover, &depth, mode);
         }
     }
 }
@@ -411,20 +383,20 @@ mod tests {
         let (mut full, mut discarded) = (0, 0);
         for mode in [MergeMode::LayerMerge, MergeMode::QuickMask] {
             for _ in 0..20_000 {
-                let mut group = Group { mask: [0; LANES], working: [0.0; LANES], reference: [1.0; LANES] };
+                let mut tile = Tile { mask: [0; LANES], working: [0.0; LANES], reference: [1.0; LANES] };
                 let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
                 for l in 0..LANES {
                     let (w, r) = (depths[pick(5)], depths[pick(5)]);
                     let (w, r) = (w.min(r), w.max(r));
-                    group.set(l, Subtile { mask: masks[pick(4)], working: w, reference: r });
+                    tile.set(l, Subtile { mask: masks[pick(4)], working: w, reference: r });
                     (cover[l], depth[l]) = (masks[pick(5)], depths[pick(6)]);
                 }
-                let before = group;
-                let mut portable = group;
+                let before = tile;
+                let mut portable = tile;
                 portable.merge(&cover, &depth, mode);
-                avx2.merge(&mut group, &cover, &depth, mode);
+                avx2.merge(&mut tile, &cover, &depth, mode);
                 for (l, &c) in cover.iter().enumerate() {
-                    let (a, p) = (group.get(l), portable.get(l));
+                    let (a, p) = (tile.get(l), portable.get(l));
                     assert!(
                         a.mask == p.mask
                             && a.working.to_bits() == p.working.to_bits()

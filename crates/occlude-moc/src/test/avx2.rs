@@ -1,19 +1,19 @@
-//! The AVX2 version of the box test's group compare
-//! ([`GroupTest::lanes_beyond`]): a group's eight subtiles in one register per
+//! The AVX2 version of the box test's tile compare
+//! ([`TileTest::lanes_beyond`]): a tile's eight subtiles in one register per
 //! field, compared with ordered compares (false on NaN, as the portable
 //! `<` is), so the answers are the portable ones.
 
 use std::arch::x86_64::*;
 
-use super::{GroupTest, SubtileRect, Visibility};
-use crate::buffer::{Group, MaskedBuffer};
+use super::{SubtileRect, TileTest, Visibility};
+use crate::buffer::{MaskedBuffer, Tile};
 use crate::raster::Avx2;
 
-impl GroupTest for Avx2 {
+impl TileTest for Avx2 {
     #[inline(always)]
-    fn lanes_beyond(self, group: &Group, nearest: f32) -> u32 {
+    fn lanes_beyond(self, tile: &Tile, nearest: f32) -> u32 {
         // SAFETY: an `Avx2` exists only where the CPU supports AVX2.
-        unsafe { lanes_beyond(group, nearest) }
+        unsafe { lanes_beyond(tile, nearest) }
     }
 }
 
@@ -32,11 +32,11 @@ unsafe fn scan(avx2: Avx2, rect: SubtileRect, buffer: &MaskedBuffer, nearest: f3
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn lanes_beyond(group: &Group, nearest: f32) -> u32 {
-    // `Group` is 32-byte aligned and each field is 32 bytes.
-    let mask = _mm256_load_si256(group.mask.as_ptr().cast());
-    let working = _mm256_load_ps(group.working.as_ptr());
-    let reference = _mm256_load_ps(group.reference.as_ptr());
+unsafe fn lanes_beyond(tile: &Tile, nearest: f32) -> u32 {
+    // `Tile` is 32-byte aligned and each field is 32 bytes.
+    let mask = _mm256_load_si256(tile.mask.as_ptr().cast());
+    let working = _mm256_load_ps(tile.working.as_ptr());
+    let reference = _mm256_load_ps(tile.reference.as_ptr());
     let nearest = _mm256_set1_ps(nearest);
     let empty = _mm256_castsi256_ps(_mm256_cmpeq_epi32(mask, _mm256_setzero_si256()));
     let before_reference = _mm256_cmp_ps::<_CMP_LT_OQ>(nearest, reference);
