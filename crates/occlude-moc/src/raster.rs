@@ -182,7 +182,7 @@ fn floor_in(v: f64, min: f64, max: f64) -> i32 {
 
 /// A triangle's depth plane `z = zx x + zy y + z0`, with the `f32` step of
 /// its subtile bounds from one subtile to the next and their cap (its
-/// farthest vertex depth), both set up with it.
+/// farthest vertex depth), both set up with it for a screen of a given width.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DepthPlane {
     zx: f64,
@@ -198,22 +198,23 @@ impl DepthPlane {
     /// The plane through `t`, raised by `(|zx| + |zy|) slack`: at every point at
     /// least the plane's value anywhere within `slack` pixels (in x and in y),
     /// so also the depth a rasterizer interpolates from vertices it placed up to
-    /// `slack` away from `t`'s (the crate doc, "Depth per subtile").
-    fn new(t: &[DVec3; 3], slack: f64) -> Self {
+    /// `slack` away from `t`'s (the crate doc, "Depth per subtile"), on a
+    /// screen `width` pixels wide.
+    fn new(t: &[DVec3; 3], slack: f64, width: u32) -> Self {
         let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
         let n = d1.cross(d2);
         let r = 1.0 / n.z;
         let (zx, zy) = (-n.x * r, -n.y * r);
         let z0 = t[0].z - zx * t[0].x - zy * t[0].y + (zx.abs() + zy.abs()) * slack;
-        Self::from_terms(zx, zy, z0, t[0].z.max(t[1].z).max(t[2].z))
+        Self::from_terms(zx, zy, z0, t[0].z.max(t[1].z).max(t[2].z), width)
     }
 
     /// The plane `z = zx x + zy y + z0` capped at `zmax`, with its `f32`
-    /// step and cap.
-    pub(crate) fn from_terms(zx: f64, zy: f64, z0: f64, zmax: f64) -> Self {
+    /// step and cap for a screen `width` pixels wide.
+    pub(crate) fn from_terms(zx: f64, zy: f64, z0: f64, zmax: f64, width: u32) -> Self {
         let v = round_far(zx * 8.0);
-        let bits = v.to_bits();
-        let step = f32::from_bits(if v >= 0.0 { (bits + 7) & !7 } else { bits & !7 });
+        let (bits, low) = (v.to_bits(), (1u32 << step_zero_bits(width)) - 1);
+        let step = f32::from_bits(if v >= 0.0 { (bits + low) & !low } else { bits & !low });
         DepthPlane { zx, zy, z0, step, cap: round_far(zmax) }
     }
 
@@ -249,10 +250,11 @@ impl DepthPlane {
     }
 
     /// An `f32` step from one subtile's corner to the next one's to the right,
-    /// never less than the plane's rise `8 zx` and with at most 21 significant
-    /// bits, so that its multiples by `0..8` are exact in `f32`: `8 zx`
+    /// never less than the plane's rise `8 zx` and with its
+    /// [`step_zero_bits`] lowest significand bits zero, so that its multiples
+    /// by the subtile columns of the screen are exact in `f32`: `8 zx`
     /// rounded far ([`round_far`]), then its significand rounded up (positive)
-    /// or cut (negative) to 21 bits.
+    /// or cut (negative).
     #[inline]
     pub(crate) fn lane_step(&self) -> f32 {
         self.step
@@ -265,20 +267,34 @@ impl DepthPlane {
         self.cap
     }
 
-    /// An `f32` bound on the triangle's depth over subtile `l` of the run of
-    /// subtiles in a row (a tile's four, [`lanes::tile_lanes`]) whose first
-    /// subtile's top-left corner is (`gx`, `by`): the plane at
-    /// the first subtile's corner ([`Self::corner_x`], [`Self::row_term`]) in
-    /// `f64`, rounded far ([`Self::far_at`]), plus `l` exact [`Self::lane_step`]s
-    /// in `f32` ([`far_sum`]), capped by [`Self::far_max`]. Lane `l`'s corner
-    /// lies `8 l` to the right of the first one's, so this is never nearer than
-    /// the plane's largest value at its corners, nor than the farthest vertex
-    /// where that is nearer (the crate doc, "Depth per subtile").
+    /// An `f32` bound on the triangle's depth over subtile `l` (`0..4`) of
+    /// tile `tx` in the subtile row whose top is `by`, from the first
+    /// subtile of tile `anchor` (the first tile of the triangle's window, at
+    /// or left of `tx`): the plane at the anchor subtile's corner
+    /// ([`Self::corner_x`], [`Self::row_term`]) in `f64`, rounded far
+    /// ([`Self::far_at`]), plus `m = 4 (tx - anchor) + l` [`Self::lane_step`]s
+    /// (exact) in `f32` ([`far_sum`]), capped by [`Self::far_max`]. The
+    /// subtile's corner lies `8 m` to the right of the anchor's, so this is
+    /// never nearer than the plane's largest value at its corners, nor than the
+    /// farthest vertex where that is nearer (the crate doc, "Depth per
+    /// subtile"). The rasterizer keeps the anchor's value for a tile row and
+    /// adds the steps tile by tile ([`lanes::tile_lanes`]).
     #[inline]
-    pub(crate) fn subtile_bound(&self, gx: f64, by: f64, l: usize) -> f32 {
-        let base = self.far_at(self.corner_x(gx), self.row_term(by));
-        far_sum(base, self.lane_step() * l as f32).min(self.far_max())
+    pub(crate) fn subtile_bound(&self, anchor: u32, tx: u32, by: f64, l: usize) -> f32 {
+        let base = self.far_at(self.corner_x(f64::from(anchor * TILE_W)), self.row_term(by));
+        let m = 4 * (tx - anchor) + l as u32;
+        far_sum(base, self.lane_step() * m as f32).min(self.far_max())
     }
+}
+
+/// The lowest significand bits that a depth plane's `f32` step
+/// ([`DepthPlane::lane_step`]) keeps zero on a screen `width` pixels wide, so
+/// that its product with every subtile column offset `m` of the screen (below
+/// `4 ceil(width / 32)`) has at most 24 significant bits: exact. 8 bits on a
+/// 1920-pixel-wide screen, leaving the step 16.
+pub(crate) fn step_zero_bits(width: u32) -> u32 {
+    let offsets = 4 * width.div_ceil(TILE_W).max(1);
+    u32::BITS - (offsets - 1).leading_zeros()
 }
 
 /// Relative nudge of a depth bound before its rounding to `f32` ([`round_far`]):
@@ -453,7 +469,7 @@ impl ScreenTriangle {
             return None;
         }
         let bands = edges.map(|e| e.band(w, h));
-        let plane = DepthPlane::new(&t, tolerance.depth);
+        let plane = DepthPlane::new(&t, tolerance.depth, width);
         let raster = Raster { x0, x1, y0, y1, plane, lanes: Intercepts::EMPTY };
         let exact = Exact { edges, bands };
         let lanes = Intercepts::new(&raster, &exact);
@@ -976,8 +992,8 @@ mod tests {
                     }
                 }
                 if cover != 0 {
-                    let (gx, by) = (f64::from(sx / 4 * TILE_W), f64::from(sy * 4));
-                    let far = tri.raster.plane.subtile_bound(gx, by, (sx % 4) as usize);
+                    let anchor = tri.raster.x0 as u32 / TILE_W;
+                    let far = tri.raster.plane.subtile_bound(anchor, sx / 4, f64::from(sy * 4), (sx % 4) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let (t, l) = (buffer.tile_index(sx, sy), Tile::lane(sx, sy));
                     let mut s = buffer.tiles[t].get(l);
@@ -1052,34 +1068,61 @@ mod tests {
     fn subtile_bounds_are_never_nearer_than_the_plane_and_close_to_it() {
         let mut rng = Lcg(17);
         let mut capped = 0;
+        let widths = [1920u32, 7, 640, 4000, 33];
         for i in 0..200_000 {
             // Planes from flat to steep, depths around 0..1, some far out.
             let scale = [1e-9, 1e-5, 1e-3, 0.1, 1.0][i % 5];
-            let zmax = rng.unit() * 2.0;
+            let (zmax, width) = (rng.unit() * 2.0, widths[i % widths.len()]);
             let plane = DepthPlane::from_terms(
                 (rng.unit() - 0.5) * scale,
                 (rng.unit() - 0.5) * scale,
                 rng.unit() * [1.0, 1e-6, 10.0][i % 3],
                 zmax,
+                width,
             );
-            let (g, sy, l) = ((rng.unit() * 80.0) as u32, (rng.unit() * 300.0) as u32, i % 4);
-            let (bx, by) = (f64::from(g * TILE_W + 8 * l as u32), f64::from(sy * 4));
+            // A tile of the screen and an anchor at or left of it.
+            let tiles = width.div_ceil(TILE_W);
+            let tx = ((rng.unit() * f64::from(tiles)) as u32).min(tiles - 1);
+            let anchor = [0, tx, (rng.unit() * f64::from(tx + 1)) as u32][i % 3].min(tx);
+            let (sy, l) = ((rng.unit() * 300.0) as u32, i % 4);
+            let (bx, by) = (f64::from(tx * TILE_W + 8 * l as u32), f64::from(sy * 4));
             let corners = [(0.0, 0.0), (8.0, 0.0), (0.0, 4.0), (8.0, 4.0)];
             let exact = corners
                 .iter()
                 .map(|&(dx, dy)| plane.zx * (bx + dx) + plane.zy * (by + dy) + plane.z0)
                 .fold(f64::MIN, f64::max)
                 .min(zmax);
-            let bound = f64::from(plane.subtile_bound(f64::from(g * TILE_W), by, l));
-            assert!(bound >= exact, "{plane:?} lane {l}: {bound} < {exact}");
+            let bound = f64::from(plane.subtile_bound(anchor, tx, by, l));
+            assert!(bound >= exact, "{plane:?} tile {tx} from {anchor}, lane {l}: {bound} < {exact}");
             // Looser than the plane by a few f32 units of its terms at most: the
-            // base's and the sum's nudges (`2^-22` each), the step's 21 bits
-            // (`2^-20` of up to three steps, less than the x term).
-            let terms = (plane.zx * (bx + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
-            assert!(bound - exact <= terms * 2e-6 + 1e-11, "{plane:?} lane {l}: {bound} vs {exact}");
+            // base's and the sum's nudges (`2^-22` each), and the step's
+            // rounding (`2^-22` and `1e-12`, the latter times the `m` steps)
+            // and cut to `24 - z` significant bits (less than a unit of its
+            // last, `2^(z - 23)` of it), of the x term's rise from the anchor.
+            let ax = f64::from(anchor * TILE_W);
+            let terms = (plane.zx * (ax + 8.0)).abs() + (plane.zy * (by + 4.0)).abs() + plane.z0.abs();
+            let rise = (plane.zx * (bx + 8.0 - ax)).abs();
+            let cut = 2f64.powi(step_zero_bits(width) as i32 - 23) + 2f64.powi(-22);
+            let m = f64::from(4 * (tx - anchor)) + l as f64;
+            let slack = terms * 2e-6 + rise * cut + m * 2e-12 + 1e-11;
+            assert!(bound - exact <= slack, "{plane:?} tile {tx} from {anchor}, lane {l}: {bound} vs {exact}");
             capped += usize::from(exact == zmax);
         }
         assert!(capped > 1000, "{capped}");
+    }
+
+    #[test]
+    fn the_depth_step_leaves_its_products_by_every_column_offset_exact() {
+        for (width, zero) in [(1, 2), (32, 2), (33, 3), (1920, 8), (2048, 8), (2049, 9)] {
+            assert_eq!(step_zero_bits(width), zero, "width {width}");
+            let steps = 4 * width.div_ceil(TILE_W);
+            let plane = DepthPlane::from_terms(0.123_456_789, 0.0, 0.5, 1.0, width);
+            let step = plane.lane_step();
+            assert!(f64::from(step) >= 8.0 * 0.123_456_789);
+            for m in 0..steps {
+                assert_eq!(f64::from(step * m as f32), f64::from(step) * f64::from(m), "width {width}, {m} steps");
+            }
+        }
     }
 
     #[test]

@@ -149,7 +149,7 @@ unsafe fn tile_loop(tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
     assert!((row.last as usize) < tiles.len(), "tiles beyond the band's tile row");
     let spans = row.spans;
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
-    let depth = DepthLanes::new(&row.raster.plane, row.ty);
+    let mut depth = DepthLanes::new(&row.raster.plane, row.ty, row.raster.x0 as u32 / TILE_W, row.first);
     let mut x = _mm256_set1_epi32((row.first * TILE_W) as i32);
     let tiles = tiles.as_mut_ptr();
     for tx in row.first..row.last + 1 {
@@ -157,7 +157,7 @@ unsafe fn tile_loop(tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
         if tx >= row.padded_from {
             c = with_outside(c, row.screen, tx, row.ty);
         }
-        let d = depth.tile(tx);
+        let d = depth.next();
         // SAFETY: `tx <= last`, a tile of the row by the assertion above;
         // `Tile` is 32-byte aligned, its fields 32 bytes each.
         let tile = &mut *tiles.add(tx as usize);
@@ -269,57 +269,64 @@ unsafe fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LA
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
     let mut out = ([0u32; LANES], [0f32; LANES]);
     _mm256_storeu_si256(out.0.as_mut_ptr().cast(), tile_cover(lo, hi, _mm256_set1_epi32((tx * TILE_W) as i32)));
-    _mm256_storeu_ps(out.1.as_mut_ptr(), DepthLanes::new(&tri.plane, ty).tile(tx));
+    _mm256_storeu_ps(out.1.as_mut_ptr(), DepthLanes::new(&tri.plane, ty, tri.x0 as u32 / TILE_W, tx).next());
     out
 }
 
 /// [`DepthPlane::subtile_bound`](super::DepthPlane) of the eight subtiles of
-/// a tile of tile row `ty`: per subtile row, the base at the tile's first
-/// column in `f64` (the two rows in two lanes), then the lanes' steps added
-/// and the cap taken in `f32` lanes, with the portable version's operations
-/// in its order. What does not change along the row is set up once.
+/// each tile of a tile row, tile by tile: per subtile row the base at the
+/// corner of the anchor (the first tile of the triangle's window) in `f64`
+/// (the two rows in two lanes), rounded far to `f32`, once for the row; the
+/// lanes' offsets `m` steps (exact), kept in a register and stepped by four
+/// steps a tile (exact sums of exact multiples, so the same values); per tile
+/// their sum with the base nudged far and capped in `f32` lanes: the portable
+/// version's operations in its order.
 struct DepthLanes {
-    zx: f64,
-    /// The corner's column offset in a subtile ([`DepthPlane::corner_x`]).
-    corner: u32,
-    /// The row terms of the two subtile rows ([`DepthPlane::row_term`]).
-    rows: __m128d,
-    /// The lanes' steps, `0..4` steps in each half.
-    steps: __m256,
+    /// The base of the upper subtile row in lanes 0-3, of the lower in 4-7.
+    base: __m256,
+    /// The next tile's lanes' offsets from the base.
+    offsets: __m256,
+    /// Four steps: from a tile's offsets to the next one's.
+    tile_step: __m256,
     cap: __m256,
 }
 
 impl DepthLanes {
-    /// The bounds' terms for the tiles of tile row `ty`.
+    /// The bounds' terms for the tiles of tile row `ty` from tile `first`,
+    /// anchored at tile `anchor` (at or left of `first`).
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn new(plane: &DepthPlane, ty: u32) -> Self {
+    unsafe fn new(plane: &DepthPlane, ty: u32, anchor: u32, first: u32) -> Self {
+        // `far_at` (the plane, then `round_far`) of both subtile rows in the
+        // two lanes of one `f64 x 2`; the corner's column is a whole number,
+        // so converted exactly.
+        let x = _mm_set1_pd(plane.zx * plane.corner_x(f64::from(anchor * TILE_W)));
+        let v = _mm_add_pd(x, row_terms(plane, ty));
+        let nudge = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), v), _mm_set1_pd(super::FAR_NUDGE));
+        let far = _mm_cvtpd_ps(_mm_add_pd(_mm_add_pd(v, nudge), _mm_set1_pd(1e-12)));
+        let step = _mm256_set1_ps(plane.lane_step());
+        // Whole numbers below 2^24: converted exactly, and products exact by
+        // the step's zero bits.
+        let m = _mm256_add_epi32(
+            _mm256_set1_epi32((4 * (first - anchor)) as i32),
+            _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3),
+        );
         DepthLanes {
-            zx: plane.zx,
-            corner: plane.corner_x(0.0) as u32,
-            rows: row_terms(plane, ty),
-            steps: _mm256_mul_ps(
-                _mm256_set1_ps(plane.lane_step()),
-                _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 0.0, 1.0, 2.0, 3.0),
-            ),
+            base: _mm256_set_m128(_mm_shuffle_ps::<0b01_01_01_01>(far, far), _mm_shuffle_ps::<0>(far, far)),
+            offsets: _mm256_mul_ps(step, _mm256_cvtepi32_ps(m)),
+            tile_step: _mm256_mul_ps(step, _mm256_set1_ps(4.0)),
             cap: _mm256_set1_ps(plane.far_max()),
         }
     }
 
-    /// The bounds of tile `tx`'s eight subtiles.
+    /// The bounds of the next tile's eight subtiles (the first tile's, on
+    /// the first call).
     #[inline]
     #[target_feature(enable = "avx2")]
-    unsafe fn tile(&self, tx: u32) -> __m256 {
-        // `far_at` (the plane, then `round_far`) of both subtile rows in the
-        // two lanes of one `f64 x 2`; the corner's column is a whole number,
-        // so converted exactly.
-        let x = _mm_set1_pd(self.zx * f64::from(tx * TILE_W + self.corner));
-        let v = _mm_add_pd(x, self.rows);
-        let nudge = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), v), _mm_set1_pd(super::FAR_NUDGE));
-        let far = _mm_cvtpd_ps(_mm_add_pd(_mm_add_pd(v, nudge), _mm_set1_pd(1e-12)));
-        let bases = _mm256_set_m128(_mm_shuffle_ps::<0b01_01_01_01>(far, far), _mm_shuffle_ps::<0>(far, far));
+    unsafe fn next(&mut self) -> __m256 {
         // `far_sum` on eight lanes.
-        let sum = _mm256_add_ps(bases, self.steps);
+        let sum = _mm256_add_ps(self.base, self.offsets);
+        self.offsets = _mm256_add_ps(self.offsets, self.tile_step);
         let nudge = _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0), sum), _mm256_set1_ps(super::FAR_NUDGE_F32));
         _mm256_min_ps(_mm256_add_ps(sum, nudge), self.cap)
     }

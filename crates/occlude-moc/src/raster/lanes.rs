@@ -228,11 +228,12 @@ pub(crate) fn edge_spans(tri: &Raster, row: f32) -> Spans {
 /// `2 ty + 1`): lane `l` is subtile column `4 tx + l % 4` of subtile row
 /// `2 ty + l / 4`, its mask bit `x + 8 y` set for the pixels of its row `y`
 /// inside `spans` (a row's bits by shifts of its span's ends), its depth
-/// [`DepthPlane::subtile_bound`](super::DepthPlane) (lane `l % 4` of the
-/// run from the tile's first column, which the AVX2 version's lanes share).
+/// [`DepthPlane::subtile_bound`](super::DepthPlane) from the first tile of
+/// the triangle's window (the AVX2 version steps to it from there tile by
+/// tile, with the same exact sums).
 pub(crate) fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
     let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
-    let gx = f64::from(tx * TILE_W);
+    let anchor = tri.x0 as u32 / TILE_W;
     for l in 0..LANES {
         let (column, half) = (l % 4, l / 4);
         let bx = (tx * TILE_W) as i32 + column as i32 * 8;
@@ -241,7 +242,7 @@ pub(crate) fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32
             let (lo, hi) = ((spans.lo[row] - bx).clamp(0, 8), (spans.hi[row] - bx).clamp(0, 8));
             cover[l] |= ((1u32 << hi.max(lo)) - (1u32 << lo)) << (8 * r);
         }
-        depth[l] = tri.plane.subtile_bound(gx, f64::from(ty * 8 + half as u32 * 4), column);
+        depth[l] = tri.plane.subtile_bound(anchor, tx, f64::from(ty * 8 + half as u32 * 4), column);
     }
     (cover, depth)
 }

@@ -18,7 +18,7 @@ use std::arch::x86_64::*;
 use glam::Vec4;
 
 use super::lanes::{Intercepts, F32_SCALE};
-use super::{CullMode, DepthPlane, Edge, Exact, Raster, SetUp, BAND_SCALE, FAR_NUDGE};
+use super::{step_zero_bits, CullMode, DepthPlane, Edge, Exact, Raster, SetUp, BAND_SCALE, FAR_NUDGE};
 use crate::project::{DRAW_LIMIT, SNAP_LIMIT, SNAP_RANGE};
 
 /// Triangles set up by one [`setup4`] call.
@@ -384,12 +384,13 @@ pub(crate) unsafe fn setup4(
     }
     // DepthPlane::from_terms: the step `8 zx` and the cap `zmax`, rounded
     // far, the step's significand then rounded up (not negative) or cut to
-    // 21 bits.
+    // leave its `step_zero_bits` lowest bits zero.
     let v = _mm256_cvtpd_ps(nudge_far(_mm256_mul_pd(zx, _mm256_set1_pd(8.0))));
+    let low = _mm_set1_epi32(((1u32 << step_zero_bits(width)) - 1) as i32);
     let bits = _mm_castps_si128(v);
     let up = _mm_castps_si128(_mm_cmpge_ps(v, _mm_setzero_ps()));
-    let bits = _mm_add_epi32(bits, _mm_and_si128(up, _mm_set1_epi32(7)));
-    let step = _mm_castsi128_ps(_mm_and_si128(bits, _mm_set1_epi32(!7)));
+    let bits = _mm_add_epi32(bits, _mm_and_si128(up, low));
+    let step = _mm_castsi128_ps(_mm_andnot_si128(low, bits));
     _mm_storeu_ps(batch.plane_f32[0].as_mut_ptr(), step);
     _mm_storeu_ps(batch.plane_f32[1].as_mut_ptr(), _mm256_cvtpd_ps(nudge_far(zmax)));
 }
