@@ -638,9 +638,9 @@ const COUNTED: u32 = 1 << 31;
 const BIN_CHUNK: usize = 2048;
 
 /// A triangle's set-up in the time of 32x8-pixel tiles drawn: the buffer's
-/// cost per triangle over its cost per tile on one thread (89.3 and 6.1 ns
+/// cost per triangle over its cost per tile on one thread (85.5 and 4.3 ns
 /// on the machine of docs/gpu-models.md), for [`worth_threads`]' estimate.
-const SETUP_TILES: usize = 15;
+const SETUP_TILES: usize = 20;
 
 /// The tiles of a small triangle's screen box for [`worth_threads`]: one
 /// of a few pixels takes up to four where it straddles tile edges.
@@ -1132,8 +1132,11 @@ mod tests {
         let at = |x: f32, y: f32, size: f32| {
             [Vec4::new(x, y, 0.5, 1.0), Vec4::new(x + size, y, 0.5, 1.0), Vec4::new(x, y + size, 0.5, 1.0)]
         };
-        let walls: Vec<_> = (0..40).map(|i| at(-1.0, -1.0 + i as f32 * 0.01, 1.9)).collect();
+        // Screen boxes of about 1,080 tiles each: 60 are more work than
+        // 2,048 small triangles, 30 less.
+        let walls: Vec<_> = (0..60).map(|i| at(-1.0, -1.0 + i as f32 * 0.01, 1.9)).collect();
         assert!(worth_threads(walls.len(), |i| Some(walls[i]), w, h));
+        assert!(!worth_threads(30, |i| Some(walls[i]), w, h));
         let specks: Vec<_> = (0..BIN_CHUNK + 1).map(|i| at(-0.9 + (i % 97) as f32 * 0.018, 0.0, 0.002)).collect();
         assert!(!worth_threads(BIN_CHUNK, |i| Some(specks[i]), w, h));
         assert!(worth_threads(BIN_CHUNK + 1, |i| Some(specks[i]), w, h));

@@ -104,7 +104,7 @@ pub struct GpuModel {
     #[serde(default = "MocCosts::box_ns")]
     pub cpu_moc_box_ns: f64,
     /// CPU time per subtile (8x4 pixels) a box test reads from the masked
-    /// buffer (compared a group of eight at a time), ns.
+    /// buffer (compared a tile of eight at a time), ns.
     #[serde(default = "MocCosts::subtile_read_ns")]
     pub cpu_moc_subtile_read_ns: f64,
 }
@@ -131,13 +131,13 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 89.3;
+const MOC_TRIANGLE_NS: f64 = 85.5;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 6.1;
+const MOC_TILE_NS: f64 = 4.3;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 63.9;
+const MOC_BOX_NS: f64 = 63.7;
 /// See [`GpuModel::cpu_moc_subtile_read_ns`].
-const MOC_SUBTILE_READ_NS: f64 = 0.21;
+const MOC_SUBTILE_READ_NS: f64 = 0.22;
 
 /// Errors loading a GPU model.
 #[derive(Debug, Error)]
