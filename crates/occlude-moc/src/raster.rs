@@ -654,9 +654,9 @@ const COUNTED: u32 = 1 << 31;
 const BIN_CHUNK: usize = 2048;
 
 /// A triangle's set-up in the time of 32x8-pixel tiles drawn: the buffer's
-/// cost per triangle over its cost per tile on one thread (85.5 and 4.3 ns
+/// cost per triangle over its cost per tile on one thread (76.4 and 4.4 ns
 /// on the machine of docs/gpu-models.md), for [`worth_threads`]' estimate.
-const SETUP_TILES: usize = 20;
+const SETUP_TILES: usize = 17;
 
 /// The tiles of a small triangle's screen box for [`worth_threads`]: one
 /// of a few pixels takes up to four where it straddles tile edges.

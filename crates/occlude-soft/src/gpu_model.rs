@@ -131,11 +131,11 @@ impl MocCosts {
 }
 
 /// See [`GpuModel::cpu_moc_triangle_ns`].
-const MOC_TRIANGLE_NS: f64 = 85.5;
+const MOC_TRIANGLE_NS: f64 = 76.4;
 /// See [`GpuModel::cpu_moc_tile_ns`].
-const MOC_TILE_NS: f64 = 4.3;
+const MOC_TILE_NS: f64 = 4.4;
 /// See [`GpuModel::cpu_moc_box_ns`].
-const MOC_BOX_NS: f64 = 63.7;
+const MOC_BOX_NS: f64 = 63.8;
 /// See [`GpuModel::cpu_moc_subtile_read_ns`].
 const MOC_SUBTILE_READ_NS: f64 = 0.22;
 
