@@ -54,14 +54,16 @@
 //!   raised plane at `p`. Over a subtile that is bounded by the raised plane's
 //!   largest value at the subtile's four corners, capped by the farthest vertex
 //!   (the depth is a convex combination of the vertices'). The buffer takes
-//!   that bound for eight neighbouring subtiles at once: the plane at the first
-//!   one's corner in `f64`, nudged farther by `2^-22` of itself (more than its
-//!   rounding to the nearest `f32` can take back), plus, for the subtile `l`
-//!   places to the right, `l` steps of an `f32` step never less than the
-//!   plane's rise `8 dz/dx` from one corner to the next, with 21 significant
-//!   bits so that `l` steps are exact; that sum is rounded to `f32` and nudged
-//!   farther by `2^-22` of itself, more than the sum's rounding took, and
-//!   capped by the farthest vertex, itself rounded far.
+//!   that bound for every subtile of a triangle's subtile row from one anchor,
+//!   the first subtile of the triangle's window: the plane at the anchor's
+//!   corner in `f64`, nudged farther by `2^-22` of itself (more than its
+//!   rounding to the nearest `f32` can take back), plus, for the subtile `m`
+//!   places to the right, `m` steps of an `f32` step never less than the
+//!   plane's rise `8 dz/dx` from one corner to the next, with as many low
+//!   significand bits zero as make `m` steps exact for every `m` on the
+//!   screen (8 on a 1920-pixel-wide screen); that sum is rounded to `f32` and
+//!   nudged farther by `2^-22` of itself, more than the sum's rounding took,
+//!   and capped by the farthest vertex, itself rounded far.
 //! - Layer merge: a merge of a triangle (mask `C`, depth `t`) into the working
 //!   layer (mask `M`, depth `w`) gives `M | C` the depth `max(w, t)`, which bounds
 //!   both; the working layer is only discarded (its pixels falling back to the
@@ -83,9 +85,10 @@
 //! each edge's x-intercepts on the eight pixel rows are computed at once in
 //! `f32` lanes (from the intercept of the triangle's first tile row, evaluated
 //! in `f64`, with a band widened by the `f32` rounding, proven), then per tile
-//! in reach the masks and depth bounds of its eight subtiles at once by shifts
-//! and one plane evaluation per subtile row of the tile (in `f64`, then a step
-//! per subtile in `f32`) (the `raster::lanes` module: only rows whose
+//! in reach (every tile of a window at most two tiles wide) the masks and
+//! depth bounds of its eight subtiles at once by shifts and exact steps from
+//! the window's first tile (the plane there evaluated in `f64` once per tile
+//! row, then the steps in `f32`) (the `raster::lanes` module: only rows whose
 //! intercept lies within its proven rounding band of a pixel boundary are
 //! decided pixel by pixel, so masks are exactly the per-pixel definition
 //! above; pixel rows of a tile row above or below the triangle are left empty
