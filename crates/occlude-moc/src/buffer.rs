@@ -69,8 +69,8 @@ impl Subtile {
 /// The eight subtiles of a 32x8-pixel tile: lanes 0-3 the upper subtile row's
 /// four from left to right, lanes 4-7 the lower row's. Stored field by field,
 /// each field 32 bytes and the tile 96, so that the rasterizer loads, merges
-/// and stores a tile in three registers per field set, and a tile touches two
-/// cache lines.
+/// and stores a tile as three registers (one a field), and a tile touches
+/// two cache lines.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub(crate) struct Tile {
@@ -131,8 +131,9 @@ const CLEAR: Tile = Tile { mask: [0; 8], working: [0.0; 8], reference: [1.0; 8] 
 /// [`Occluded`](crate::Visibility::Occluded) for something an exact depth buffer
 /// of the same occluders would show; it may say visible for hidden things.
 ///
-/// Memory: 12 bytes per 32 pixels (the width padded to 32 and the height to 8). Cost: proportional to the subtiles each
-/// triangle's bounding box touches.
+/// Memory: 12 bytes per 32 pixels (the width padded to 32 and the height to
+/// 8). Cost: proportional to the subtiles each triangle's bounding box
+/// touches.
 ///
 /// ```
 /// use glam::{Mat4, Vec3};

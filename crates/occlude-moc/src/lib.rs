@@ -95,8 +95,9 @@
 //! by its edges, decided so, and only the padding rows below the screen by a
 //! test of their own), and merged into them in lanes: the subtiles are stored
 //! tile by tile (a tile's eight, field by field: 96 bytes, loaded and stored
-//! as three registers), and each lane applies the merge rule above. These steps run in AVX2 where the CPU has it (detected at run time)
-//! and in portable code otherwise, with bit-identical results; with AVX2,
+//! as three registers), and each lane applies the merge rule above. These
+//! steps run in AVX2 where the CPU has it (detected at run time) and in
+//! portable code otherwise, with bit-identical results; with AVX2,
 //! four triangles are also set up at once (projection, snapping, edges, depth
 //! plane, the `f32` intercepts: the `raster::setup` module), bit for bit as
 //! the scalar set-up does each. Inside a rayon pool of several threads, large

@@ -585,8 +585,8 @@ impl Band<'_> {
         let tiles_per_row = self.cols as usize / 4;
         let row = (sy - self.first) as usize / 2 * tiles_per_row;
         let tiles = &mut self.tiles[row..row + tiles_per_row];
-        // Spans lie within the window, so `0 <= left < right`: the tiles by
-        // shifts of unsigned values.
+        // The window, and the spans in it, lie within the screen, so
+        // `0 <= left < right`: the tiles by shifts of unsigned values.
         let padded_from = if sy * 4 + STEP_ROWS > self.height { 0 } else { self.width / TILE_W };
         let row = TileRow {
             raster,
