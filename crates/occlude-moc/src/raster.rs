@@ -17,7 +17,7 @@
 
 use crate::buffer::{MaskedBuffer, MergeMode, Tile};
 use crate::project::{screen_triangles, to_screen};
-use crate::{SUBTILE_H, SUBTILE_W};
+use crate::SUBTILE_H;
 use glam::{DVec2, DVec3, Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -347,11 +347,20 @@ pub(crate) struct Raster {
 impl Raster {
     /// How many 32x8-pixel tiles its pixel-centre ranges overlap.
     fn tiles(&self) -> u64 {
-        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= x0 < x1`,
-        // `0 <= y0 < y1`), so unsigned division is shifts.
-        let (tx, ty) = (4 * SUBTILE_W, 2 * SUBTILE_H);
-        let (x0, x1, y0, y1) = (self.x0 as u32, self.x1 as u32, self.y0 as u32, self.y1 as u32);
-        u64::from((x1 - 1) / tx - x0 / tx + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
+        // A tile is 4 x 2 subtiles; the window is on screen (`0 <= y0 < y1`),
+        // so unsigned division is shifts.
+        let ty = 2 * SUBTILE_H;
+        let (first, last) = self.tile_columns();
+        let (y0, y1) = (self.y0 as u32, self.y1 as u32);
+        u64::from(last - first + 1) * u64::from((y1 - 1) / ty - y0 / ty + 1)
+    }
+
+    /// The first and last tile column of the window; the first is also the
+    /// anchor of the depth bounds ([`DepthPlane::subtile_bound`]).
+    fn tile_columns(&self) -> (u32, u32) {
+        // The window is on screen (`0 <= x0 < x1`), so unsigned division is
+        // shifts.
+        (self.x0 as u32 / TILE_W, (self.x1 - 1) as u32 / TILE_W)
     }
 
     /// The first and one past the last subtile row the triangle touches.
@@ -575,28 +584,18 @@ impl Band<'_> {
     /// empty masks, which merge nothing.
     #[inline(always)]
     fn draw_tile_row<L: Lanes>(&mut self, raster: &Raster, lanes: L, sy: u32, spans: &Spans) {
-        let tile_w = TILE_W as i32;
-        let (left, right) = if (raster.x1 - 1) / tile_w - raster.x0 / tile_w < NARROW_TILES {
-            (raster.x0, raster.x1)
-        } else {
-            let Some(reach) = lanes.reach(spans) else { return };
-            reach
-        };
+        let (mut first, mut last) = raster.tile_columns();
+        if last - first >= NARROW_TILES {
+            let Some((left, right)) = lanes.reach(spans) else { return };
+            // Spans lie within the window, so `0 <= left < right`: the tiles
+            // by shifts of unsigned values.
+            (first, last) = (left as u32 / TILE_W, (right - 1) as u32 / TILE_W);
+        }
         let tiles_per_row = self.cols as usize / 4;
         let row = (sy - self.first) as usize / 2 * tiles_per_row;
         let tiles = &mut self.tiles[row..row + tiles_per_row];
-        // The window, and the spans in it, lie within the screen, so
-        // `0 <= left < right`: the tiles by shifts of unsigned values.
         let padded_from = if sy * 4 + STEP_ROWS > self.height { 0 } else { self.width / TILE_W };
-        let row = TileRow {
-            raster,
-            spans,
-            ty: sy / 2,
-            first: left as u32 / TILE_W,
-            last: (right - 1) as u32 / TILE_W,
-            padded_from,
-            screen: (self.width, self.height),
-        };
+        let row = TileRow { raster, spans, ty: sy / 2, first, last, padded_from, screen: (self.width, self.height) };
         lanes.draw_tiles(tiles, &row, self.merge);
     }
 }
@@ -640,7 +639,7 @@ fn exact_spans(exact: &Exact, (x0, x1): (i32, i32), y: i32, mut spans: Spans) ->
 /// fill-rate workload (one thread, the AMD EPYC of docs/benchmarks.md)
 /// walking windows of up to two tiles so was 4-8 % faster at N = 10 and 25
 /// and level at N = 50 and 100; up to three, 6 % slower at N = 50.
-const NARROW_TILES: i32 = 2;
+const NARROW_TILES: u32 = 2;
 
 /// The bit of a render's item (a triangle index) that marks where the
 /// triangle's work is counted: in the first band it is binned to, so that
@@ -1008,7 +1007,7 @@ mod tests {
                     }
                 }
                 if cover != 0 {
-                    let anchor = tri.raster.x0 as u32 / TILE_W;
+                    let anchor = tri.raster.tile_columns().0;
                     let far = tri.raster.plane.subtile_bound(anchor, sx / 4, f64::from(sy * 4), (sx % 4) as usize);
                     let outside = outside_mask(buffer.width, buffer.height, sx, sy);
                     let (t, l) = (buffer.tile_index(sx, sy), Tile::lane(sx, sy));

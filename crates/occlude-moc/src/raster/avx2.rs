@@ -149,7 +149,7 @@ unsafe fn tile_loop(tiles: &mut [Tile], row: &TileRow<'_>, mode: MergeMode) {
     assert!((row.last as usize) < tiles.len(), "tiles beyond the band's tile row");
     let spans = row.spans;
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
-    let mut depth = DepthLanes::new(&row.raster.plane, row.ty, row.raster.x0 as u32 / TILE_W, row.first);
+    let mut depth = DepthLanes::new(&row.raster.plane, row.ty, row.raster.tile_columns().0, row.first);
     let mut x = _mm256_set1_epi32((row.first * TILE_W) as i32);
     let tiles = tiles.as_mut_ptr();
     for tx in row.first..row.last + 1 {
@@ -269,7 +269,7 @@ unsafe fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LA
     let (lo, hi) = (_mm256_load_si256(spans.lo.as_ptr().cast()), _mm256_load_si256(spans.hi.as_ptr().cast()));
     let mut out = ([0u32; LANES], [0f32; LANES]);
     _mm256_storeu_si256(out.0.as_mut_ptr().cast(), tile_cover(lo, hi, _mm256_set1_epi32((tx * TILE_W) as i32)));
-    _mm256_storeu_ps(out.1.as_mut_ptr(), DepthLanes::new(&tri.plane, ty, tri.x0 as u32 / TILE_W, tx).next());
+    _mm256_storeu_ps(out.1.as_mut_ptr(), DepthLanes::new(&tri.plane, ty, tri.tile_columns().0, tx).next());
     out
 }
 

@@ -233,7 +233,7 @@ pub(crate) fn edge_spans(tri: &Raster, row: f32) -> Spans {
 /// tile, with the same exact sums).
 pub(crate) fn tile_lanes(tri: &Raster, spans: &Spans, tx: u32, ty: u32) -> ([u32; LANES], [f32; LANES]) {
     let (mut cover, mut depth) = ([0u32; LANES], [0f32; LANES]);
-    let anchor = tri.x0 as u32 / TILE_W;
+    let anchor = tri.tile_columns().0;
     for l in 0..LANES {
         let (column, half) = (l % 4, l / 4);
         let bx = (tx * TILE_W) as i32 + column as i32 * 8;
@@ -431,7 +431,8 @@ mod tests {
                 assert_eq!(avx2.edge_spans(&tri.raster, row), spans, "{:?} row {sy}", tri.exact.edges);
                 assert_eq!(avx2.reach(&spans), spans.reach());
                 exact += usize::from(spans.exact != 0);
-                for tx in tri.raster.x0 as u32 / TILE_W..=(tri.raster.x1 - 1) as u32 / TILE_W {
+                let (first, last) = tri.raster.tile_columns();
+                for tx in first..=last {
                     let (c, d) = tile_lanes(&tri.raster, &spans, tx, sy / 2);
                     let (ac, ad) = avx2.tile_lanes(&tri.raster, &spans, tx, sy / 2);
                     assert_eq!(ac, c);
