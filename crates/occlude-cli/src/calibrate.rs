@@ -138,15 +138,9 @@ const LATENCY_CHECKS: u32 = 8;
 /// The synthetic scene: two materials on an off-screen triangle, a mesh of
 /// slivers, and full-screen quads at increasing distance.
 fn synthetic_scene() -> Scene {
-    let mut scene = Scene {
-        name: "calibration".into(),
-        meshes: Vec::new(),
-        instances: Vec::new(),
-        material_count: 0,
-        path: CameraPath {
-            keyframes: vec![Keyframe { time: 0.0, position: Vec3::ZERO, target: Vec3::NEG_Z, fov_y_deg: 60.0 }],
-        },
-        triangle_counts: Vec::new(),
+    let mut scene = Scene::new("calibration");
+    scene.path = CameraPath {
+        keyframes: vec![Keyframe { time: 0.0, position: Vec3::ZERO, target: Vec3::NEG_Z, fov_y_deg: 60.0 }],
     };
     let triangle = scene.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]));
     let off_screen = Mat4::from_translation(Vec3::new(1000.0, 0.0, -10.0));
@@ -197,12 +191,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Runs `body` in `repeats` frames and returns the median CPU and GPU time (ms).
-fn timed(
-    backend: &mut WgpuBackend<'_>,
-    camera: &Camera,
-    repeats: usize,
-    body: impl Fn(&mut WgpuBackend<'_>),
-) -> (f64, f64) {
+fn timed(backend: &mut WgpuBackend, camera: &Camera, repeats: usize, body: impl Fn(&mut WgpuBackend)) -> (f64, f64) {
     let frames: Vec<FrameStats> = (0..repeats)
         .map(|_| {
             backend.begin_frame(camera);
@@ -214,7 +203,7 @@ fn timed(
 }
 
 /// Issues `count` queries of `query_box`, their results left unread.
-fn issue_queries(backend: &mut WgpuBackend<'_>, count: usize, query_box: Aabb) {
+fn issue_queries(backend: &mut WgpuBackend, count: usize, query_box: Aabb) {
     (0..count).for_each(|_| {
         backend.issue_query(&[query_box]);
     });
@@ -312,7 +301,7 @@ struct Boxes {
 /// commands, each isolating one cost (the empty frame's time and the
 /// dispatch around it subtracted), or says why the backend cannot run them.
 fn measure_culling(
-    backend: &mut WgpuBackend<'_>,
+    backend: &mut WgpuBackend,
     camera: &Camera,
     repeats: usize,
     boxes: Boxes,
@@ -328,7 +317,7 @@ fn measure_culling(
     let screen_ids = c.create_list(SCREEN_TEST_BOXES, &(0..SCREEN_TEST_BOXES).collect::<Vec<_>>());
     let tested = c.create_flags(TEST_BOXES);
     let draws = c.create_list(DRAWS as u32, &vec![OFF_SCREEN_A; DRAWS]);
-    fn culling<'a>(b: &'a mut WgpuBackend<'_>) -> &'a mut dyn GpuCulling {
+    fn culling(b: &mut WgpuBackend) -> &mut dyn GpuCulling {
         b.gpu_culling().expect("checked above")
     }
 
@@ -380,7 +369,7 @@ fn measure_culling(
 /// shared among them); `gpu_hib_batch_us` from [`measure_hib_batch`].
 /// Needs the compute shaders of GPU-resident culling.
 fn measure_hib_query(
-    backend: &mut WgpuBackend<'_>,
+    backend: &mut WgpuBackend,
     camera: &Camera,
     repeats: usize,
     small_box: Aabb,
@@ -405,7 +394,7 @@ fn measure_hib_query(
 /// they hold the GPU's time, the CPU blocked behind the rasterizer's
 /// threads (`docs/benchmarks.md`), so a batch keeps `cpu_dispatch_us`.
 fn measure_hib_batch(
-    backend: &mut WgpuBackend<'_>,
+    backend: &mut WgpuBackend,
     camera: &Camera,
     repeats: usize,
     small_box: Aabb,
@@ -452,7 +441,7 @@ fn slope(points: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
 /// pass); and the CPU time of one availability check of a query in flight, from
 /// at most [`LATENCY_CHECKS`] checks before the wait. Medians over several
 /// frames, in µs.
-fn measure_latency(backend: &mut WgpuBackend<'_>, camera: &Camera, small_box: Aabb, box_us: f64) -> (f64, f64) {
+fn measure_latency(backend: &mut WgpuBackend, camera: &Camera, small_box: Aabb, box_us: f64) -> (f64, f64) {
     let mut latencies = Vec::new();
     let mut polls = Vec::new();
     for _ in 0..LATENCY_FRAMES {

@@ -190,6 +190,11 @@ struct BenchArgs {
     /// Folder for the --dump-frame PNGs (created if missing).
     #[arg(long, value_name = "DIR", default_value = ".")]
     dump_dir: PathBuf,
+    /// Share of the scene's instances that move, 0 to 1: each chosen one
+    /// slides back and forth, one in eight also leaves and comes back
+    /// (deterministic from --seed).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
+    motion: f64,
 }
 
 #[derive(clap::Args)]
@@ -322,6 +327,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
         parallel_lanes: !args.serial_lanes,
+        motion: args.motion,
         ..args.scene.config(args.paper.is_some())?
     };
     let config = match (&args.paper, &args.scene.size) {

@@ -316,20 +316,11 @@ fn approximate_chc_reports_its_missing_pixels() {
 fn node_seen_from_inside_its_box_is_never_culled() {
     use glam::{Mat4, Vec3};
     use occlude_core::{CameraPath, Mesh};
-    let mut scene = Scene {
-        name: "room".into(),
-        meshes: vec![],
-        instances: vec![],
-        material_count: 0,
-        path: CameraPath::through(
-            [
-                (Vec3::new(0.0, 1.5, 0.0), Vec3::new(3.0, 1.0, -2.0)),
-                (Vec3::new(1.0, 1.5, 1.0), Vec3::new(-3.0, 1.0, -2.0)),
-            ],
-            70.0,
-        ),
-        triangle_counts: Vec::new(),
-    };
+    let mut scene = Scene::new("room");
+    scene.path = CameraPath::through(
+        [(Vec3::new(0.0, 1.5, 0.0), Vec3::new(3.0, 1.0, -2.0)), (Vec3::new(1.0, 1.5, 1.0), Vec3::new(-3.0, 1.0, -2.0))],
+        70.0,
+    );
     let corners: Vec<Vec3> =
         occlude_core::Aabb::new(Vec3::new(-5.0, 0.0, -5.0), Vec3::new(5.0, 4.0, 5.0)).corners().to_vec();
     let faces = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];

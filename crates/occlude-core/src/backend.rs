@@ -10,6 +10,7 @@ use crate::camera::Camera;
 use crate::cost_model::CostModel;
 use crate::geometry::Aabb;
 use crate::gpu_culling::{GpuCulling, GpuCullingUnsupported};
+use crate::scene::Scene;
 use crate::stats::FrameStats;
 
 /// Handle of an issued occlusion query, valid until the frame ends.
@@ -38,6 +39,15 @@ pub struct QueryHandle(pub u32);
 pub trait Backend {
     /// Starts a frame seen by `camera`: clears depth and statistics.
     fn begin_frame(&mut self, camera: &Camera);
+
+    /// Takes the `changed` instances of `scene` (the scene the backend
+    /// was made for, after [`Scene::apply`](crate::Scene::apply)) into the
+    /// backend's own copy, for the frames that follow: their transforms,
+    /// boxes and whether they are shown ([`crate::motion`]). A backend that
+    /// keeps a copy of the instances (both of `occlude`'s: a GPU keeps its
+    /// own copy of the transforms) implements it; one that reads the
+    /// renderer's data in place need not (the default does nothing).
+    fn update_instances(&mut self, _scene: &Scene, _changed: &[u32]) {}
 
     /// Draws the given instances in order, one draw call each. Counts draw
     /// calls, triangles and state changes (material switches).

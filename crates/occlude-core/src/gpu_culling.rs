@@ -33,9 +33,11 @@
 //! [`GpuCulling::read_list`] and [`GpuCulling::read_flags`] are instruments
 //! for the viewer and tests, counted the same way.
 //!
-//! The resources live as long as the backend; methods create them in
+//! The resources live as long as the backend, or until
+//! [`GpuCulling::release_all`]; methods create them in
 //! `CullingMethod::prepare` of their first frame, outside the frame's clock,
-//! as a renderer uploads its scene once.
+//! as a renderer uploads its scene once, and rewrite the boxes that moved
+//! ([`GpuCulling::update_boxes`]).
 
 use crate::geometry::Aabb;
 use thiserror::Error;
@@ -102,6 +104,17 @@ pub trait GpuCulling {
     /// Uploads `boxes` once. Tests rasterize them grown by
     /// [`QUERY_BOX_PAD`](crate::query_box::QUERY_BOX_PAD), as queries do.
     fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet;
+
+    /// Rewrites slots of `boxes`, `(slot, box)` each: the boxes that moved
+    /// since they were uploaded (a refit, [`crate::motion`]). One upload of
+    /// what changed.
+    fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]);
+
+    /// Drops every resource created so far: their handles mean nothing
+    /// after. A method whose hierarchy was rebuilt (other node ids, other
+    /// sizes) makes its resources anew, without leaving the old ones
+    /// behind.
+    fn release_all(&mut self);
 
     /// A flag buffer of `len` slots, all 0.
     fn create_flags(&mut self, len: u32) -> Flags;

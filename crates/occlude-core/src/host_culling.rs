@@ -73,6 +73,19 @@ impl HostResources {
         BoxSet(self.boxes.len() as u32 - 1)
     }
 
+    /// [`GpuCulling::update_boxes`](crate::GpuCulling::update_boxes).
+    pub fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        let set = &mut self.boxes[boxes.0 as usize];
+        for (slot, b) in changed {
+            set[*slot as usize] = (!b.is_empty()).then(|| padded(b));
+        }
+    }
+
+    /// [`GpuCulling::release_all`](crate::GpuCulling::release_all).
+    pub fn release_all(&mut self) {
+        *self = Self::default();
+    }
+
     /// [`GpuCulling::create_flags`](crate::GpuCulling::create_flags).
     pub fn create_flags(&mut self, len: u32) -> Flags {
         self.flags.push(vec![false; len as usize]);

@@ -250,18 +250,22 @@ mod tests {
 
     fn scene(meshes_of_instances: &[u32]) -> Scene {
         let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]);
-        let instances = meshes_of_instances
-            .iter()
-            .map(|&mesh| Instance { mesh, transform: Mat4::IDENTITY, material: 0, bounds: Aabb::default() })
-            .collect();
-        Scene {
-            name: "items".into(),
-            meshes: vec![mesh; 3],
-            instances,
-            material_count: 1,
-            path: Default::default(),
-            triangle_counts: Vec::new(),
+        let mut scene = Scene::new("items");
+        for _ in 0..3 {
+            scene.add_mesh(mesh.clone());
         }
+        scene.instances = meshes_of_instances
+            .iter()
+            .map(|&mesh| Instance {
+                mesh,
+                transform: Mat4::IDENTITY,
+                material: 0,
+                bounds: Aabb::default(),
+                enabled: true,
+            })
+            .collect();
+        scene.material_count = 1;
+        scene
     }
 
     #[test]

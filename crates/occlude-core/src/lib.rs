@@ -66,6 +66,7 @@ pub mod inner_box;
 pub mod item_buffer;
 pub mod methods;
 pub mod mock;
+pub mod motion;
 pub mod path;
 pub mod query_box;
 pub mod recording;
@@ -83,9 +84,10 @@ pub use geometry::Aabb;
 pub use gpu_culling::{
     BoxSet, ExpandInto, Flags, GpuCulling, GpuCullingUnsupported, IdList, ItemRange, Pyramid, RangeTable, TableData,
 };
-pub use hierarchy::{Hierarchy, HierarchyKind, NodeId};
+pub use hierarchy::{Hierarchy, HierarchyKind, NodeId, Since, UpdatePolicy, Upkeep};
 pub use item_buffer::{ItemBufferError, ItemCounts, ItemLayout, QueryMode, NO_ITEM};
 pub use methods::{CullingMethod, DrawnSet, FrameContext};
+pub use motion::{InstanceChange, MotionError};
 
 pub use path::{CameraPath, Keyframe, Sampling};
 pub use scene::{Instance, Mesh, Scene, SceneError};

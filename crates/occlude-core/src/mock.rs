@@ -45,6 +45,8 @@ use std::rc::Rc;
 pub enum Call {
     /// `begin_frame`.
     BeginFrame,
+    /// `update_instances` of these instances.
+    UpdateInstances(Vec<u32>),
     /// `draw` of these instances.
     Draw(Vec<u32>),
     /// `issue_query` over these boxes, answered by this handle.
@@ -108,6 +110,7 @@ impl Call {
     pub fn name(&self) -> &'static str {
         match self {
             Call::BeginFrame => "begin_frame",
+            Call::UpdateInstances(_) => "update_instances",
             Call::Draw(_) => "draw",
             Call::IssueQuery { .. } => "issue_query",
             Call::IsAvailable { .. } => "is_available",
@@ -129,8 +132,9 @@ impl Call {
 }
 
 /// Every method of the [`Backend`] trait, in the order it declares them.
-pub const BACKEND_CALLS: [&str; 13] = [
+pub const BACKEND_CALLS: [&str; 14] = [
     "begin_frame",
+    "update_instances",
     "draw",
     "issue_query",
     "is_available",
@@ -188,7 +192,7 @@ impl MockBackend {
     pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
         let instances = &scene.instances;
         Self {
-            bounds: instances.iter().map(|i| i.bounds).collect(),
+            bounds: instances.iter().map(|i| i.culling_bounds()).collect(),
             triangles: (0..instances.len()).map(|i| scene.instance_triangles(i)).collect(),
             materials: instances.iter().map(|i| i.material).collect(),
             visible: vec![true; instances.len()],
@@ -293,6 +297,15 @@ impl Backend for MockBackend {
         self.push(Call::BeginFrame);
     }
 
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        for &i in changed {
+            let inst = &scene.instances[i as usize];
+            self.bounds[i as usize] = inst.culling_bounds();
+            self.triangles[i as usize] = scene.instance_triangles(i as usize);
+        }
+        self.push(Call::UpdateInstances(changed.to_vec()));
+    }
+
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
             self.count.set_state(RenderState::Material(self.materials[i as usize]));
@@ -372,6 +385,14 @@ impl Backend for MockBackend {
 impl GpuCulling for MockBackend {
     fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
         self.resources().create_boxes(boxes)
+    }
+
+    fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        self.resources().update_boxes(boxes, changed);
+    }
+
+    fn release_all(&mut self) {
+        self.resources().release_all();
     }
 
     fn create_flags(&mut self, len: u32) -> Flags {
@@ -472,6 +493,7 @@ pub fn assert_forwards_every_call<D: Backend>(wrap: impl FnOnce(MockBackend) -> 
     let mut decorator = wrap(mock);
     let view = Mat4::look_at_rh(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, Vec3::Y);
     let camera = Camera::from_matrices(view, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).expect("a camera");
+    decorator.update_instances(&scene, &[0]);
     decorator.begin_frame(&camera);
     decorator.draw(&[0]);
     let query = decorator.issue_query(&[unit]);

@@ -10,7 +10,7 @@
 use crate::depth_pyramid::tested_levels;
 use crate::{
     Aabb, Backend, BoxSet, Camera, CostModel, CpuCullingWork, ExpandInto, Flags, FrameStats, GpuCulling,
-    GpuCullingUnsupported, IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable,
+    GpuCullingUnsupported, IdList, Instruments, ItemRange, Pyramid, QueryHandle, RangeTable, Scene,
 };
 use std::collections::HashMap;
 
@@ -177,6 +177,10 @@ impl<B: Backend> Backend for RecordingBackend<B> {
         self.inner.begin_frame(camera);
     }
 
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        self.inner.update_instances(scene, changed);
+    }
+
     fn draw(&mut self, instances: &[u32]) {
         self.inner.draw(instances);
     }
@@ -239,6 +243,20 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
         let set = self.culling().create_boxes(boxes);
         self.box_sets.insert(set, boxes.to_vec());
         set
+    }
+
+    fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        self.culling().update_boxes(boxes, changed);
+        if let Some(set) = self.box_sets.get_mut(&boxes) {
+            for (slot, b) in changed {
+                set[*slot as usize] = *b;
+            }
+        }
+    }
+
+    fn release_all(&mut self) {
+        self.culling().release_all();
+        self.box_sets.clear();
     }
 
     fn create_flags(&mut self, len: u32) -> Flags {

@@ -1,9 +1,15 @@
 //! The scene model: indexed triangle meshes shared by instances.
+//!
+//! Meshes never change once added; instances move, hide and show again
+//! ([`Scene::apply`], module [`crate::motion`]). Meshes are shared behind
+//! an [`Arc`], so that a backend keeping its own copy of the instances (as
+//! a GPU keeps its own copy of the transforms) clones a scene cheaply.
 
 use crate::geometry::Aabb;
 use crate::path::CameraPath;
 use crate::query_box::BOX_TRIANGLES;
 use glam::{Mat4, Vec3, Vec4};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// An indexed triangle mesh in its own (object) space.
@@ -40,8 +46,24 @@ pub struct Instance {
     /// Material id; drawing a different material than the previous draw is a
     /// state change.
     pub material: u32,
-    /// World-space box of the transformed mesh.
+    /// World-space box of the transformed mesh (hidden or not).
     pub bounds: Aabb,
+    /// Whether the instance is part of the scene now: a hidden instance
+    /// ([`crate::motion::InstanceChange::Hide`]) is drawn by no backend,
+    /// counted in no statistic and lies in no node box.
+    pub enabled: bool,
+}
+
+impl Instance {
+    /// The box culling sees: [`Instance::bounds`], or the empty box while
+    /// the instance is hidden.
+    pub fn culling_bounds(&self) -> Aabb {
+        if self.enabled {
+            self.bounds
+        } else {
+            Aabb::EMPTY
+        }
+    }
 }
 
 /// Errors found by [`Scene::validate`].
@@ -109,8 +131,8 @@ pub enum SceneError {
 pub struct Scene {
     /// Short name (`city`, a file name, ...).
     pub name: String,
-    /// Shared geometry.
-    pub meshes: Vec<Mesh>,
+    /// Shared geometry, fixed once added ([`Scene::add_mesh`]).
+    pub meshes: Vec<Arc<Mesh>>,
     /// Placed objects.
     pub instances: Vec<Instance>,
     /// Number of distinct materials (ids are `0..material_count`).
@@ -123,6 +145,8 @@ pub struct Scene {
     /// ([`Scene::with_triangle_counts`]). Empty: every instance counts its
     /// mesh's triangles ([`Scene::instance_triangles`]).
     pub triangle_counts: Vec<u32>,
+    /// How many times [`Scene::apply`] changed the instances.
+    revision: u64,
 }
 
 impl Scene {
@@ -137,7 +161,24 @@ impl Scene {
             material_count: 0,
             path: Default::default(),
             triangle_counts: Vec::new(),
+            revision: 0,
         }
+    }
+
+    /// How many times [`Scene::apply`] has changed the instances: equal
+    /// revisions of one scene mean equal poses.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Counts one change of the instances ([`crate::motion`]).
+    pub(crate) fn bump_revision(&mut self) {
+        self.revision += 1;
+    }
+
+    /// Takes the revision of the original this is a copy of.
+    pub(crate) fn set_revision(&mut self, revision: u64) {
+        self.revision = revision;
     }
 
     /// A scene of boxes only, for culling geometry that a renderer keeps
@@ -158,7 +199,7 @@ impl Scene {
                 return Err(SceneError::BadBounds(i));
             }
             let transform = Mat4::from_translation(b.min) * Mat4::from_scale(b.max - b.min);
-            scene.instances.push(Instance { mesh: cube, transform, material: 0, bounds: *b });
+            scene.instances.push(Instance { mesh: cube, transform, material: 0, bounds: *b, enabled: true });
         }
         scene.material_count = 1;
         scene.validate()?;
@@ -196,7 +237,7 @@ impl Scene {
 
     /// Adds a mesh and returns its index.
     pub fn add_mesh(&mut self, mesh: Mesh) -> u32 {
-        self.meshes.push(mesh);
+        self.meshes.push(Arc::new(mesh));
         (self.meshes.len() - 1) as u32
     }
 
@@ -204,7 +245,7 @@ impl Scene {
     pub fn add_instance(&mut self, mesh: u32, transform: Mat4, material: u32) {
         let bounds = self.meshes[mesh as usize].bounds.transformed(&transform);
         self.material_count = self.material_count.max(material + 1);
-        self.instances.push(Instance { mesh, transform, material, bounds });
+        self.instances.push(Instance { mesh, transform, material, bounds, enabled: true });
     }
 
     /// The scene with instance `i` counting `counts[i]` triangles in
@@ -225,26 +266,31 @@ impl Scene {
     }
 
     /// Triangles instance `i` counts in statistics and cost estimates:
-    /// [`Scene::triangle_counts`]' entry where given, else its mesh's.
+    /// [`Scene::triangle_counts`]' entry where given, else its mesh's; 0
+    /// while it is hidden.
     pub fn instance_triangles(&self, i: usize) -> u64 {
+        if !self.instances[i].enabled {
+            return 0;
+        }
         match self.triangle_counts.get(i) {
             Some(&n) => u64::from(n),
             None => self.meshes[self.instances[i].mesh as usize].triangle_count() as u64,
         }
     }
 
-    /// Triangles over all instances (what view-frustum culling would draw with
-    /// everything in view), as [`Scene::instance_triangles`] counts them.
+    /// Triangles over all shown instances (what view-frustum culling would
+    /// draw with everything in view), as [`Scene::instance_triangles`]
+    /// counts them.
     pub fn triangle_count(&self) -> usize {
         (0..self.instances.len()).map(|i| self.instance_triangles(i) as usize).sum()
     }
 
     /// Triangles stored once per mesh (memory footprint).
     pub fn unique_triangle_count(&self) -> usize {
-        self.meshes.iter().map(Mesh::triangle_count).sum()
+        self.meshes.iter().map(|m| m.triangle_count()).sum()
     }
 
-    /// Box of all instances.
+    /// Box of all instances, hidden ones included (where they would be).
     pub fn bounds(&self) -> Aabb {
         self.instances.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds))
     }
@@ -287,14 +333,7 @@ mod tests {
     use super::*;
 
     fn triangle_scene(p: Vec3, indices: Vec<u32>) -> Scene {
-        let mut s = Scene {
-            name: "t".into(),
-            meshes: vec![],
-            instances: vec![],
-            material_count: 0,
-            path: CameraPath::default(),
-            triangle_counts: Vec::new(),
-        };
+        let mut s = Scene::new("t");
         let m = s.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, p], indices));
         s.add_instance(m, Mat4::IDENTITY, 0);
         s

@@ -80,4 +80,15 @@ pub struct FrameStats {
     /// counted in `queries`, not here).
     #[serde(default)]
     pub readbacks: u64,
+    /// Real time spent before the frame keeping the scene up to date
+    /// (`crate::motion`): the hierarchy's refit or rebuild and the
+    /// backend's update of the instances that changed; 0 in a still scene.
+    #[serde(default)]
+    pub update_ms: f64,
+    /// Instances that moved, hid or showed before the frame.
+    #[serde(default)]
+    pub instances_moved: u64,
+    /// Whether the hierarchy was rebuilt before the frame (1) or not (0).
+    #[serde(default)]
+    pub rebuilds: u64,
 }

@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::{Mat4, Vec3};
 use occlude_core::rng::Rng;
-use occlude_core::{CameraPath, Scene};
+use occlude_core::Scene;
 use occlude_scenes::import::{import, ModelFormat};
 use occlude_scenes::shapes::{sphere, MeshBuilder};
 use occlude_scenes::{export, AutoPath, ImportOptions};
@@ -17,14 +17,8 @@ const MESHES: u32 = 1000;
 /// A field of [`MESHES`] spheres of random radius and place, each baked into
 /// its own mesh so that every triangle is read from the file.
 fn million_triangles() -> Scene {
-    let mut scene = Scene {
-        name: "million".into(),
-        meshes: vec![],
-        instances: vec![],
-        material_count: 8,
-        path: CameraPath::default(),
-        triangle_counts: Vec::new(),
-    };
+    let mut scene = Scene::new("million");
+    scene.material_count = 8;
     let mut rng = Rng::new(1, 0);
     for k in 0..MESHES {
         let at = rng.point_in(Vec3::ZERO, Vec3::new(400.0, 20.0, 400.0));

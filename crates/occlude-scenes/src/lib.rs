@@ -22,6 +22,7 @@ pub mod building;
 mod city;
 pub mod export;
 mod figures;
+pub mod motion;
 pub mod import;
 pub mod newell;
 mod plant;
@@ -34,6 +35,7 @@ mod teapots;
 mod walk;
 
 pub use import::{load, AutoPath, ImportOptions, LoadError};
+pub use motion::SceneMotion;
 use occlude_core::{Scene, SceneError};
 use std::fmt;
 use std::str::FromStr;

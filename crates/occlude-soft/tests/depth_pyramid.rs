@@ -9,21 +9,14 @@
 
 use glam::Vec3;
 use occlude_core::rng::Rng;
-use occlude_core::{Aabb, Backend, Camera, CameraPath, Scene};
+use occlude_core::{Aabb, Backend, Camera, Scene};
 use occlude_soft::{GpuModel, SoftBackend};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use std::cell::Cell;
 
 fn empty_scene() -> Scene {
-    Scene {
-        name: "empty".into(),
-        meshes: Vec::new(),
-        instances: Vec::new(),
-        material_count: 0,
-        path: CameraPath::default(),
-        triangle_counts: Vec::new(),
-    }
+    Scene::new("empty")
 }
 
 /// A depth image of a few overlapping rectangles at random depths over a

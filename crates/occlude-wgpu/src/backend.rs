@@ -138,9 +138,10 @@ impl Bound {
 }
 
 /// One method's view of a [`GpuScene`]: its own render target, camera,
-/// query boxes and queries.
-pub struct WgpuBackend<'s> {
-    scene: &'s Scene,
+/// query boxes and queries, and its own copy of the scene's instances
+/// (meshes shared), updated by [`Backend::update_instances`].
+pub struct WgpuBackend {
+    scene: Scene,
     gpu: Arc<GpuScene>,
     target: RenderTarget,
     camera_buffer: wgpu::Buffer,
@@ -172,16 +173,16 @@ struct CountedQueries {
     group: wgpu::BindGroup,
 }
 
-impl<'s> WgpuBackend<'s> {
+impl WgpuBackend {
     /// A backend rendering `scene` (already uploaded as `gpu`) at `width` x
     /// `height` pixels.
-    pub fn new(gpu: Arc<GpuScene>, scene: &'s Scene, width: u32, height: u32) -> Self {
+    pub fn new(gpu: Arc<GpuScene>, scene: &Scene, width: u32, height: u32) -> Self {
         let ctx = Arc::clone(&gpu.ctx);
         let camera_buffer = camera_buffer(&ctx.device);
         let boxes = BoxRows::new(&ctx.device);
         let frame_group = frame_group(&gpu, &camera_buffer, &boxes.buffer);
         Self {
-            scene,
+            scene: scene.clone(),
             target: RenderTarget::new(&ctx, width, height),
             camera_buffer,
             frame_group,
@@ -235,7 +236,7 @@ impl<'s> WgpuBackend<'s> {
     pub fn set_query_mode(&mut self, mode: QueryMode) -> Result<(), GpuCullingUnsupported> {
         if mode == QueryMode::Hib && self.counted.is_none() {
             self.ctx().gpu_culling_support()?;
-            let scene = self.gpu.culling(self.scene);
+            let scene = self.gpu.culling(&self.scene);
             let buffer = self.ctx().device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("query counts"),
                 size: u64::from(QUERIES_PER_SET) * 8,
@@ -355,7 +356,7 @@ impl<'s> WgpuBackend<'s> {
             });
             let frame = Encoding {
                 gpu: &gpu,
-                scene: self.scene,
+                scene: &self.scene,
                 frame: &self.frame_group,
                 culling: self.culling.as_ref(),
                 counted: self.counted.as_ref(),
@@ -422,7 +423,7 @@ impl<'s> WgpuBackend<'s> {
 
     /// GPU-resident culling's resources, made on first use.
     fn culling(&mut self) -> &mut Culling {
-        let (gpu, scene, camera_buffer, camera) = (&self.gpu, self.scene, &self.camera_buffer, self.camera);
+        let (gpu, scene, camera_buffer, camera) = (&self.gpu, &self.scene, &self.camera_buffer, self.camera);
         let depth = &self.target.depth;
         self.culling.get_or_insert_with(|| {
             let culling = Culling::new(gpu, scene, camera_buffer, depth);
@@ -555,16 +556,24 @@ fn encode_ops(pass: &mut wgpu::RenderPass<'_>, enc: &Encoding<'_>, ops: &[Op]) {
     }
 }
 
-impl Backend for WgpuBackend<'_> {
+impl Backend for WgpuBackend {
     fn begin_frame(&mut self, camera: &Camera) {
         self.start(camera);
         self.count.begin_frame();
         self.frame_start = Instant::now();
     }
 
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        self.scene.copy_instances(scene, changed);
+        self.gpu.write_transforms(&self.scene, changed);
+    }
+
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
             let inst = &self.scene.instances[i as usize];
+            if !inst.enabled {
+                continue;
+            }
             self.count.set_state(RenderState::Material(inst.material));
             self.count.draw(i, self.scene.instance_triangles(i as usize));
             self.ops.push(Op::Draw(i));
@@ -658,7 +667,7 @@ impl Backend for WgpuBackend<'_> {
     }
 }
 
-impl Instruments for WgpuBackend<'_> {
+impl Instruments for WgpuBackend {
     fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.settle();
         let gpu = Arc::clone(&self.gpu);
@@ -685,9 +694,17 @@ impl Instruments for WgpuBackend<'_> {
 /// Resources are made at once (outside frames, as the trait asks); commands
 /// are recorded as ops and run at the next submission, in order with the
 /// draws and queries around them.
-impl GpuCulling for WgpuBackend<'_> {
+impl GpuCulling for WgpuBackend {
     fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
         self.culling().create_boxes(boxes)
+    }
+
+    fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        self.culling().update_boxes(boxes, changed);
+    }
+
+    fn release_all(&mut self) {
+        self.culling().release_all();
     }
 
     fn create_flags(&mut self, len: u32) -> Flags {
@@ -761,7 +778,7 @@ impl GpuCulling for WgpuBackend<'_> {
     }
 }
 
-impl WgpuBackend<'_> {
+impl WgpuBackend {
     /// Runs everything recorded, then `read` (a blocking read-back of the
     /// culling resources): the time is wait time, the call a read-back. A
     /// failed read-back fails the backend and answers the default.

@@ -363,6 +363,27 @@ impl Culling {
         BoxSet(self.boxes.len() as u32 - 1)
     }
 
+    /// Rewrites the `changed` slots of `boxes` (one queue write each).
+    pub fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        let buffer = &self.boxes[boxes.0 as usize];
+        for (slot, b) in changed {
+            let words = box_words(b, *slot);
+            self.gpu.ctx.queue.write_buffer(buffer, u64::from(*slot) * BOX_SLOT_BYTES, bytemuck::cast_slice(&words));
+        }
+    }
+
+    /// Drops every box set, flag buffer, list, table and pyramid, and the
+    /// bind groups that name them.
+    pub fn release_all(&mut self) {
+        self.boxes.clear();
+        self.flags.clear();
+        self.lists.clear();
+        self.tables.clear();
+        self.pyramids.clear();
+        self.groups.clear();
+        self.test_frame = None;
+    }
+
     /// A flag buffer of `len` slots, all 0.
     pub fn create_flags(&mut self, len: u32) -> Flags {
         let buffer = self.ctx().device.create_buffer(&wgpu::BufferDescriptor {
@@ -764,22 +785,25 @@ pub(crate) fn param_buffer(device: &wgpu::Device, value: u32) -> wgpu::Buffer {
 /// A box set's storage buffer: `boxes` padded as query boxes, each with its
 /// slot; empty boxes stay empty (min > max), which tests skip.
 pub(crate) fn box_set_buffer(ctx: &GpuContext, boxes: &[Aabb]) -> wgpu::Buffer {
-    let data: Vec<[u32; 8]> = boxes
-        .iter()
-        .zip(0u32..)
-        .map(|(b, slot)| {
-            let (lo, hi) = if b.is_empty() {
-                (glam::Vec3::ONE, glam::Vec3::ZERO)
-            } else {
-                let p = b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element());
-                (p.min, p.max)
-            };
-            let [lx, ly, lz] = lo.to_array().map(f32::to_bits);
-            let [hx, hy, hz] = hi.to_array().map(f32::to_bits);
-            [lx, ly, lz, slot, hx, hy, hz, 0]
-        })
-        .collect();
-    storage_init(ctx, "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::empty())
+    let data: Vec<[u32; 8]> = boxes.iter().zip(0u32..).map(|(b, slot)| box_words(b, slot)).collect();
+    storage_init(ctx, "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::COPY_DST)
+}
+
+/// Bytes of one box of a box set.
+const BOX_SLOT_BYTES: u64 = 32;
+
+/// Box `b` in slot `slot` of a box set, padded as a query box; an empty box
+/// stays empty (min > max), which tests skip.
+fn box_words(b: &Aabb, slot: u32) -> [u32; 8] {
+    let (lo, hi) = if b.is_empty() {
+        (glam::Vec3::ONE, glam::Vec3::ZERO)
+    } else {
+        let p = b.expanded(QUERY_BOX_PAD, QUERY_BOX_PAD * b.min.abs().max(b.max.abs()).max_element());
+        (p.min, p.max)
+    };
+    let [lx, ly, lz] = lo.to_array().map(f32::to_bits);
+    let [hx, hy, hz] = hi.to_array().map(f32::to_bits);
+    [lx, ly, lz, slot, hx, hy, hz, 0]
 }
 
 /// Records a pyramid's reductions into `pass`: `pipeline`

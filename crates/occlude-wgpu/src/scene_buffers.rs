@@ -44,6 +44,17 @@ pub struct GpuScene {
     culling: OnceLock<Arc<CullingScene>>,
 }
 
+/// The transform an instance is drawn with: its own, or all zeros while it
+/// is hidden (every vertex at the clip-space origin with `w` = 0, which
+/// the rasterizer clips away).
+fn drawn_transform(instance: &occlude_core::Instance) -> [f32; 16] {
+    if instance.enabled {
+        instance.transform.to_cols_array()
+    } else {
+        [0.0; 16]
+    }
+}
+
 /// Bytes between two materials' colours in the material buffer (the
 /// uniform-offset alignment every adapter accepts).
 const MATERIAL_STRIDE: u64 = 256;
@@ -67,7 +78,7 @@ impl GpuScene {
             positions.extend(mesh.positions.iter().map(|p| p.to_array()));
             indices.extend_from_slice(&mesh.indices);
         }
-        let transforms: Vec<[f32; 16]> = scene.instances.iter().map(|i| i.transform.to_cols_array()).collect();
+        let transforms: Vec<[f32; 16]> = scene.instances.iter().map(drawn_transform).collect();
         let limits = device.limits();
         for (name, bytes) in [
             ("vertex pool", positions.len() as u64 * 12),
@@ -93,7 +104,11 @@ impl GpuScene {
         };
         let vertices = upload("vertices", bytemuck::cast_slice(&positions), wgpu::BufferUsages::VERTEX);
         let index_buffer = upload("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
-        let transform_buffer = upload("transforms", bytemuck::cast_slice(&transforms), wgpu::BufferUsages::STORAGE);
+        let transform_buffer = upload(
+            "transforms",
+            bytemuck::cast_slice(&transforms),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
         let box_indices = box_index_buffer(device);
 
         let (instance_material, material_groups) = material_groups(&ctx, &pipelines, scene);
@@ -109,6 +124,15 @@ impl GpuScene {
             material_groups,
             culling: OnceLock::new(),
         })
+    }
+
+    /// Writes the transforms of the `changed` instances of `scene` (the
+    /// scene this was uploaded from, after it moved): one queue write each.
+    pub(crate) fn write_transforms(&self, scene: &Scene, changed: &[u32]) {
+        for &i in changed {
+            let t = drawn_transform(&scene.instances[i as usize]);
+            self.ctx.queue.write_buffer(&self.transforms, u64::from(i) * 64, bytemuck::cast_slice(&t));
+        }
     }
 
     /// GPU-resident culling's shared part for `scene` (the scene this was

@@ -106,6 +106,9 @@ pub struct BenchConfig {
     /// so they are the same either way (only `wall_ms` differs); the wgpu
     /// backend's lanes take turns, as they measure time on one GPU.
     pub parallel_lanes: bool,
+    /// Share of the scene's instances that move (`--motion`, 0 to 1;
+    /// `occlude_scenes::SceneMotion`): 0 is a still scene.
+    pub motion: f64,
 }
 
 impl Default for BenchConfig {
@@ -128,6 +131,7 @@ impl Default for BenchConfig {
             camera_path: None,
             dump_frame: None,
             parallel_lanes: true,
+            motion: 0.0,
         }
     }
 }
@@ -170,6 +174,9 @@ impl BenchConfig {
         }
         if self.build.leaf_size == 0 {
             bail!("--leaf-size must be at least 1");
+        }
+        if !(0.0..=1.0).contains(&self.motion) {
+            bail!("--motion {} is out of range: expected a share of the instances from 0 to 1", self.motion);
         }
         Ok(())
     }

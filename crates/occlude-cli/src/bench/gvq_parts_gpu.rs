@@ -139,16 +139,16 @@ struct GpuRow {
 
 /// What the rows of one view run on: the uploaded scene and its backend,
 /// and `GpuSat` with the scene it draws.
-struct GpuView<'a, 's> {
+struct GpuView<'a> {
     heavy: &'a Heavy,
     scene: &'a Scene,
-    backend: &'a mut WgpuBackend<'s>,
+    backend: &'a mut WgpuBackend,
     sat: &'a GpuSat,
     sat_scene: &'a Scene,
     frames: usize,
 }
 
-impl GpuView<'_, '_> {
+impl GpuView<'_> {
     /// Every method's row in the view of `camera`, whose soft passes are
     /// `passes`.
     fn rows(&mut self, camera: &Camera, passes: &ViewPasses) -> Result<Vec<GpuRow>> {

@@ -338,7 +338,7 @@ struct Passes<'s> {
     scene: &'s Scene,
     edges: Vec<MeshEdges>,
     sat: SoftSat,
-    hib: SoftBackend<'s>,
+    hib: SoftBackend,
     layout: ItemLayout,
     rasterizer: Rasterizer,
     light_depth: DepthBuffer,
@@ -359,7 +359,7 @@ impl<'s> Passes<'s> {
         let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
         Self {
             scene,
-            edges: scene.meshes.iter().map(MeshEdges::new).collect(),
+            edges: scene.meshes.iter().map(|m| MeshEdges::new(m)).collect(),
             sat: SoftSat::new(light_size.0, light_size.1),
             hib: SoftBackend::new(scene, light_size.0, light_size.1, model.clone()),
             layout: ItemLayout::new(scene, &all, 0).expect("one tile: one bin per object"),

@@ -50,7 +50,7 @@ struct Device<'a, 's> {
     scene: &'s Scene,
     size: (u32, u32),
     /// The item pass's backend, over `scene`.
-    backend: WgpuBackend<'s>,
+    backend: WgpuBackend,
     /// One bin per object.
     layout: ItemLayout,
     /// Per region mode (conservative, approximate), its summed area tables.

@@ -15,7 +15,7 @@
 
 use occlude_core::{
     Aabb, Backend, Camera, CostModel, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling,
-    GpuCullingUnsupported, Instruments, QueryHandle,
+    GpuCullingUnsupported, Instruments, QueryHandle, Scene,
 };
 use std::sync::{Arc, Mutex, PoisonError};
 
@@ -56,6 +56,10 @@ impl<B: Backend + ?Sized> Backend for DrawLog<B> {
     fn begin_frame(&mut self, camera: &Camera) {
         lock(&self.calls).clear();
         self.inner.begin_frame(camera);
+    }
+
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        self.inner.update_instances(scene, changed);
     }
     fn draw(&mut self, instances: &[u32]) {
         lock(&self.calls).push(instances.to_vec());

@@ -14,12 +14,16 @@ use crate::progress::stage;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
-use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene};
+use occlude_core::{
+    differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, UpdatePolicy, Upkeep,
+};
+use occlude_scenes::SceneMotion;
 use occlude_soft::{DrawReplay, SharedSetup, SoftBackend};
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// Everything a run measured, before summarising.
 pub struct BenchRun {
@@ -75,12 +79,7 @@ impl Renderer {
 
     /// A lane's backend; on the soft backend, `draws` says whether it keeps
     /// its draws' counts for another or takes them from one.
-    fn backend<'s>(
-        &self,
-        scene: &'s Scene,
-        config: &BenchConfig,
-        draws: Draws,
-    ) -> Result<Box<dyn Backend + Send + 's>> {
+    fn backend(&self, scene: &Scene, config: &BenchConfig, draws: Draws) -> Result<Box<dyn Backend + Send>> {
         let (w, h) = config.resolution;
         Ok(match self {
             Self::Soft(shared) => {
@@ -167,9 +166,9 @@ impl Variant {
 }
 
 /// One method with its own backend and state across frames.
-struct Lane<'s> {
+struct Lane {
     built: BuiltMethod,
-    backend: Box<dyn Backend + Send + 's>,
+    backend: Box<dyn Backend + Send>,
     drawn: DrawnSet,
     frames: Vec<FrameStats>,
     counters: BTreeMap<String, Vec<f64>>,
@@ -179,10 +178,13 @@ struct Lane<'s> {
     /// The depth image of the frame last rendered, in memory reused frame
     /// after frame.
     image: Vec<f32>,
+    /// The upkeep of a moving scene before the coming frame (only its
+    /// `update_ms`, `instances_moved` and `rebuilds`).
+    update: FrameStats,
 }
 
-impl<'s> Lane<'s> {
-    fn new(built: BuiltMethod, backend: Box<dyn Backend + Send + 's>) -> Self {
+impl Lane {
+    fn new(built: BuiltMethod, backend: Box<dyn Backend + Send>) -> Self {
         Self {
             built,
             backend,
@@ -191,6 +193,7 @@ impl<'s> Lane<'s> {
             counters: BTreeMap::new(),
             stats: FrameStats::default(),
             image: Vec::new(),
+            update: FrameStats::default(),
         }
     }
 
@@ -208,6 +211,9 @@ impl<'s> Lane<'s> {
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> Result<()> {
         let method = self.built.method.as_mut();
         self.stats = render_frame(method, self.backend.as_mut(), scene, hierarchy, camera, &mut self.drawn);
+        let update = std::mem::take(&mut self.update);
+        (self.stats.update_ms, self.stats.instances_moved, self.stats.rebuilds) =
+            (update.update_ms, update.instances_moved, update.rebuilds);
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
@@ -220,23 +226,23 @@ impl<'s> Lane<'s> {
 /// by side when [`Self::parallel`]. Nothing else is shared between lanes
 /// but the set-up of the frame's triangles (`SharedSetup`), the same
 /// whichever lane makes it, so the order they render in changes no figure.
-struct Lanes<'s> {
-    chains: Vec<Vec<Lane<'s>>>,
+struct Lanes {
+    chains: Vec<Vec<Lane>>,
     /// Per lane in report order (the `vfc` reference first), its chain and
     /// place in it.
     order: Vec<(usize, usize)>,
     parallel: bool,
 }
 
-impl<'s> Lanes<'s> {
+impl Lanes {
     /// `reference` alone, its lanes to render side by side when `parallel`.
-    fn new(reference: Lane<'s>, parallel: bool) -> Self {
+    fn new(reference: Lane, parallel: bool) -> Self {
         Self { chains: vec![vec![reference]], order: vec![(0, 0)], parallel }
     }
 
     /// Appends `lane` in report order, in a chain of its own or, with
     /// `after`, after the lane of that index in its chain.
-    fn push(&mut self, lane: Lane<'s>, after: Option<usize>) {
+    fn push(&mut self, lane: Lane, after: Option<usize>) {
         let chain = match after {
             Some(i) => self.order[i].0,
             None => {
@@ -253,19 +259,35 @@ impl<'s> Lanes<'s> {
     }
 
     /// The lane of index `i` in report order (0: the reference).
-    fn get_mut(&mut self, i: usize) -> &mut Lane<'s> {
+    fn get_mut(&mut self, i: usize) -> &mut Lane {
         let (chain, at) = self.order[i];
         &mut self.chains[chain][at]
     }
 
     /// Every lane in report order.
-    fn iter(&self) -> impl Iterator<Item = &Lane<'s>> {
+    fn iter(&self) -> impl Iterator<Item = &Lane> {
         self.order.iter().map(|&(chain, at)| &self.chains[chain][at])
+    }
+
+    /// Gives every lane's backend the `changed` instances of `scene` and
+    /// adds the time each took, and `upkeep` (the hierarchy's), to its
+    /// frame's statistics.
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32], upkeep: &Upkeep) {
+        for lane in self.chains.iter_mut().flatten() {
+            let start = Instant::now();
+            lane.backend.update_instances(scene, changed);
+            lane.update = FrameStats {
+                update_ms: (upkeep.time + start.elapsed()).as_secs_f64() * 1e3,
+                instances_moved: upkeep.instances as u64,
+                rebuilds: u64::from(upkeep.rebuilt),
+                ..FrameStats::default()
+            };
+        }
     }
 
     /// Renders one frame on every lane.
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> Result<()> {
-        let chain = |lanes: &mut Vec<Lane<'s>>| lanes.iter_mut().try_for_each(|l| l.frame(scene, hierarchy, camera));
+        let chain = |lanes: &mut Vec<Lane>| lanes.iter_mut().try_for_each(|l| l.frame(scene, hierarchy, camera));
         if self.parallel {
             self.chains.par_iter_mut().try_for_each(chain)
         } else {
@@ -274,8 +296,8 @@ impl<'s> Lanes<'s> {
     }
 
     /// The lanes in report order.
-    fn into_vec(self) -> Vec<Lane<'s>> {
-        let mut chains: Vec<Vec<Option<Lane<'s>>>> =
+    fn into_vec(self) -> Vec<Lane> {
+        let mut chains: Vec<Vec<Option<Lane>>> =
             self.chains.into_iter().map(|c| c.into_iter().map(Some).collect()).collect();
         self.order.iter().map(|&(chain, at)| chains[chain][at].take().expect("each lane once")).collect()
     }
@@ -355,11 +377,15 @@ fn run_scene_here(
 ) -> Result<BenchRun> {
     config.validate()?;
     let variant_methods = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>()?;
-    let hierarchy = stage(progress, &format!("building the {}", config.hierarchy), || {
+    let mut hierarchy = stage(progress, &format!("building the {}", config.hierarchy), || {
         Hierarchy::build(scene, config.hierarchy, config.build)
     });
     let cameras = cameras(scene, config);
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
+    let times = scene.path.frame_times(config.sampling());
+    let motion = (config.motion > 0.0).then(|| SceneMotion::new(scene, config.motion, config.seed));
+    // The scene as it moves, frame by frame; the caller's stays as built.
+    let mut moving = scene.clone();
 
     let lanes = 1 + config.methods.iter().filter(|m| m.as_str() != "vfc").count() + variant_methods.len();
     let renderer = stage(progress, "uploading the scene", || Renderer::new(config, scene, lanes))?;
@@ -375,7 +401,12 @@ fn run_scene_here(
         for i in 1..lanes.len() {
             lanes.get_mut(i).built.method.set_debug(dump);
         }
-        lanes.frame(scene, &hierarchy, camera)?;
+        if let Some(motion) = &motion {
+            let changed = moving.apply(&motion.changes_at(times[k]))?;
+            let upkeep = hierarchy.update(&moving, &changed, UpdatePolicy::default());
+            lanes.update_instances(&moving, &changed, &upkeep);
+        }
+        lanes.frame(&moving, &hierarchy, camera)?;
         if let Some(e) = lanes.iter().find_map(|l| l.backend.failure().map(|e| (l.built.method.name(), e))) {
             aborted = Some(format!("frame {k}, method {}: {}", e.0, e.1));
             break;
@@ -433,12 +464,12 @@ fn run_scene_here(
 /// The run's lanes on `renderer`'s backends: the `vfc` reference, each
 /// configured method but `vfc`, then `variants`; a method the backend
 /// cannot run is refused.
-fn build_lanes<'s>(
-    scene: &'s Scene,
+fn build_lanes(
+    scene: &Scene,
     config: &BenchConfig,
     variants: Vec<BuiltMethod>,
     renderer: &Renderer,
-) -> Result<Lanes<'s>> {
+) -> Result<Lanes> {
     let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config, Draws::Own)?);
     let mut lanes = Lanes::new(reference, renderer.parallel_lanes(config));
     // `ideal` replays the draw calls `sw` (listed before it) made in the

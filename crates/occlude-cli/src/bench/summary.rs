@@ -117,6 +117,17 @@ pub struct MethodSummary {
     /// GPU-to-CPU read-backs per frame (besides query results).
     #[serde(default)]
     pub readbacks_per_frame: f64,
+    /// Real time per frame keeping a moving scene up to date (the
+    /// hierarchy's refit or rebuild and the backend's update), ms; 0 in a
+    /// still scene. See `FrameStats::update_ms`.
+    #[serde(default)]
+    pub update_ms_per_frame: f64,
+    /// Instances that moved, hid or showed per frame.
+    #[serde(default)]
+    pub instances_moved_per_frame: f64,
+    /// Frames before which the hierarchy was rebuilt.
+    #[serde(default)]
+    pub rebuilds: u64,
     /// Means per frame of the method's own counters (e.g. `om`'s stage-1
     /// nodes decided without a query and its stage-2 rounds).
     pub counters_per_frame: BTreeMap<String, f64>,
@@ -234,6 +245,9 @@ impl BenchReport {
                     indirect_draws_per_frame: mean(frames, |f| f.indirect_draws as f64),
                     indirect_draw_calls_per_frame: mean(frames, |f| f.indirect_draw_calls as f64),
                     readbacks_per_frame: mean(frames, |f| f.readbacks as f64),
+                    update_ms_per_frame: mean(frames, |f| f.update_ms),
+                    instances_moved_per_frame: mean(frames, |f| f.instances_moved as f64),
+                    rebuilds: frames.iter().map(|f| f.rebuilds).sum(),
                     counters_per_frame: m
                         .counters
                         .iter()

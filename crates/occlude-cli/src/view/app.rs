@@ -78,11 +78,11 @@ fn os_message(message: &str) -> String {
 }
 
 /// The GPU side of the viewer, made once the window exists.
-struct Gpu<'s> {
+struct Gpu {
     window: Arc<Window>,
     adapter: String,
     scene: Arc<GpuScene>,
-    backend: RecordingBackend<WgpuBackend<'s>>,
+    backend: RecordingBackend<WgpuBackend>,
     /// The backend's colour image, bound for presenting.
     frame: wgpu::BindGroup,
     blit: Blit,
@@ -91,10 +91,10 @@ struct Gpu<'s> {
     overlay: Overlay,
 }
 
-impl<'s> Gpu<'s> {
+impl Gpu {
     /// Opens the window, an adapter that can draw to it and its device, and
     /// uploads the scene.
-    fn open(event_loop: &ActiveEventLoop, scene: &'s Scene, config: &ViewConfig) -> Result<Self> {
+    fn open(event_loop: &ActiveEventLoop, scene: &Scene, config: &ViewConfig) -> Result<Self> {
         let (w, h) = config.scene.resolution;
         let attributes = Window::default_attributes()
             .with_title(format!("occlude view: {} ({})", config.scene.scene, config.scene.size))
@@ -146,7 +146,7 @@ impl<'s> Gpu<'s> {
 
     /// Renders from now on at `width` x `height` (a new backend; the
     /// method's state is kept).
-    fn resize_backend(&mut self, scene: &'s Scene, (width, height): (u32, u32)) {
+    fn resize_backend(&mut self, scene: &Scene, (width, height): (u32, u32)) {
         if width == 0 || height == 0 || self.backend.inner().size() == (width, height) {
             return;
         }
@@ -216,7 +216,7 @@ struct Viewer<'s> {
     last_refresh: Option<Instant>,
     average: StatsAverage,
     shown: ShownStats,
-    gpu: Option<Gpu<'s>>,
+    gpu: Option<Gpu>,
     outcome: Result<()>,
 }
 

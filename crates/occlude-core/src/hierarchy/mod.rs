@@ -8,6 +8,9 @@
 
 pub mod bvh;
 pub mod kdtree;
+mod refit;
+
+pub use refit::{Changes, Since, UpdatePolicy, Upkeep, Version};
 
 use crate::geometry::Aabb;
 use crate::scene::Scene;
@@ -85,6 +88,19 @@ pub struct Hierarchy {
     pub kind: HierarchyKind,
     /// Wall time the build took.
     pub build_time: Duration,
+    /// The options it was built with (a rebuild uses them again).
+    options: BuildOptions,
+    /// Instances of the scene it was built over.
+    instance_count: usize,
+    /// Its SAH cost right after the build ([`Hierarchy::sah_cost`]).
+    built_cost: f64,
+    version: Version,
+    /// What the last refit changed.
+    changes: Changes,
+    /// Per instance, its leaves (built on the first refit).
+    leaves_of: refit::LeavesOf,
+    /// Per node, scratch of a refit.
+    dirty: Vec<bool>,
 }
 
 /// Options shared by both builders.
@@ -103,7 +119,9 @@ impl Default for BuildOptions {
 }
 
 impl Hierarchy {
-    /// Builds a hierarchy of `kind` over all instances of `scene`.
+    /// Builds a hierarchy of `kind` over all instances of `scene`. Hidden
+    /// instances are placed where they are and lie in no node box
+    /// ([`crate::Instance::culling_bounds`]).
     pub fn build(scene: &Scene, kind: HierarchyKind, options: BuildOptions) -> Hierarchy {
         let start = Instant::now();
         let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
@@ -112,7 +130,30 @@ impl Hierarchy {
             HierarchyKind::Bvh => bvh::build(&boxes, options, &mut builder),
             HierarchyKind::KdTree => kdtree::build(&boxes, options, &mut builder),
         }
-        Hierarchy { nodes: builder.nodes, items: builder.items, kind, build_time: start.elapsed() }
+        let nodes = builder.nodes.len();
+        let mut h = Hierarchy {
+            nodes: builder.nodes,
+            items: builder.items,
+            kind,
+            build_time: Duration::ZERO,
+            options,
+            instance_count: scene.instances.len(),
+            built_cost: 0.0,
+            version: Version { build: refit::next_build(), refit: 0 },
+            changes: Changes::default(),
+            leaves_of: Default::default(),
+            dirty: vec![false; nodes],
+        };
+        let hidden: Vec<u32> =
+            (0..scene.instances.len() as u32).filter(|&i| !scene.instances[i as usize].enabled).collect();
+        if !hidden.is_empty() {
+            h.refit(scene, &hidden);
+            h.version.refit = 0;
+            h.changes = Changes::default();
+        }
+        h.built_cost = h.sah_cost();
+        h.build_time = start.elapsed();
+        h
     }
 
     /// The root node.
@@ -211,14 +252,7 @@ mod tests {
 
     /// A scene of `n` unit boxes scattered deterministically.
     pub(crate) fn scattered(n: usize) -> Scene {
-        let mut s = Scene {
-            name: "scatter".into(),
-            meshes: vec![],
-            instances: vec![],
-            material_count: 0,
-            path: Default::default(),
-            triangle_counts: Vec::new(),
-        };
+        let mut s = Scene::new("scatter");
         let m =
             s.add_mesh(crate::scene::Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![0, 1, 2, 1, 3, 2]));
         let mut x = 12345u64;

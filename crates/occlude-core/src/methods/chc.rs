@@ -9,12 +9,13 @@
 //! available, interleaved with the traversal (section 4.1). Visibility is
 //! pulled up the hierarchy when a node turns out visible.
 
+use super::tracked::Tracked;
 use super::{
     pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
     OptionReader,
 };
 use crate::backend::{Backend, QueryHandle};
-use crate::hierarchy::NodeId;
+use crate::hierarchy::{NodeId, Since};
 use std::collections::VecDeque;
 
 /// The section 5 options of CHC.
@@ -65,6 +66,8 @@ impl Classified for NodeState {
 pub struct Chc {
     params: ChcParams,
     frame: u32,
+    /// The hierarchy the node states are for.
+    tracked: Tracked,
     nodes: Vec<NodeState>,
     /// Triangles under each node, for the speculation cost estimate.
     subtree_triangles: Vec<u64>,
@@ -73,7 +76,7 @@ pub struct Chc {
 impl Chc {
     /// CHC with the given options.
     pub fn new(params: ChcParams) -> Self {
-        Self { params, frame: 0, nodes: Vec::new(), subtree_triangles: Vec::new() }
+        Self { params, frame: 0, tracked: Tracked::default(), nodes: Vec::new(), subtree_triangles: Vec::new() }
     }
 
     /// Figure 2, `TraverseNode`: render a leaf or queue the children.
@@ -123,7 +126,7 @@ impl Chc {
     /// Sizes the per-node state for `h` (first frame, or a new hierarchy).
     fn prepare_state(&mut self, ctx: &FrameContext<'_>) {
         let h = ctx.hierarchy;
-        if self.nodes.len() != h.node_count() {
+        if self.tracked.since(h) == Since::New {
             self.nodes = vec![NodeState::default(); h.node_count()];
             self.subtree_triangles = subtree_triangles(ctx.scene, h);
         }

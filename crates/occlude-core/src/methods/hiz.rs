@@ -49,6 +49,7 @@
 
 use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::{AllInstances, TemporalSet};
+use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
@@ -136,13 +137,15 @@ struct Resources {
 #[derive(Clone, Debug)]
 pub struct TwoPhaseHiZ {
     params: HizParams,
+    /// The hierarchy (and instance boxes) the resources are for.
+    tracked: Tracked,
     resources: Option<Resources>,
 }
 
 impl TwoPhaseHiZ {
     /// A fresh `hiz` (nothing visible yet).
     pub fn new(params: HizParams) -> Self {
-        Self { params, resources: None }
+        Self { params, tracked: Tracked::default(), resources: None }
     }
 }
 
@@ -160,6 +163,13 @@ impl CullingMethod for TwoPhaseHiZ {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let (scene, h) = (ctx.scene, ctx.hierarchy);
+        self.tracked.keep_up(h, &mut self.resources, backend, |r, gpu, changes| {
+            update_instance_boxes(gpu, r.all.boxes, scene, changes);
+            if let Some(n) = &r.nodes {
+                update_node_boxes(gpu, n.walk.boxes, h, changes);
+            }
+        });
         if self.resources.is_some() {
             return;
         }

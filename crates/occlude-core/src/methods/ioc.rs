@@ -37,6 +37,7 @@
 
 use super::node_walk::{walk_tables, NodeTest, NodeWalk};
 use super::roc::TemporalSet;
+use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
@@ -162,6 +163,8 @@ struct Resources {
 #[derive(Clone, Debug)]
 pub struct IterativeOcclusion {
     params: IocParams,
+    /// The hierarchy (and instance boxes) the resources are for.
+    tracked: Tracked,
     resources: Option<Resources>,
     warnings: Vec<String>,
 }
@@ -169,7 +172,7 @@ pub struct IterativeOcclusion {
 impl IterativeOcclusion {
     /// A fresh `ioc` (nothing visible yet).
     pub fn new(params: IocParams) -> Self {
-        Self { params, resources: None, warnings: Vec::new() }
+        Self { params, tracked: Tracked::default(), resources: None, warnings: Vec::new() }
     }
 }
 
@@ -261,6 +264,11 @@ impl CullingMethod for IterativeOcclusion {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let (scene, h) = (ctx.scene, ctx.hierarchy);
+        self.tracked.keep_up(h, &mut self.resources, backend, |r, gpu, changes| {
+            update_instance_boxes(gpu, r.instance_boxes, scene, changes);
+            update_node_boxes(gpu, r.walk.boxes, h, changes);
+        });
         if self.resources.is_some() {
             return;
         }
@@ -269,7 +277,7 @@ impl CullingMethod for IterativeOcclusion {
         self.warnings.extend(warnings);
         let Ok(gpu) = backend.gpu_culling() else { return };
         let nodes = h.node_count() as u32;
-        let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.bounds).collect();
+        let instance_boxes: Vec<_> = ctx.scene.instances.iter().map(|i| i.culling_bounds()).collect();
         let auto = self.params.auto;
         let starts = (0..=depths.1)
             .map(|d| (auto || d == depths.0).then(|| gpu.create_list(nodes, &start_list(h, d))))

@@ -279,7 +279,7 @@ impl MaskedOcclusion {
                 backend.traverse(instances.len() as u64);
                 let eye = ctx.camera.position;
                 let mut scored: Vec<(f32, u32)> = (0..instances.len() as u32)
-                    .filter(|&i| ctx.frustum.intersects(&instances[i as usize].bounds))
+                    .filter(|&i| ctx.frustum.intersects(&instances[i as usize].culling_bounds()))
                     .map(|i| {
                         let b = &instances[i as usize].bounds;
                         (b.extent().length_squared() / b.distance_squared(eye).max(1e-12), i)
@@ -310,6 +310,9 @@ fn render_occluders(
     let size = (buffer.width(), buffer.height());
     for &i in instances {
         let inst = &ctx.scene.instances[i as usize];
+        if !inst.enabled {
+            continue;
+        }
         let to_clip = view_projection * inst.transform;
         let done = match proxies.as_mut().and_then(|p| p.proxy(ctx.scene, &ctx.camera, inst, size)) {
             Some((corners, indices)) => {

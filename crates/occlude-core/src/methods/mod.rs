@@ -23,6 +23,7 @@ pub mod roc;
 pub mod sw;
 #[cfg(test)]
 mod test_rig;
+mod tracked;
 pub mod vfc;
 
 pub use debug::{DebugView, NdcRect, NodeClass};
@@ -227,12 +228,12 @@ impl DrawnSet {
         self.stamp[instance as usize] == self.frame
     }
 
-    /// Replaces the batch with those of `instances` not drawn yet this
-    /// frame (each once), marking them drawn.
-    fn batch_new(&mut self, instances: impl Iterator<Item = u32>) {
+    /// Replaces the batch with those of `instances` shown in `scene` and
+    /// not drawn yet this frame (each once), marking them drawn.
+    fn batch_new(&mut self, scene: &Scene, instances: impl Iterator<Item = u32>) {
         self.batch.clear();
         for i in instances {
-            if self.stamp[i as usize] != self.frame {
+            if self.stamp[i as usize] != self.frame && scene.instances[i as usize].enabled {
                 self.stamp[i as usize] = self.frame;
                 self.batch.push(i);
             }
@@ -266,25 +267,26 @@ impl<'a> FrameContext<'a> {
         self.draw_leaves(backend, &[node], false)
     }
 
-    /// Draws those of `instances` not yet drawn this frame, in one batch;
-    /// returns them (valid until the next draw through this context).
+    /// Draws those of `instances` shown and not yet drawn this frame, in
+    /// one batch; returns them (valid until the next draw through this
+    /// context).
     pub fn draw_instances(&mut self, backend: &mut dyn Backend, instances: &[u32]) -> &[u32] {
         let d = &mut *self.drawn;
-        d.batch_new(instances.iter().copied());
+        d.batch_new(self.scene, instances.iter().copied());
         if !d.batch.is_empty() {
             backend.draw(&d.batch);
         }
         &d.batch
     }
 
-    /// Draws the instances of `leaves` not yet drawn this frame, in one
-    /// batch; with `sort_by_material` the batch is ordered by material so
+    /// Draws the shown instances of `leaves` not yet drawn this frame, in
+    /// one batch; with `sort_by_material` the batch is ordered by material so
     /// that each material costs one state change (the CHC++ render queue,
     /// section 4.3). Returns how many instances were drawn.
     pub fn draw_leaves(&mut self, backend: &mut dyn Backend, leaves: &[NodeId], sort_by_material: bool) -> usize {
         let d = &mut *self.drawn;
         let h = self.hierarchy;
-        d.batch_new(leaves.iter().flat_map(|&leaf| h.instances(leaf).iter().copied()));
+        d.batch_new(self.scene, leaves.iter().flat_map(|&leaf| h.instances(leaf).iter().copied()));
         if sort_by_material {
             let instances = &self.scene.instances;
             d.batch.sort_by_key(|&i| instances[i as usize].material);

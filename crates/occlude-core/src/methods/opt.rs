@@ -71,7 +71,8 @@ pub(crate) fn oracle_visible(
     in_view: &[NodeId],
 ) -> Option<(OracleView, Vec<bool>)> {
     let h = ctx.hierarchy;
-    let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).collect();
+    let shown = |&i: &u32| ctx.scene.instances[i as usize].enabled;
+    let mut candidates: Vec<u32> = in_view.iter().flat_map(|&n| h.instances(n).iter().copied()).filter(shown).collect();
     candidates.sort_unstable();
     candidates.dedup();
     let view = backend.instruments()?.oracle(&ctx.camera, &candidates);

@@ -22,6 +22,7 @@
 //! which contains it and is pulled towards the eye, passes the test there,
 //! and the object is drawn in step 1 or 3.
 
+use super::tracked::{update_instance_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, OptionError, OptionReader};
 use crate::backend::Backend;
@@ -139,7 +140,7 @@ impl AllInstances {
     /// Uploads the boxes and the list of `scene`'s instances.
     pub(crate) fn new(gpu: &mut dyn GpuCulling, scene: &Scene) -> Self {
         let n = scene.instances.len() as u32;
-        let boxes: Vec<_> = scene.instances.iter().map(|i| i.bounds).collect();
+        let boxes: Vec<_> = scene.instances.iter().map(|i| i.culling_bounds()).collect();
         let ids: Vec<u32> = (0..n).collect();
         Self { boxes: gpu.create_boxes(&boxes), ids: gpu.create_list(n, &ids) }
     }
@@ -157,13 +158,15 @@ struct Resources {
 #[derive(Clone, Debug)]
 pub struct RasterOcclusion {
     params: RocParams,
+    /// The hierarchy (and instance boxes) the resources are for.
+    tracked: Tracked,
     resources: Option<Resources>,
 }
 
 impl RasterOcclusion {
     /// A fresh `roc` (nothing visible yet).
     pub fn new(params: RocParams) -> Self {
-        Self { params, resources: None }
+        Self { params, tracked: Tracked::default(), resources: None }
     }
 }
 
@@ -177,6 +180,10 @@ impl CullingMethod for RasterOcclusion {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let scene = ctx.scene;
+        self.tracked.keep_up(ctx.hierarchy, &mut self.resources, backend, |r, gpu, changes| {
+            update_instance_boxes(gpu, r.all.boxes, scene, changes);
+        });
         if self.resources.is_some() {
             return;
         }

@@ -30,7 +30,7 @@ use occlude_core::{
     RenderState,
 };
 
-impl SoftBackend<'_> {
+impl SoftBackend {
     /// Charges a read-back: the frame waits until everything recorded so
     /// far has run and the copy has come back.
     fn read_back(&mut self) {
@@ -89,9 +89,17 @@ impl SoftBackend<'_> {
     }
 }
 
-impl GpuCulling for SoftBackend<'_> {
+impl GpuCulling for SoftBackend {
     fn create_boxes(&mut self, boxes: &[Aabb]) -> BoxSet {
         self.device.create_boxes(boxes)
+    }
+
+    fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
+        self.device.update_boxes(boxes, changed);
+    }
+
+    fn release_all(&mut self) {
+        self.device.release_all();
     }
 
     fn create_flags(&mut self, len: u32) -> Flags {
@@ -215,6 +223,9 @@ impl GpuCulling for SoftBackend<'_> {
         self.dispatch(ids.len());
         self.indirect_draw(RenderState::Indirect);
         for &i in &ids {
+            if !self.scene.instances[i as usize].enabled {
+                continue;
+            }
             self.count.stats.indirect_draw_calls += 1;
             self.draw_instance(i, self.model.gpu_indirect_draw_us);
         }

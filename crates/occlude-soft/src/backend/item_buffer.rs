@@ -9,7 +9,7 @@ use super::SoftBackend;
 use crate::raster::Fragments;
 use occlude_core::{Camera, ItemCounts, ItemLayout, NO_ITEM};
 
-impl SoftBackend<'_> {
+impl SoftBackend {
     /// Item pass, outside any frame's clock: draws `layout`'s instances from
     /// `camera` into an item image and a depth image of their own and counts
     /// the image: every slot's, object's and tile's visible pixels. The

@@ -119,9 +119,10 @@ fn charge_gpu_time(stats: &mut FrameStats, cull: bool, us: f64) {
     }
 }
 
-/// Software backend over one scene.
-pub struct SoftBackend<'s> {
-    scene: &'s Scene,
+/// Software backend over one scene: its own copy of the scene's instances
+/// (meshes shared), updated by [`Backend::update_instances`].
+pub struct SoftBackend {
+    scene: Scene,
     model: GpuModel,
     depth: DepthBuffer,
     rasterizer: Rasterizer,
@@ -172,12 +173,12 @@ pub struct SoftBackend<'s> {
     replay: Role,
 }
 
-impl<'s> SoftBackend<'s> {
+impl SoftBackend {
     /// A backend drawing `scene` at `width` x `height` pixels with the costs
     /// of `model`.
-    pub fn new(scene: &'s Scene, width: u32, height: u32, model: GpuModel) -> Self {
+    pub fn new(scene: &Scene, width: u32, height: u32, model: GpuModel) -> Self {
         Self {
-            scene,
+            scene: scene.clone(),
             model,
             depth: DepthBuffer::new(width, height),
             rasterizer: Rasterizer::new(),
@@ -288,7 +289,7 @@ impl<'s> SoftBackend<'s> {
                 let prepared: Vec<Option<&Prepared>> = match &self.frame_setup {
                     Some(setup) => {
                         let instances: Vec<u32> = self.sources[done..].iter().flatten().map(|&(i, _)| i).collect();
-                        let mut set_up = setup.prepare(self.scene, &instances, &self.rasterizer).into_iter();
+                        let mut set_up = setup.prepare(&self.scene, &instances, &self.rasterizer).into_iter();
                         self.sources[done..]
                             .iter()
                             .map(|s| s.map(|_| set_up.next().expect("one set-up per such draw")))
@@ -413,7 +414,7 @@ impl<'s> SoftBackend<'s> {
     }
 }
 
-impl Backend for SoftBackend<'_> {
+impl Backend for SoftBackend {
     fn begin_frame(&mut self, camera: &Camera) {
         self.camera = Some(*camera);
         self.view_projection = camera.view_projection();
@@ -425,13 +426,22 @@ impl Backend for SoftBackend<'_> {
         self.batch_open = false;
         self.late_from_us = None;
         self.replay.begin_frame();
-        let (width, height, instances) = (self.depth.width(), self.depth.height(), self.scene.instances.len());
-        self.frame_setup = self.shared_setup.as_ref().map(|s| s.frame(self.view_projection, width, height, instances));
+        let (width, height) = (self.depth.width(), self.depth.height());
+        let (instances, revision) = (self.scene.instances.len(), self.scene.revision());
+        self.frame_setup =
+            self.shared_setup.as_ref().map(|s| s.frame(self.view_projection, width, height, instances, revision));
         self.frame_start = Instant::now();
+    }
+
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        self.scene.copy_instances(scene, changed);
     }
 
     fn draw(&mut self, instances: &[u32]) {
         for &i in instances {
+            if !self.scene.instances[i as usize].enabled {
+                continue;
+            }
             let changed = self.count.set_state(RenderState::Material(self.scene.instances[i as usize].material));
             self.charge_state_change(changed);
             self.clock.cpu_work(self.model.cpu_draw_call_us);
@@ -539,7 +549,7 @@ impl Backend for SoftBackend<'_> {
     }
 }
 
-impl Instruments for SoftBackend<'_> {
+impl Instruments for SoftBackend {
     fn depth_image(&mut self, out: &mut Vec<f32>) {
         self.flush();
         if !self.replay.image(out) {

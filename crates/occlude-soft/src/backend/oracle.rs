@@ -89,7 +89,7 @@ impl Culling {
     }
 }
 
-impl SoftBackend<'_> {
+impl SoftBackend {
     /// The oracle pass, each pass in rasterizer calls of about `part`
     /// triangles (at least one candidate each), so that a view of tens of
     /// millions of triangles holds a bounded number of them at once;
@@ -106,10 +106,15 @@ impl SoftBackend<'_> {
         self.view_projection = camera.view_projection();
         self.depth.clear();
         let (width, height, instances) = (self.depth.width(), self.depth.height(), self.scene.instances.len());
-        let setup = self.shared_setup.as_ref().map(|s| s.frame(self.view_projection, width, height, instances));
+        let setup = self
+            .shared_setup
+            .as_ref()
+            .map(|s| s.frame(self.view_projection, width, height, instances, self.scene.revision()));
         let setup = setup.as_deref();
         let mut culling = cull.then(|| Culling::new(camera, &self.depth));
-        let mut order: Vec<usize> = (0..candidates.len()).collect();
+        // Hidden instances draw nothing: 0 pixels.
+        let shown = |&k: &usize| self.scene.instances[candidates[k] as usize].enabled;
+        let mut order: Vec<usize> = (0..candidates.len()).filter(shown).collect();
         if cull {
             // Nearest first, so that the near ones hide the far ones.
             let distance =
@@ -162,7 +167,7 @@ impl SoftBackend<'_> {
             if !commands.is_empty() && (self.triangles.len() + prepared_triangles >= part || n + 1 == order.len()) {
                 let prepared: Vec<Option<&Prepared>> = match setup {
                     Some(setup) => {
-                        setup.prepare(self.scene, &instances, &self.rasterizer).into_iter().map(Some).collect()
+                        setup.prepare(&self.scene, &instances, &self.rasterizer).into_iter().map(Some).collect()
                     }
                     None => Vec::new(),
                 };

@@ -120,7 +120,7 @@ impl Role {
     }
 }
 
-impl SoftBackend<'_> {
+impl SoftBackend {
     /// From the next frame on, keeps every draw's counts and the final
     /// depth image in `shared`, for a backend replaying them (module
     /// documentation).

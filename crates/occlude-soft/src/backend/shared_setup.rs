@@ -47,19 +47,28 @@ impl SharedSetup {
         Self::default()
     }
 
-    /// The table for frames of `instances` instances seen through
+    /// The table for frames of `instances` instances at scene revision
+    /// `revision` ([`Scene::revision`]: the same poses) seen through
     /// `view_projection` at `width` x `height`: the latest one if it is for
     /// those, else a new one, which becomes the latest.
-    pub(super) fn frame(&self, view_projection: Mat4, width: u32, height: u32, instances: usize) -> Arc<FrameSetup> {
+    pub(super) fn frame(
+        &self,
+        view_projection: Mat4,
+        width: u32,
+        height: u32,
+        instances: usize,
+        revision: u64,
+    ) -> Arc<FrameSetup> {
         let mut latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let same = |f: &FrameSetup| {
-            f.is_for(&view_projection) && (f.width, f.height, f.slots.len()) == (width, height, instances)
+            f.is_for(&view_projection)
+                && (f.width, f.height, f.slots.len(), f.revision) == (width, height, instances, revision)
         };
         match latest.as_ref().filter(|f| same(f)) {
             Some(f) => Arc::clone(f),
             None => {
                 let slots = (0..instances).map(|_| OnceLock::new()).collect();
-                let f = Arc::new(FrameSetup { view_projection, width, height, slots });
+                let f = Arc::new(FrameSetup { view_projection, width, height, revision, slots });
                 *latest = Some(Arc::clone(&f));
                 f
             }
@@ -73,6 +82,7 @@ pub(super) struct FrameSetup {
     view_projection: Mat4,
     width: u32,
     height: u32,
+    revision: u64,
     slots: Vec<OnceLock<Prepared>>,
 }
 

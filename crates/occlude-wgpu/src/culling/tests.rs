@@ -36,14 +36,7 @@ fn camera() -> Camera {
 }
 
 fn scene() -> Scene {
-    let mut scene = Scene {
-        name: "culling".into(),
-        meshes: vec![],
-        instances: vec![],
-        material_count: 0,
-        path: Default::default(),
-        triangle_counts: Vec::new(),
-    };
+    let mut scene = Scene::new("culling");
     // A quad first, so that the cube lies past the pools' start.
     let quad = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)], vec![0, 1, 2, 1, 3, 2]);
     let quad = scene.add_mesh(quad);
@@ -78,12 +71,12 @@ fn gpu(test: &str, scene: &Scene) -> Option<Arc<GpuScene>> {
 }
 
 /// The flags of `flags` as 0 or 1, read through the backend's instrument.
-fn read_flags(backend: &mut WgpuBackend<'_>, flags: Flags) -> Vec<u32> {
+fn read_flags(backend: &mut WgpuBackend, flags: Flags) -> Vec<u32> {
     GpuCulling::read_flags(backend, flags).into_iter().map(u32::from).collect()
 }
 
 /// The ids of `list`, sorted, read through the backend's instrument.
-fn read_list(backend: &mut WgpuBackend<'_>, list: IdList) -> Vec<u32> {
+fn read_list(backend: &mut WgpuBackend, list: IdList) -> Vec<u32> {
     let mut ids = GpuCulling::read_list(backend, list);
     ids.sort_unstable();
     ids
@@ -93,7 +86,7 @@ fn all_instances(scene: &Scene) -> Vec<u32> {
     (0..scene.instances.len() as u32).collect()
 }
 
-fn depth_after(backend: &mut WgpuBackend<'_>, frame: impl FnOnce(&mut WgpuBackend<'_>)) -> (Vec<f32>, FrameStats) {
+fn depth_after(backend: &mut WgpuBackend, frame: impl FnOnce(&mut WgpuBackend)) -> (Vec<f32>, FrameStats) {
     backend.begin_frame(&camera());
     frame(backend);
     let stats = backend.end_frame();

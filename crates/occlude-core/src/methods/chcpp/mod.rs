@@ -14,13 +14,14 @@
 pub mod multiquery;
 pub mod tight;
 
+use super::tracked::Tracked;
 use super::{
     pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
     OptionReader,
 };
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
-use crate::hierarchy::NodeId;
+use crate::hierarchy::{NodeId, Since};
 use crate::rng::mix64;
 use std::collections::VecDeque;
 
@@ -115,6 +116,8 @@ struct Queues {
 pub struct Chcpp {
     params: ChcppParams,
     frame: u32,
+    /// The hierarchy the node states and boxes are for.
+    tracked: Tracked,
     nodes: Vec<NodeState>,
     is_leaf: Vec<bool>,
     boxes: Vec<Option<Vec<Aabb>>>,
@@ -129,16 +132,39 @@ fn jitter(node: NodeId, frame: u32, n: u32) -> u32 {
 impl Chcpp {
     /// CHC++ with the given parameters.
     pub fn new(params: ChcppParams) -> Self {
-        Self { params, frame: 0, nodes: Vec::new(), is_leaf: Vec::new(), boxes: Vec::new() }
+        Self {
+            params,
+            frame: 0,
+            tracked: Tracked::default(),
+            nodes: Vec::new(),
+            is_leaf: Vec::new(),
+            boxes: Vec::new(),
+        }
     }
 
+    /// Makes the per-node state for a new tree; after a refit, forgets the
+    /// query boxes of the nodes whose box changed and of their ancestors
+    /// (a tight box is made of descendants' boxes), keeping the rest.
     fn prepare_state(&mut self, ctx: &FrameContext<'_>) {
         let h = ctx.hierarchy;
-        if self.nodes.len() != h.node_count() {
-            self.nodes = vec![NodeState::default(); h.node_count()];
-            let tris = subtree_triangles(ctx.scene, h);
-            self.is_leaf = tight::virtual_leaves(h, &tris, self.params.virtual_leaf_triangles);
-            self.boxes = vec![None; h.node_count()];
+        match self.tracked.since(h) {
+            Since::Unchanged => {}
+            Since::Refit(Some(changes)) => {
+                for &changed in &changes.nodes {
+                    let mut n = Some(changed);
+                    while let Some(node) = n {
+                        self.boxes[node as usize] = None;
+                        n = h.parent(node);
+                    }
+                }
+            }
+            Since::Refit(None) => self.boxes.fill(None),
+            Since::New => {
+                self.nodes = vec![NodeState::default(); h.node_count()];
+                let tris = subtree_triangles(ctx.scene, h);
+                self.is_leaf = tight::virtual_leaves(h, &tris, self.params.virtual_leaf_triangles);
+                self.boxes = vec![None; h.node_count()];
+            }
         }
     }
 

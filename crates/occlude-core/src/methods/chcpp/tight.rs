@@ -53,14 +53,7 @@ mod tests {
     use glam::{Mat4, Vec3};
 
     fn row_of_boxes(n: usize) -> Scene {
-        let mut s = Scene {
-            name: "row".into(),
-            meshes: vec![],
-            instances: vec![],
-            material_count: 0,
-            path: Default::default(),
-            triangle_counts: Vec::new(),
-        };
+        let mut s = Scene::new("row");
         let m = s.add_mesh(Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![0, 1, 2, 1, 3, 2]));
         for i in 0..n {
             s.add_instance(m, Mat4::from_translation(Vec3::new(i as f32 * 10.0, 0.0, 0.0)), 0);

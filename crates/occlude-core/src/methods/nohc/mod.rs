@@ -41,11 +41,12 @@
 pub mod estimate;
 
 use super::opt::{leaves_in_view, oracle_visible};
+use super::tracked::Tracked;
 use super::{subtree_triangles, CullingMethod, FrameContext, FrontToBack};
 use crate::backend::{Backend, QueryHandle};
 use crate::cost_model::CostModel;
 use crate::depth_pyramid::{box_footprint, Footprint};
-use crate::hierarchy::{Hierarchy, NodeId};
+use crate::hierarchy::{Hierarchy, NodeId, Since};
 use estimate::{occlusion_probability, query_pays, History};
 use glam::Mat4;
 use std::collections::VecDeque;
@@ -76,6 +77,8 @@ struct NodeState {
 pub struct Nohc {
     estimate: Estimate,
     frame: u32,
+    /// The hierarchy the node states are for.
+    tracked: Tracked,
     nodes: Vec<NodeState>,
     triangles: Vec<u64>,
     /// Instance references under each node: the subtree's draw calls.
@@ -120,6 +123,7 @@ impl Nohc {
         Self {
             estimate,
             frame: 0,
+            tracked: Tracked::default(),
             nodes: Vec::new(),
             triangles: Vec::new(),
             draws: Vec::new(),
@@ -130,7 +134,7 @@ impl Nohc {
 
     fn prepare_state(&mut self, ctx: &FrameContext<'_>) {
         let h = ctx.hierarchy;
-        if self.nodes.len() != h.node_count() {
+        if self.tracked.since(h) == Since::New {
             self.nodes = vec![NodeState::default(); h.node_count()];
             self.triangles = subtree_triangles(ctx.scene, h);
             self.draws = vec![0; h.node_count()];

@@ -204,7 +204,7 @@ impl CullingMethod for OccupancyMap {
             if h.is_leaf(node) {
                 ctx.draw_leaf(backend, node);
                 note(&mut view, NodeClass::DrawnWithoutQuery, &vp, h.bounds(node));
-                for &i in h.instances(node) {
+                for &i in h.instances(node).iter().filter(|&&i| ctx.scene.instances[i as usize].enabled) {
                     self.map.mark(self.map.rect_of(&vp, &ctx.scene.instances[i as usize].bounds));
                 }
             } else {

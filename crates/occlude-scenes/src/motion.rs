@@ -1,0 +1,124 @@
+//! Deterministic motion for any scene (`occlude bench --motion FRACTION`):
+//! a chosen share of its instances slide back and forth, and some of them
+//! leave the scene and come back, all decided by the seed.
+//!
+//! Every instance is chosen with probability `fraction` (from the seed and
+//! its index, so that the chosen ones do not depend on the order of the
+//! others). A chosen instance slides along a horizontal axis (x or z) by a
+//! sine of the walkthrough's time, with a period of 4 to 10 seconds and an
+//! amplitude of twice its own size or 5 % of the scene's width, whichever is
+//! larger: small objects cross streets, large ones (buildings, blocks) are
+//! moving occluders that reveal what they hid. One in eight chosen
+//! instances also hides for a third of each period (doors, spawns).
+
+use glam::{Mat4, Vec3};
+use occlude_core::rng::Rng;
+use occlude_core::{InstanceChange, Scene};
+use std::f32::consts::TAU;
+
+/// One moving instance.
+#[derive(Clone, Debug)]
+struct Mover {
+    instance: u32,
+    /// Its transform in the scene as built.
+    base: Mat4,
+    /// Displacement at the sine's peak.
+    offset: Vec3,
+    period: f32,
+    phase: f32,
+    /// Whether it hides for part of each period.
+    blinks: bool,
+}
+
+/// The motion of a scene's chosen instances over time (module
+/// documentation).
+#[derive(Clone, Debug, Default)]
+pub struct SceneMotion {
+    movers: Vec<Mover>,
+}
+
+/// Sine phases above this are hidden for blinking movers: a third of the
+/// period.
+const HIDDEN_ABOVE: f32 = 0.5;
+
+impl SceneMotion {
+    /// Motion of `fraction` (0 to 1) of `scene`'s instances, as built,
+    /// chosen and shaped from `seed`.
+    pub fn new(scene: &Scene, fraction: f64, seed: u64) -> Self {
+        let extent = scene.bounds().extent();
+        let width = extent.x.max(extent.z);
+        let movers = scene
+            .instances
+            .iter()
+            .zip(0u32..)
+            .filter_map(|(inst, i)| {
+                let mut rng = Rng::new(seed, 0x6d6f_7665 ^ u64::from(i) << 8);
+                if f64::from(rng.unit()) >= fraction {
+                    return None;
+                }
+                let axis = if rng.chance(0.5) { Vec3::X } else { Vec3::Z };
+                let amplitude = (2.0 * inst.bounds.extent().max_element()).max(0.05 * width);
+                Some(Mover {
+                    instance: i,
+                    base: inst.transform,
+                    offset: axis * amplitude,
+                    period: rng.range(4.0, 10.0),
+                    phase: rng.unit(),
+                    blinks: rng.below(8) == 0,
+                })
+            })
+            .collect();
+        Self { movers }
+    }
+
+    /// Instances that move.
+    pub fn moving(&self) -> usize {
+        self.movers.len()
+    }
+
+    /// The changes that put every moving instance where it is at time `t`
+    /// (seconds of the walkthrough), shown or hidden.
+    pub fn changes_at(&self, t: f32) -> Vec<InstanceChange> {
+        let mut changes = Vec::with_capacity(self.movers.len() * 2);
+        for m in &self.movers {
+            let s = (TAU * (t / m.period + m.phase)).sin();
+            let transform = Mat4::from_translation(m.offset * s) * m.base;
+            changes.push(InstanceChange::Move { instance: m.instance, transform });
+            if m.blinks {
+                changes.push(if s > HIDDEN_ABOVE {
+                    InstanceChange::Hide(m.instance)
+                } else {
+                    InstanceChange::Show(m.instance)
+                });
+            }
+        }
+        changes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{generate, Size};
+
+    #[test]
+    fn motion_is_deterministic_and_moves_the_chosen_share() {
+        let scene = generate("city", Size::Small, 1).unwrap();
+        let a = SceneMotion::new(&scene, 0.1, 7);
+        let b = SceneMotion::new(&scene, 0.1, 7);
+        assert_eq!(a.changes_at(1.5), b.changes_at(1.5));
+        let share = a.moving() as f64 / scene.instances.len() as f64;
+        assert!((0.05..0.15).contains(&share), "{share}");
+        assert_eq!(SceneMotion::new(&scene, 0.0, 7).moving(), 0);
+        assert_eq!(SceneMotion::new(&scene, 1.0, 7).moving(), scene.instances.len());
+        let mut moved = scene.clone();
+        let changed = moved.apply(&a.changes_at(2.0)).unwrap();
+        assert_eq!(changed.len(), a.moving());
+        assert!(changed.iter().any(|&i| moved.instances[i as usize].bounds != scene.instances[i as usize].bounds));
+        // Over a whole period some blinking instance is hidden at some time.
+        let hidden = (0..40).any(|k| {
+            a.changes_at(k as f32 * 0.25).iter().any(|c| matches!(c, InstanceChange::Hide(_)))
+        });
+        assert!(hidden);
+    }
+}
