@@ -10,9 +10,10 @@ use occlude_cli::bench::ideal::IDEAL;
 use occlude_cli::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
 use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene};
+use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene, UpdatePolicy};
 use occlude_scenes::import::{import, Imported, ModelFormat};
 use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, PAPER_SCENES};
+use occlude_soft::GpuModel;
 use occlude_soft::SoftBackend;
 use std::collections::HashSet;
 
@@ -455,5 +456,42 @@ fn query_methods_with_hib_counts_match_vfc_and_hardware_queries() {
             "{name}: nvp=25 drew as much"
         );
         assert!(sum(approximate, |f| f.missing_pixels as f64) > 0.0, "{name}: nvp=25 missed nothing");
+    }
+}
+
+#[test]
+fn every_method_matches_vfc_in_scripted_motion_refitted_and_rebuilt() {
+    let refit_only = UpdatePolicy { max_cost_ratio: f32::INFINITY };
+    let rebuild_always = UpdatePolicy { max_cost_ratio: 0.0 };
+    for kind in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
+        for (policy, rebuilt) in [(refit_only, false), (rebuild_always, true)] {
+            let rebuilds = common::assert_methods_match_vfc_in_motion(&METHOD_NAMES, kind, policy, |scene| {
+                Box::new(SoftBackend::new(scene, 160, 120, GpuModel::modern()))
+            });
+            assert_eq!(rebuilds > 0, rebuilt, "{kind}: {rebuilds} rebuilds");
+        }
+    }
+}
+
+#[test]
+fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
+    for name in PAPER_SCENES.iter().copied().chain(["swarm"]) {
+        let scene = small(name);
+        let mut cfg = config(name, HierarchyKind::Bvh);
+        cfg.methods = METHOD_NAMES.map(String::from).to_vec();
+        cfg.methods.push(IDEAL.into());
+        cfg.frames = 40;
+        cfg.motion = 0.3;
+        let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+        for m in &run.methods {
+            for (f, stats) in m.frames.iter().enumerate() {
+                assert_eq!(stats.missing_pixels, 0, "{name}/{}: frame {f} differs from vfc", m.name);
+                assert!(stats.instances_moved > 0, "{name}: nothing moved before frame {f}");
+            }
+        }
+        let still = BenchConfig { motion: 0.0, methods: vec!["vfc".into()], ..cfg };
+        let still = run_scene(&scene, &still, &ProgressBar::hidden()).unwrap();
+        let tris = |r: &occlude_cli::bench::BenchRun| r.reference.iter().map(|f| f.triangles).collect::<Vec<_>>();
+        assert_ne!(tris(&run), tris(&still), "{name}: motion changed nothing vfc draws");
     }
 }

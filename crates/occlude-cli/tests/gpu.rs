@@ -10,7 +10,7 @@ use occlude_cli::bench::config::{BackendKind, ALL_FRAMES};
 use occlude_cli::bench::runner::{cameras, run_scene};
 use occlude_cli::bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
-use occlude_core::{Backend, HierarchyKind, Instruments, Scene};
+use occlude_core::{Backend, HierarchyKind, Instruments, Scene, UpdatePolicy};
 use occlude_scenes::{generate, Size, PAPER_SCENES};
 use occlude_soft::SoftBackend;
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
@@ -390,5 +390,39 @@ fn hib_counts_equal_hardware_counts() {
         }
         // Counts that zero / not zero would not tell apart.
         assert!(partial > 0 && zero > 0, "{name}: {partial} small counts, {zero} zero");
+    }
+}
+
+#[test]
+fn every_method_matches_vfc_on_the_gpu_in_scripted_motion_refitted_and_rebuilt() {
+    let Some(ctx) = GpuContext::for_test("every_method_matches_vfc_on_the_gpu_in_scripted_motion_refitted_and_rebuilt")
+    else {
+        return;
+    };
+    let refit_only = UpdatePolicy { max_cost_ratio: f32::INFINITY };
+    let rebuild_always = UpdatePolicy { max_cost_ratio: 0.0 };
+    for (policy, rebuilt) in [(refit_only, false), (rebuild_always, true)] {
+        let rebuilds = common::assert_methods_match_vfc_in_motion(&METHOD_NAMES, HierarchyKind::Bvh, policy, |scene| {
+            let gpu = Arc::new(GpuScene::new(Arc::clone(&ctx), scene).unwrap());
+            Box::new(WgpuBackend::new(gpu, scene, 160, 120))
+        });
+        assert_eq!(rebuilds > 0, rebuilt, "{rebuilds} rebuilds");
+    }
+}
+
+#[test]
+fn every_method_matches_vfc_on_the_gpu_on_every_frame_of_a_moving_city() {
+    if GpuContext::for_test("every_method_matches_vfc_on_the_gpu_on_every_frame_of_a_moving_city").is_none() {
+        return;
+    }
+    let scene = small("city");
+    let cfg = BenchConfig { motion: 0.3, ..config("city", HierarchyKind::Bvh, 30) };
+    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    assert_eq!(run.aborted, None);
+    for m in &run.methods {
+        for (f, stats) in m.frames.iter().enumerate() {
+            assert_eq!(stats.missing_pixels, 0, "moving city/{}: frame {f} differs from vfc", m.name);
+            assert!(stats.instances_moved > 0);
+        }
     }
 }

@@ -116,9 +116,8 @@ mod tests {
         assert_eq!(changed.len(), a.moving());
         assert!(changed.iter().any(|&i| moved.instances[i as usize].bounds != scene.instances[i as usize].bounds));
         // Over a whole period some blinking instance is hidden at some time.
-        let hidden = (0..40).any(|k| {
-            a.changes_at(k as f32 * 0.25).iter().any(|c| matches!(c, InstanceChange::Hide(_)))
-        });
+        let hidden =
+            (0..40).any(|k| a.changes_at(k as f32 * 0.25).iter().any(|c| matches!(c, InstanceChange::Hide(_))));
         assert!(hidden);
     }
 }

@@ -464,12 +464,7 @@ fn run_scene_here(
 /// The run's lanes on `renderer`'s backends: the `vfc` reference, each
 /// configured method but `vfc`, then `variants`; a method the backend
 /// cannot run is refused.
-fn build_lanes(
-    scene: &Scene,
-    config: &BenchConfig,
-    variants: Vec<BuiltMethod>,
-    renderer: &Renderer,
-) -> Result<Lanes> {
+fn build_lanes(scene: &Scene, config: &BenchConfig, variants: Vec<BuiltMethod>, renderer: &Renderer) -> Result<Lanes> {
     let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config, Draws::Own)?);
     let mut lanes = Lanes::new(reference, renderer.parallel_lanes(config));
     // `ideal` replays the draw calls `sw` (listed before it) made in the

@@ -1,11 +1,15 @@
 //! Checks shared by the soft (`correctness.rs`) and wgpu (`gpu.rs`) test
 //! files, so that both backends are held to the same rule by the same code.
 
-use glam::Mat4;
+use glam::{Mat4, Quat, Vec3};
 use occlude_cli::bench::runner::{cameras, far_plane};
 use occlude_cli::bench::BenchConfig;
+use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{check_support, create, DrawnSet};
-use occlude_core::{differing_pixels, render_frame, Backend, Camera, Hierarchy, Scene};
+use occlude_core::{
+    differing_pixels, render_frame, Aabb, Backend, Camera, Hierarchy, HierarchyKind, InstanceChange, Mesh, Scene,
+    UpdatePolicy,
+};
 
 /// Cameras from matrices: each walkthrough camera's view with a reverse-Z
 /// infinite-far perspective, a forward infinite-far perspective and an
@@ -74,4 +78,94 @@ pub fn assert_methods_match_vfc_with_cameras_from_matrices<'b>(
         }
     }
     lanes.iter().map(|(m, ..)| m.name().to_string()).zip(culled).skip(1).collect()
+}
+
+/// A stage for scripted motion, seen by a camera that stands still: a wall
+/// (instance 0) with four cubes behind it (1 to 4) and a fifth cube (5)
+/// hidden to start with, then one list of changes per frame: a cube jumps
+/// from behind the wall into view within one frame, the wall moves away to
+/// reveal the cubes it hid and comes back, the hidden cube appears in view,
+/// a visible one disappears, and every cube wanders for a few frames.
+pub fn motion_stage() -> (Scene, Camera, Vec<Vec<InstanceChange>>) {
+    let mut scene = Scene::new("stage");
+    let cube = scene.add_mesh(Mesh::new(
+        Aabb::new(Vec3::splat(-0.5), Vec3::splat(0.5)).corners().to_vec(),
+        occlude_core::query_box::BOX_TRIANGLES.iter().flatten().map(|&c| u32::from(c)).collect(),
+    ));
+    let wall =
+        Mat4::from_scale_rotation_translation(Vec3::new(8.0, 4.0, 0.3), Quat::IDENTITY, Vec3::new(0.0, 2.0, 0.0));
+    scene.add_instance(cube, wall, 0);
+    let behind = |x: f32| Mat4::from_translation(Vec3::new(x, 1.0, -3.0));
+    for (k, x) in [-2.0, -0.5, 1.0, 2.5].into_iter().enumerate() {
+        scene.add_instance(cube, behind(x), 1 + k as u32 % 2);
+    }
+    scene.add_instance(cube, Mat4::from_translation(Vec3::new(1.5, 0.8, 2.0)), 2);
+    let view = Mat4::look_at_rh(Vec3::new(0.0, 2.0, 9.0), Vec3::new(0.0, 1.5, 0.0), Vec3::Y);
+    let camera = Camera::from_matrices(view, Mat4::perspective_rh(1.0, 4.0 / 3.0, 0.1, 100.0), false).unwrap();
+    let moved = |i: u32, to: Mat4| InstanceChange::Move { instance: i, transform: to };
+    let mut script = vec![
+        vec![InstanceChange::Hide(5)],
+        vec![],
+        vec![moved(2, Mat4::from_translation(Vec3::new(-0.5, 1.0, 3.0)))],
+        vec![moved(0, Mat4::from_translation(Vec3::X * 20.0) * wall)],
+        vec![],
+        vec![moved(0, wall)],
+        vec![InstanceChange::Show(5)],
+        vec![InstanceChange::Hide(2)],
+        vec![InstanceChange::Show(2), moved(2, behind(-0.5))],
+    ];
+    for f in 0..8 {
+        let t = f as f32 * 0.7;
+        script.push(
+            (1..=4)
+                .map(|i| {
+                    let at = Vec3::new((t + i as f32).sin() * 4.0, 1.0, (t * 1.3 + i as f32).cos() * 4.0 - 1.0);
+                    moved(i, Mat4::from_translation(at))
+                })
+                .collect(),
+        );
+    }
+    (scene, camera, script)
+}
+
+/// Runs every method of `methods` (`vfc` first) on its own backend from
+/// `backend` through `script` ([`motion_stage`]), updating the hierarchy of
+/// `kind` with `policy` and each backend before each frame, and asserts
+/// that every method's depth image equals vfc's on every frame. Returns
+/// how many frames rebuilt the hierarchy.
+pub fn assert_methods_match_vfc_in_motion(
+    methods: &[&str],
+    kind: HierarchyKind,
+    policy: UpdatePolicy,
+    mut backend: impl FnMut(&Scene) -> Box<dyn Backend>,
+) -> usize {
+    assert_eq!(methods.first(), Some(&"vfc"), "vfc is the reference, listed first");
+    let (mut scene, camera, script) = motion_stage();
+    let options = BuildOptions { leaf_size: 1, ..BuildOptions::default() };
+    let mut h = Hierarchy::build(&scene, kind, options);
+    let mut lanes: Vec<_> = methods
+        .iter()
+        .map(|m| (create(m, &Default::default()).unwrap().method, backend(&scene), DrawnSet::default()))
+        .collect();
+    for (method, backend, _) in &mut lanes {
+        check_support(method.as_ref(), backend.as_mut()).expect("the backend runs every method given");
+    }
+    let (mut reference, mut image) = (Vec::new(), Vec::new());
+    let mut rebuilds = 0;
+    for (f, changes) in script.iter().enumerate() {
+        let changed = scene.apply(changes).unwrap();
+        rebuilds += usize::from(h.update(&scene, &changed, policy).rebuilt);
+        for (k, (method, backend, drawn)) in lanes.iter_mut().enumerate() {
+            backend.update_instances(&scene, &changed);
+            render_frame(method.as_mut(), backend.as_mut(), &scene, &h, &camera, drawn);
+            assert_eq!(backend.failure(), None, "frame {f}: {}", method.name());
+            let out = if k == 0 { &mut reference } else { &mut image };
+            backend.instruments().expect("the backend has a depth image").depth_image(out);
+            if k > 0 {
+                let differ = differing_pixels(&reference, &image);
+                assert_eq!(differ, 0, "{kind} frame {f}: {} differs from vfc in {differ} pixels", method.name());
+            }
+        }
+    }
+    rebuilds
 }
