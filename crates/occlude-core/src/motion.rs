@@ -20,6 +20,7 @@
 //! an instance that was hidden: the instance count is fixed once a
 //! hierarchy is built over the scene.
 
+use crate::geometry::Aabb;
 use crate::scene::Scene;
 use glam::Mat4;
 use thiserror::Error;
@@ -42,6 +43,12 @@ pub enum InstanceChange {
 }
 
 impl InstanceChange {
+    /// Moves instance `instance` of a scene of boxes
+    /// ([`Scene::from_bounds`]) to the box `bounds`.
+    pub fn to_box(instance: u32, bounds: &Aabb) -> Self {
+        InstanceChange::Move { instance, transform: Scene::box_transform(bounds) }
+    }
+
     /// The instance the change applies to.
     pub fn instance(&self) -> u32 {
         match *self {
@@ -133,7 +140,6 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Aabb;
     use crate::scene::Mesh;
     use glam::Vec3;
 

@@ -198,12 +198,18 @@ impl Scene {
             if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()) {
                 return Err(SceneError::BadBounds(i));
             }
-            let transform = Mat4::from_translation(b.min) * Mat4::from_scale(b.max - b.min);
+            let transform = Self::box_transform(b);
             scene.instances.push(Instance { mesh: cube, transform, material: 0, bounds: *b, enabled: true });
         }
         scene.material_count = 1;
         scene.validate()?;
         Ok(scene)
+    }
+
+    /// The transform that makes [`Scene::from_bounds`]' unit cube the box
+    /// `b`.
+    pub fn box_transform(b: &Aabb) -> Mat4 {
+        Mat4::from_translation(b.min) * Mat4::from_scale(b.max - b.min)
     }
 
     /// Appends the clip-space triangles of instance `i` seen through

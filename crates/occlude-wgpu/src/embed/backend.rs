@@ -209,6 +209,14 @@ impl QueryBackend {
         })
     }
 
+    /// Takes the triangle counts of the `changed` instances of `scene` (0
+    /// while hidden) for the frames' statistics.
+    pub fn update_instances(&mut self, scene: &Scene, changed: &[u32]) {
+        for &i in changed {
+            self.triangles[i as usize] = scene.instance_triangles(i as usize);
+        }
+    }
+
     /// The attachments the query pipeline was built for.
     pub fn attachments(&self) -> Attachments {
         self.attachments

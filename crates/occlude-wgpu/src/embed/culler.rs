@@ -4,7 +4,10 @@
 use super::{Attachments, EmbedError, FrameTarget, QueryBackend};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions};
-use occlude_core::{render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameStats, Hierarchy, HierarchyKind, Scene};
+use occlude_core::{
+    render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameStats, Hierarchy, HierarchyKind, InstanceChange, Scene,
+    UpdatePolicy, Upkeep,
+};
 
 /// The methods that run embedded: those that draw and query through the
 /// [`occlude_core::Backend`] interface alone. `vfc` (frustum culling)
@@ -89,6 +92,20 @@ impl Culler {
             Some(reason) => Err(EmbedError::Device(reason)),
             None => Ok(stats),
         }
+    }
+
+    /// Moves, hides and shows instances before the next frame
+    /// ([`occlude_core::motion`]): the scene's boxes change, the BVH is
+    /// refitted (rebuilt when refits have degraded it), and the method keeps
+    /// what it learnt about the nodes. For a culler made from boxes
+    /// ([`Culler::new`]), [`InstanceChange::to_box`] moves an instance to a
+    /// new box. A change naming an unknown instance or a non-finite
+    /// transform is an error, and nothing changes.
+    pub fn update(&mut self, changes: &[InstanceChange]) -> Result<Upkeep, EmbedError> {
+        let changed = self.scene.apply(changes)?;
+        let upkeep = self.hierarchy.update(&self.scene, &changed, UpdatePolicy::default());
+        self.backend.update_instances(&self.scene, &changed);
+        Ok(upkeep)
     }
 
     /// The scene the method culls ([`Scene::from_bounds`] for

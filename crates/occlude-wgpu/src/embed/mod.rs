@@ -39,8 +39,10 @@
 //!
 //! ## Requirements
 //!
-//! - Every draw of instance `i` stays inside `bounds[i]`; instances that
-//!   move need new bounds (and a new [`Culler`]). A mesh's local box and
+//! - Every draw of instance `i` stays inside `bounds[i]`; an instance that
+//!   moves gets its new box before the frame ([`Culler::update`] with
+//!   [`InstanceChange::to_box`](occlude_core::InstanceChange::to_box); a
+//!   [`GpuCuller`] needs a new one). A mesh's local box and
 //!   its instance's transform give the world box with
 //!   [`Aabb::transformed`](occlude_core::Aabb::transformed).
 //! - The camera is [`occlude_core::Camera::from_matrices`] of the view and
@@ -300,6 +302,10 @@ pub enum EmbedError {
     /// The instance boxes are not a scene ([`occlude_core::Scene::from_bounds`]).
     #[error("bad instance bounds: {0}")]
     Scene(#[from] SceneError),
+    /// A frame's changes name an unknown instance or a transform that is
+    /// not finite ([`Culler::update`]); nothing changed.
+    #[error("bad instance change: {0}")]
+    Motion(#[from] occlude_core::MotionError),
     /// The attachments' depth format or test cannot be culled against.
     #[error("unsupported attachments: {0}")]
     Attachments(String),
