@@ -352,6 +352,10 @@ fn simulated_figures_are_identical_between_runs() {
     let a = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
     let b = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
     assert_eq!(simulated(a), simulated(b));
+    let moving = BenchConfig { motion: 0.2, ..cfg };
+    let a = run_scene(&scene, &moving, &ProgressBar::hidden()).unwrap().report(&moving);
+    let b = run_scene(&scene, &moving, &ProgressBar::hidden()).unwrap().report(&moving);
+    assert_eq!(simulated(a), simulated(b), "a moving scene's figures differ between runs");
 }
 
 /// A report's JSON without its real times (which vary between runs).
@@ -359,8 +363,10 @@ fn simulated(mut r: BenchReport) -> String {
     r.scene_stats.build_wall_ms = 0.0;
     for m in &mut r.methods {
         m.wall_ms = 0.0;
+        m.update_ms_per_frame = 0.0;
         for f in &mut m.per_frame {
             f.wall_ms = 0.0;
+            f.update_ms = 0.0;
         }
     }
     serde_json::to_string(&r).unwrap()

@@ -103,6 +103,11 @@ impl Renderer {
         })
     }
 
+    /// Whether frame times are simulated (soft) rather than measured.
+    fn models_time(&self) -> bool {
+        matches!(self, Self::Soft(_))
+    }
+
     fn adapter(&self) -> Option<String> {
         match self {
             Self::Soft(_) => None,
@@ -181,6 +186,9 @@ struct Lane {
     /// The upkeep of a moving scene before the coming frame (only its
     /// `update_ms`, `instances_moved` and `rebuilds`).
     update: FrameStats,
+    /// The time that upkeep adds to the coming frame, CPU work done before
+    /// the frame begins (each frame starts with the GPU idle).
+    update_charge_ms: f64,
 }
 
 impl Lane {
@@ -194,6 +202,7 @@ impl Lane {
             stats: FrameStats::default(),
             image: Vec::new(),
             update: FrameStats::default(),
+            update_charge_ms: 0.0,
         }
     }
 
@@ -214,6 +223,9 @@ impl Lane {
         let update = std::mem::take(&mut self.update);
         (self.stats.update_ms, self.stats.instances_moved, self.stats.rebuilds) =
             (update.update_ms, update.instances_moved, update.rebuilds);
+        let charge = std::mem::take(&mut self.update_charge_ms);
+        self.stats.frame_ms += charge;
+        self.stats.cpu_ms += charge;
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
@@ -270,18 +282,21 @@ impl Lanes {
     }
 
     /// Gives every lane's backend the `changed` instances of `scene` and
-    /// adds the time each took, and `upkeep` (the hierarchy's), to its
-    /// frame's statistics.
-    fn update_instances(&mut self, scene: &Scene, changed: &[u32], upkeep: &Upkeep) {
+    /// records, for its coming frame, the time that took with `upkeep` (the
+    /// hierarchy's), and the time its frame is charged: `modelled_ms` on
+    /// the soft backend's simulated clock, else that measured time.
+    fn update_instances(&mut self, scene: &Scene, changed: &[u32], upkeep: &Upkeep, modelled_ms: Option<f64>) {
         for lane in self.chains.iter_mut().flatten() {
             let start = Instant::now();
             lane.backend.update_instances(scene, changed);
+            let update_ms = (upkeep.time + start.elapsed()).as_secs_f64() * 1e3;
             lane.update = FrameStats {
-                update_ms: (upkeep.time + start.elapsed()).as_secs_f64() * 1e3,
+                update_ms,
                 instances_moved: upkeep.instances as u64,
                 rebuilds: u64::from(upkeep.rebuilt),
                 ..FrameStats::default()
             };
+            lane.update_charge_ms = modelled_ms.unwrap_or(update_ms);
         }
     }
 
@@ -301,6 +316,16 @@ impl Lanes {
             self.chains.into_iter().map(|c| c.into_iter().map(Some).collect()).collect();
         self.order.iter().map(|&(chain, at)| chains[chain][at].take().expect("each lane once")).collect()
     }
+}
+
+/// The simulated CPU time of `upkeep` on `config`'s GPU model: a refit
+/// recomputes each node it visits at the cost of visiting a node in a
+/// traversal (`cpu_node_us`: a box union against a frustum test); a
+/// rebuild (after its refit) reads every instance's box once per level of
+/// the new tree `h`, as a binned SAH build does.
+fn modelled_upkeep_ms(config: &BenchConfig, upkeep: &Upkeep, h: &Hierarchy) -> f64 {
+    let rebuild = if upkeep.rebuilt { h.items.len() * (h.max_depth() as usize + 1) } else { 0 };
+    (upkeep.visited + rebuild) as f64 * config.gpu_model.cpu_node_us * 1e-3
 }
 
 /// Far clipping distance of every camera in `scene`: beyond the whole scene
@@ -404,7 +429,8 @@ fn run_scene_here(
         if let Some(motion) = &motion {
             let changed = moving.apply(&motion.changes_at(times[k]))?;
             let upkeep = hierarchy.update(&moving, &changed, UpdatePolicy::default());
-            lanes.update_instances(&moving, &changed, &upkeep);
+            let modelled = renderer.models_time().then(|| modelled_upkeep_ms(config, &upkeep, &hierarchy));
+            lanes.update_instances(&moving, &changed, &upkeep, modelled);
         }
         lanes.frame(&moving, &hierarchy, camera)?;
         if let Some(e) = lanes.iter().find_map(|l| l.backend.failure().map(|e| (l.built.method.name(), e))) {

@@ -86,6 +86,9 @@ pub struct Upkeep {
     pub instances: usize,
     /// Nodes whose box changed (all of them after a rebuild).
     pub nodes: usize,
+    /// Nodes the refit recomputed (those of the changed instances' leaves
+    /// and their ancestors): its work, for a cost model.
+    pub visited: usize,
     /// Whether the tree was rebuilt.
     pub rebuilt: bool,
     /// Wall time of the refit and the rebuild.
@@ -171,9 +174,10 @@ impl Hierarchy {
 
     /// Refits the boxes of the leaves holding `changed` instances of
     /// `scene` and of their ancestors, bottom up (module documentation);
-    /// records what changed for [`Self::since`]. `scene` is the one the
-    /// tree was built over, after [`Scene::apply`].
-    pub fn refit(&mut self, scene: &Scene, changed: &[u32]) {
+    /// records what changed for [`Self::since`] and returns how many nodes
+    /// it recomputed. `scene` is the one the tree was built over, after
+    /// [`Scene::apply`].
+    pub fn refit(&mut self, scene: &Scene, changed: &[u32]) -> usize {
         if self.leaves_of.offsets.len() != scene.instances.len() + 1 {
             self.leaves_of = LeavesOf::new(self, scene.instances.len());
         }
@@ -213,6 +217,7 @@ impl Hierarchy {
         self.changes.instances.clear();
         self.changes.instances.extend_from_slice(changed);
         self.version.refit += 1;
+        dirty.len()
     }
 
     /// Brings the tree up to date with `scene` after `changed` instances
@@ -226,7 +231,7 @@ impl Hierarchy {
             *self = Hierarchy::build(scene, self.kind, self.options);
             upkeep.rebuilt = true;
         } else if !changed.is_empty() {
-            self.refit(scene, changed);
+            upkeep.visited = self.refit(scene, changed);
             upkeep.nodes = self.changes.nodes.len();
             if self.sah_cost() > self.built_cost * f64::from(policy.max_cost_ratio) {
                 *self = Hierarchy::build(scene, self.kind, self.options);
