@@ -93,6 +93,11 @@ struct SceneArgs {
     /// Method parameter, method.key=value (repeatable), e.g. chc.tav=2.
     #[arg(long = "method-opt", value_name = "METHOD.KEY=VALUE")]
     method_opt: Vec<String>,
+    /// Share of the scene's instances that move, 0 to 1: each chosen one
+    /// slides back and forth, one in eight also leaves and comes back
+    /// (deterministic from --seed).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
+    motion: f64,
 }
 
 impl SceneArgs {
@@ -115,6 +120,7 @@ impl SceneArgs {
             options: MethodOptions::parse(&self.method_opt).map_err(|e| usage(e.into()))?,
             import: ImportOptions { split_triangles: self.split_triangles, auto_path: self.auto_path },
             camera_path: self.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
+            motion: self.motion,
             ..BenchConfig::default()
         })
     }
@@ -190,11 +196,6 @@ struct BenchArgs {
     /// Folder for the --dump-frame PNGs (created if missing).
     #[arg(long, value_name = "DIR", default_value = ".")]
     dump_dir: PathBuf,
-    /// Share of the scene's instances that move, 0 to 1: each chosen one
-    /// slides back and forth, one in eight also leaves and comes back
-    /// (deterministic from --seed).
-    #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
-    motion: f64,
 }
 
 #[derive(clap::Args)]
@@ -327,7 +328,6 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
         dump_frame: args.dump_frame,
         parallel_lanes: !args.serial_lanes,
-        motion: args.motion,
         ..args.scene.config(args.paper.is_some())?
     };
     let config = match (&args.paper, &args.scene.size) {

@@ -137,6 +137,21 @@ fn figure4_shows_visible_and_occluded_query_boxes() {
     }
 }
 
+/// With `--motion` the scene moves while the camera stands still, and the
+/// query boxes follow it: the same view shows other pixels, boxes included.
+#[test]
+fn the_scene_moves_in_the_viewer_with_its_boxes() {
+    let Some(x) = window_setup("the_scene_moves_in_the_viewer_with_its_boxes") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let still = city_screenshot(&x, dir.path(), "still.png", &["--method", "chcpp", "--figure4"]);
+    let args = ["--method", "chcpp", "--figure4", "--motion", "1"];
+    let moving = city_screenshot(&x, dir.path(), "moving.png", &args);
+    let differ = still.iter().zip(&moving).filter(|(a, b)| a != b).count();
+    assert!(differ > still.len() / 20, "only {differ} pixels moved");
+    let (green, red) = (count(&moving, VISIBLE_GREEN), count(&moving, OCCLUDED_RED));
+    assert!(green > 100 && red > 100, "boxes while moving: {green} green, {red} red pixels");
+}
+
 /// `hiz`'s box tests coloured by the pyramid level each was tested at
 /// (`--pyramid-levels`, key Z): outlines in the colours of several levels.
 #[test]

@@ -83,12 +83,14 @@ pub struct FrameStats {
     /// Real time spent before the frame keeping the scene up to date
     /// (`crate::motion`): the hierarchy's refit or rebuild and the
     /// backend's update of the instances that changed; 0 in a still scene.
-    /// `frame_ms` and `cpu_ms` include the upkeep as CPU work before the
-    /// frame: this measured time on wgpu, a modelled one on the soft
+    #[serde(default)]
+    pub update_ms: f64,
+    /// The upkeep as `frame_ms` and `cpu_ms` include it, CPU work before
+    /// the frame: `update_ms` on wgpu, a modelled time on the soft
     /// backend's simulated clock (the benchmark runner's
     /// `modelled_upkeep_ms`).
     #[serde(default)]
-    pub update_ms: f64,
+    pub update_charged_ms: f64,
     /// Instances that moved, hid or showed before the frame.
     #[serde(default)]
     pub instances_moved: u64,

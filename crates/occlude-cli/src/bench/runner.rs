@@ -226,6 +226,7 @@ impl Lane {
         let charge = std::mem::take(&mut self.update_charge_ms);
         self.stats.frame_ms += charge;
         self.stats.cpu_ms += charge;
+        self.stats.update_charged_ms = charge;
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }

@@ -122,6 +122,11 @@ pub struct MethodSummary {
     /// still scene. See `FrameStats::update_ms`.
     #[serde(default)]
     pub update_ms_per_frame: f64,
+    /// The upkeep per frame as the frame times include it (modelled on
+    /// the soft backend, measured on wgpu), ms; see
+    /// `FrameStats::update_charged_ms`.
+    #[serde(default)]
+    pub update_charged_ms_per_frame: f64,
     /// Instances that moved, hid or showed per frame.
     #[serde(default)]
     pub instances_moved_per_frame: f64,
@@ -246,6 +251,7 @@ impl BenchReport {
                     indirect_draw_calls_per_frame: mean(frames, |f| f.indirect_draw_calls as f64),
                     readbacks_per_frame: mean(frames, |f| f.readbacks as f64),
                     update_ms_per_frame: mean(frames, |f| f.update_ms),
+                    update_charged_ms_per_frame: mean(frames, |f| f.update_charged_ms),
                     instances_moved_per_frame: mean(frames, |f| f.instances_moved as f64),
                     rebuilds: frames.iter().map(|f| f.rebuilds).sum(),
                     counters_per_frame: m

@@ -15,8 +15,9 @@ use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, METHOD_NAMES};
 use occlude_core::recording::{RecordedBoxTest, RecordingBackend};
-use occlude_core::render_frame;
+use occlude_core::{render_frame, UpdatePolicy};
 use occlude_core::{Backend, Camera, Hierarchy, HierarchyKind, Keyframe, Scene};
+use occlude_scenes::SceneMotion;
 use occlude_wgpu::{best_adapter, GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
 use std::sync::Arc;
 use std::time::Instant;
@@ -187,7 +188,11 @@ impl Gpu {
 
 /// Everything the viewer keeps between frames.
 struct Viewer<'s> {
-    scene: &'s Scene,
+    /// The scene as it moves (`--motion`), or as loaded.
+    scene: Scene,
+    /// How it moves, and since when (seconds of viewing).
+    motion: Option<SceneMotion>,
+    motion_time: f32,
     config: &'s ViewConfig,
     far: f32,
     hierarchy_kind: HierarchyKind,
@@ -225,7 +230,10 @@ impl<'s> Viewer<'s> {
         let method_index = METHOD_NAMES.iter().position(|&m| m == config.method).context("unknown method")?;
         let start = Playback::default().keyframe(&scene.path).unwrap_or_else(|| overview(scene));
         Ok(Self {
-            scene,
+            scene: scene.clone(),
+            motion: (config.scene.motion > 0.0)
+                .then(|| SceneMotion::new(scene, config.scene.motion, config.scene.seed)),
+            motion_time: 0.0,
             config,
             far: far_plane(scene),
             hierarchy_kind: config.scene.hierarchy,
@@ -307,7 +315,7 @@ impl<'s> Viewer<'s> {
                     HierarchyKind::Bvh => HierarchyKind::KdTree,
                     HierarchyKind::KdTree => HierarchyKind::Bvh,
                 };
-                self.hierarchy = Hierarchy::build(self.scene, self.hierarchy_kind, self.config.scene.build);
+                self.hierarchy = Hierarchy::build(&self.scene, self.hierarchy_kind, self.config.scene.build);
                 self.set_method(self.method_index);
             }
             Action::ToggleBoxes => self.show_boxes = !self.show_boxes,
@@ -366,13 +374,20 @@ impl<'s> Viewer<'s> {
         self.last_frame = now;
         self.move_camera(dt);
         let Some(gpu) = self.gpu.as_mut() else { return Ok(()) };
+        if let Some(motion) = &self.motion {
+            // The scene moves while you fly: its boxes (key V) follow.
+            self.motion_time += dt;
+            let changed = self.scene.apply(&motion.changes_at(self.motion_time))?;
+            self.hierarchy.update(&self.scene, &changed, UpdatePolicy::default());
+            gpu.backend.update_instances(&self.scene, &changed);
+        }
         let (w, h) = gpu.backend.inner().size();
         let camera = self.fly.camera(w as f32 / h as f32, NEAR_PLANE, self.far);
         gpu.backend.set_recording(self.show_boxes);
         let stats = render_frame(
             self.method.method.as_mut(),
             &mut gpu.backend,
-            self.scene,
+            &self.scene,
             &self.hierarchy,
             &camera,
             &mut self.drawn,
@@ -438,7 +453,7 @@ impl ApplicationHandler for Viewer<'_> {
         if self.gpu.is_some() {
             return;
         }
-        match Gpu::open(event_loop, self.scene, self.config) {
+        match Gpu::open(event_loop, &self.scene, self.config) {
             Ok(mut gpu) => match gpu.supports(&self.method) {
                 Ok(()) => {
                     gpu.window.request_redraw();
@@ -462,7 +477,7 @@ impl ApplicationHandler for Viewer<'_> {
                     let size: (u32, u32) = size.into();
                     gpu.presenter.resize(&gpu.scene.context().device, size);
                     if self.config.screenshot.is_none() {
-                        gpu.resize_backend(self.scene, size);
+                        gpu.resize_backend(&self.scene, size);
                     }
                 }
                 Ok(())
