@@ -485,7 +485,7 @@ fn measure_latency(backend: &mut WgpuBackend<'_>, camera: &Camera, small_box: Aa
 /// Measures the model and, if asked, checks its predictions.
 pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Calibration> {
     crate::limits::check_resolution(config.resolution).map_err(anyhow::Error::msg)?;
-    crate::limits::parse_repeats(&config.repeats.to_string()).map_err(|e| anyhow::anyhow!("--repeats: {e}"))?;
+    crate::limits::check_repeats(config.repeats).map_err(|e| anyhow::anyhow!("--repeats: {e}"))?;
     let ctx = Arc::new(GpuContext::new()?);
     let adapter = ctx.adapter_name();
     progress.set_message(format!("measuring {adapter}"));

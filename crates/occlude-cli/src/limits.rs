@@ -49,13 +49,22 @@ pub fn parse_in<T>(s: &str, what: &str, range: RangeInclusive<T>) -> Result<T, S
 where
     T: FromStr + PartialOrd + Display,
 {
-    let out_of_range = || format!("'{s}' is not {what} from {} to {}", range.start(), range.end());
-    let value = s.trim().parse::<T>().map_err(|_| out_of_range())?;
+    let value = s.trim().parse::<T>().map_err(|_| out_of_range(s, what, &range))?;
+    check_in(value, what, range)
+}
+
+/// Checks that `value`, `what` (a phrase such as "a thread count"), lies
+/// within `range`; the error names the value and the range.
+pub fn check_in<T: PartialOrd + Display>(value: T, what: &str, range: RangeInclusive<T>) -> Result<T, String> {
     if range.contains(&value) {
         Ok(value)
     } else {
-        Err(out_of_range())
+        Err(out_of_range(&value.to_string(), what, &range))
     }
+}
+
+fn out_of_range<T: Display>(value: &str, what: &str, range: &RangeInclusive<T>) -> String {
+    format!("'{value}' is not {what} from {} to {}", range.start(), range.end())
 }
 
 /// Parses a thread count, 1 to [`MAX_THREADS`].
@@ -65,13 +74,27 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
 
 /// Parses a frame count, 1 to [`MAX_FRAMES`].
 pub fn parse_frame_count(s: &str) -> Result<usize, String> {
-    parse_in(s, "a frame count", 1..=MAX_FRAMES)
+    parse_in(s, FRAME_COUNT, 1..=MAX_FRAMES)
 }
+
+/// Checks a frame count, 1 to [`MAX_FRAMES`].
+pub fn check_frame_count(frames: usize) -> Result<usize, String> {
+    check_in(frames, FRAME_COUNT, 1..=MAX_FRAMES)
+}
+
+const FRAME_COUNT: &str = "a frame count";
 
 /// Parses a repeat count, 1 to [`MAX_REPEATS`].
 pub fn parse_repeats(s: &str) -> Result<usize, String> {
-    parse_in(s, "a repeat count", 1..=MAX_REPEATS)
+    parse_in(s, REPEAT_COUNT, 1..=MAX_REPEATS)
 }
+
+/// Checks a repeat count, 1 to [`MAX_REPEATS`].
+pub fn check_repeats(repeats: usize) -> Result<usize, String> {
+    check_in(repeats, REPEAT_COUNT, 1..=MAX_REPEATS)
+}
+
+const REPEAT_COUNT: &str = "a repeat count";
 
 /// Parses a triangle count per call, 1 to [`MAX_TRIANGLES_PER_CALL`].
 pub fn parse_triangles_per_call(s: &str) -> Result<u64, String> {

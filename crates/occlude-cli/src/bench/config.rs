@@ -152,7 +152,7 @@ impl BenchConfig {
             bail!("method '{}' is listed twice", dup.1);
         }
         if self.frames != ALL_FRAMES {
-            crate::limits::parse_frame_count(&self.frames.to_string()).map_err(|e| anyhow::anyhow!("--frames: {e}"))?;
+            crate::limits::check_frame_count(self.frames).map_err(|e| anyhow::anyhow!("--frames: {e}"))?;
         }
         if let Some(fps) = self.fps {
             crate::limits::check_fps(fps).map_err(|e| anyhow::anyhow!("--fps: {e}"))?;
