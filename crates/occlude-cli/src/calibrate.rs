@@ -473,10 +473,19 @@ fn measure_latency(backend: &mut WgpuBackend, camera: &Camera, small_box: Aabb, 
 
 /// Measures the model and, if asked, checks its predictions.
 pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Calibration> {
+    crate::limits::check_resolution(config.resolution).map_err(anyhow::Error::msg)?;
+    crate::limits::check_repeats(config.repeats).map_err(|e| anyhow::anyhow!("--repeats: {e}"))?;
     let ctx = Arc::new(GpuContext::new()?);
     let adapter = ctx.adapter_name();
     progress.set_message(format!("measuring {adapter}"));
     let (model, culling_unmeasured) = measure_model(ctx, config)?;
+    model.validate().map_err(|e| anyhow::anyhow!("the model measured on {adapter} is not usable: {e}"))?;
+    let gpu_costs = [model.gpu_draw_call_us, model.gpu_triangle_ns, model.gpu_fragment_ns, model.gpu_query_box_us];
+    anyhow::ensure!(
+        gpu_costs.iter().any(|&c| c > 0.0),
+        "{adapter} measured no GPU time for draws, triangles, fragments or query boxes: the measurement failed, \
+         no model is written"
+    );
     let predictions = match &config.check {
         Some(check) => predict(check, &model, progress)?,
         None => Vec::new(),

@@ -5,9 +5,13 @@
 
 pub mod bench;
 pub mod calibrate;
+pub mod camera_path;
+pub mod figures;
+pub mod limits;
 pub mod output_path;
 pub mod progress;
 pub mod raster_bench;
 pub mod report;
 pub mod scenes;
+pub mod stdout;
 pub mod view;

@@ -7,20 +7,22 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
 use occlude_cli::bench::config::{
-    load_camera_path, parse_frames, parse_resolution, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES,
-    DEFAULT_METHODS, DEFAULT_RESOLUTION,
+    parse_frames, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES, DEFAULT_METHODS, DEFAULT_RESOLUTION,
 };
 use occlude_cli::bench::paper::PAPERS;
 use occlude_cli::bench::plot::PlotKind;
 use occlude_cli::bench::{self, BenchConfig};
+use occlude_cli::limits::{parse_fps, parse_frame_count, parse_repeats, parse_resolution, parse_threads};
+use occlude_cli::output_path::check_distinct;
 use occlude_cli::output_path::parse_output_path;
+use occlude_cli::stdout::print;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::HierarchyKind;
 use occlude_scenes::import::SceneSource;
 use occlude_scenes::{AutoPath, ImportOptions, LoadError, Size};
 use occlude_soft::GpuModel;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -101,6 +103,18 @@ struct SceneArgs {
 }
 
 impl SceneArgs {
+    /// The files these options read (the model, the camera path) and the
+    /// `--gpu-model`, when given and not a preset, for
+    /// [`check_distinct`].
+    fn inputs<'a>(&'a self, gpu_model: Option<&'a str>) -> [(&'static str, Option<&'a Path>); 3] {
+        let file = |name: &'a str| Some(Path::new(name)).filter(|p| p.is_file());
+        [
+            ("--scene", self.scene.as_deref().and_then(file)),
+            ("--camera-path", self.camera_path.as_deref()),
+            ("--gpu-model", gpu_model.and_then(file)),
+        ]
+    }
+
     /// A configuration with these settings checked and every other one at
     /// its default; a bad value is the user's (exit code 2). `--scene` is
     /// not read with `--paper` (`paper_scenes`).
@@ -119,7 +133,7 @@ impl SceneArgs {
             build: BuildOptions { leaf_size: self.leaf_size, ..BuildOptions::default() },
             options: MethodOptions::parse(&self.method_opt).map_err(|e| usage(e.into()))?,
             import: ImportOptions { split_triangles: self.split_triangles, auto_path: self.auto_path },
-            camera_path: self.camera_path.as_deref().map(load_camera_path).transpose().map_err(usage)?,
+            camera_path: self.camera_path.as_deref().map(occlude_cli::camera_path::load).transpose().map_err(usage)?,
             motion: self.motion,
             ..BenchConfig::default()
         })
@@ -140,7 +154,7 @@ struct BenchArgs {
     frames: Option<usize>,
     /// Frame rate the walkthrough is sampled at, frames per second of
     /// walkthrough time.
-    #[arg(long, default_value_t = DEFAULT_FPS)]
+    #[arg(long, default_value_t = DEFAULT_FPS, value_parser = parse_fps)]
     fps: f32,
     /// Image size, WIDTHxHEIGHT [default: 1024x768; 800x600 with --paper
     /// om, the paper's].
@@ -180,8 +194,8 @@ struct BenchArgs {
         model as in the paper, except ioc, which takes --gpu-model; size, frames, resolution, seed and \
         backend from the other options): {}", one_of(&PAPERS)))]
     paper: Option<String>,
-    /// Worker threads for the rasterizer (default: all cores).
-    #[arg(long)]
+    /// Worker threads for the rasterizer, 1 to 256 (default: all cores).
+    #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Render a frame's methods one after another on the soft backend
     /// instead of side by side on the thread pool: each method's wall ms is
@@ -226,7 +240,7 @@ struct ViewArgs {
     #[arg(long, value_name = "FILE.png", value_parser = parse_output_path)]
     screenshot: Option<PathBuf>,
     /// Frames rendered before --screenshot.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = parse_frame_count)]
     frames: usize,
     /// Where key R writes the recorded camera path (JSON for
     /// `bench --camera-path`).
@@ -246,7 +260,7 @@ struct CalibrateArgs {
     #[arg(long, default_value = "1024x768", value_parser = parse_resolution)]
     resolution: (u32, u32),
     /// Repeats of each measurement (the median counts).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = parse_repeats)]
     repeats: usize,
     /// Scene of the check: every method on the GPU and on the soft backend
     /// with the measured model, mean frame times compared.
@@ -256,7 +270,7 @@ struct CalibrateArgs {
     #[arg(long, default_value = "small")]
     check_size: String,
     /// Frames of the check.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = parse_frame_count)]
     check_frames: usize,
     /// Methods of the check.
     #[arg(long, value_delimiter = ',', default_value = "vfc,sw,chc,chcpp,om,opt")]
@@ -289,7 +303,8 @@ enum Failure {
 
 /// A failed run is the user's input when a model file could not be imported
 /// (the scene is loaded in the run, not in `configure`, so as to read a large
-/// model once), `--backend wgpu`, `view` or `raster-bench --gpu required`
+/// model once), its walkthrough cannot be run as asked (too many frames, a
+/// camera on its target), `--backend wgpu`, `view` or `raster-bench --gpu required`
 /// found no GPU adapter that can run the backend (or none with what a
 /// GPU-driven method needs), or `view` found no display: exit code 2 like
 /// any bad argument; anything else exit code 1.
@@ -305,6 +320,7 @@ fn run_failure(e: anyhow::Error) -> Failure {
             || no_adapter(c)
             || c.is::<occlude_core::GpuCullingUnsupported>()
             || c.is::<occlude_cli::view::ViewError>()
+            || c.is::<occlude_cli::camera_path::UnusableWalkthrough>()
     };
     if e.chain().any(input) {
         Failure::Usage(e)
@@ -356,9 +372,16 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     for path in args.plot.iter().chain(&args.plot_queries) {
         bench::plot::plot_format(path).map_err(usage)?;
     }
-    if args.threads == Some(0) {
-        return Err(usage(anyhow::anyhow!("--threads must be at least 1")));
+    if args.dump_frame.is_some() && args.dump_dir.exists() && !args.dump_dir.is_dir() {
+        return Err(usage(anyhow::anyhow!("--dump-dir {} is a file, not a folder", args.dump_dir.display())));
     }
+    let outputs = [
+        ("--json", args.json.as_deref()),
+        ("--csv", args.csv.as_deref()),
+        ("--plot", args.plot.as_deref()),
+        ("--plot-queries", args.plot_queries.as_deref()),
+    ];
+    check_distinct(&outputs, &args.scene.inputs(Some(&args.gpu_model))).map_err(|e| usage(anyhow::anyhow!(e)))?;
     Ok(config)
 }
 
@@ -383,7 +406,7 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     if let Some(paper) = &args.paper {
         let result = bench::paper::run(paper, config, &paper_scenes(args), &progress)?;
         progress.finish_and_clear();
-        print!("{}", result.text);
+        occlude_cli::figures::check_output(&result.tables.reports)?;
         if let Some(path) = &args.json {
             match &result.gvq {
                 Some(gvq) => bench::output::write_json(gvq, path)?,
@@ -400,13 +423,13 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
                 eprintln!("wrote {}", written.display());
             }
         }
-        return Ok(());
+        return print(&result.text);
     }
     progress.set_message(format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
     let run = bench::run(config, &progress)?;
     progress.finish_and_clear();
     let report = run.report(config);
-    print!("{}", bench::table::render(&report));
+    occlude_cli::figures::check_output(&report)?;
     if let Some(path) = &args.json {
         bench::output::write_json(&report, path)?;
         eprintln!("wrote {}", path.display());
@@ -427,6 +450,7 @@ fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
             eprintln!("wrote {}", path.display());
         }
     }
+    print(&bench::table::render(&report))?;
     match &run.aborted {
         Some(why) => anyhow::bail!(
             "the run stopped early ({why}); the {} frames every method finished are reported above",
@@ -452,9 +476,10 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
             "calibrate measures a real GPU: use --backend wgpu (the soft backend's costs are the model itself)"
         )));
     }
-    if args.repeats == 0 {
-        return Err(usage(anyhow::anyhow!("--repeats must be at least 1")));
-    }
+    let check_scene = Path::new(&args.check_scene);
+    let check_input = (!args.no_check && check_scene.is_file()).then_some(check_scene);
+    check_distinct(&[("--out", Some(&args.out))], &[("--check-scene", check_input)])
+        .map_err(|e| usage(anyhow::anyhow!(e)))?;
     let check = (!args.no_check)
         .then(|| {
             SceneSource::resolve(&args.check_scene)?;
@@ -477,12 +502,11 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
     let calibration = occlude_cli::calibrate::calibrate(&config, &progress).map_err(run_failure)?;
     progress.finish_and_clear();
     let text = calibration.to_toml().map_err(Failure::Run)?;
-    print!("{text}");
     std::fs::write(&args.out, &text)
         .with_context(|| format!("cannot write {}", args.out.display()))
         .map_err(Failure::Run)?;
     eprintln!("wrote {}", args.out.display());
-    Ok(())
+    print(&text).map_err(Failure::Run)
 }
 
 /// `occlude view`: bad options, no display or no GPU adapter are the user's
@@ -503,12 +527,17 @@ fn view(args: &ViewArgs) -> Result<(), Failure> {
         record: args.record.clone(),
     };
     config.validate().map_err(Failure::Usage)?;
+    let outputs = [("--screenshot", args.screenshot.as_deref()), ("--record", Some(args.record.as_path()))];
+    check_distinct(&outputs, &args.scene.inputs(None)).map_err(|e| Failure::Usage(anyhow::anyhow!(e)))?;
     occlude_cli::view::run(&config).map_err(run_failure)
 }
 
 /// `occlude report`: unreadable or malformed input is the user's (exit code
 /// 2); failing to write the output is not (exit code 1).
 fn report(args: &ReportArgs) -> Result<(), Failure> {
+    let inputs: Vec<_> = args.files.iter().map(|f| ("FILE.json", Some(f.as_path()))).collect();
+    check_distinct(&[("--out", Some(&args.out)), ("--markdown", args.markdown.as_deref())], &inputs)
+        .map_err(|e| Failure::Usage(anyhow::anyhow!(e)))?;
     let mut reports = Vec::new();
     for path in &args.files {
         reports.extend(occlude_cli::report::load(path).map_err(Failure::Usage)?);
@@ -543,8 +572,7 @@ fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
         vec![size.parse::<Size>().map_err(|e| Failure::Usage(e.into()))?]
     };
     let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude_cli::scenes::rows(s, seed)).collect();
-    print!("{}", occlude_cli::scenes::render(&rows));
-    Ok(())
+    print(&occlude_cli::scenes::render(&rows)).map_err(Failure::Run)
 }
 
 fn main() -> ExitCode {

@@ -28,7 +28,7 @@ use occlude_soft::workload;
 use occlude_wgpu::{DepthRaster, GpuContext};
 use serde::Serialize;
 
-use crate::bench::config::parse_resolution;
+use crate::limits::{parse_resolution, parse_seconds, parse_threads, parse_triangles_per_call, MAX_TRIANGLES_PER_CALL};
 
 /// Options of `occlude raster-bench`.
 #[derive(clap::Args, Debug, Clone)]
@@ -37,20 +37,22 @@ pub struct RasterBenchArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [10, 25, 50, 100, 250, 500],
           value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub sizes: Vec<u32>,
-    /// Triangles drawn per call (default: about two screens of pixels, at least 64).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    /// Triangles drawn per call, 1 to 4000000 (default: about two screens of
+    /// pixels, at least 64, at most 4000000).
+    #[arg(long, value_parser = parse_triangles_per_call)]
     pub triangles_per_size: Option<u64>,
     /// Seconds to measure each fill-rate row for (calls repeat until they are
     /// spent, at least three; the median call is reported); query rows get a third
-    /// of it.
+    /// of it; at most 600.
     #[arg(long, default_value_t = 0.75, value_parser = parse_seconds)]
     pub seconds_per_row: f64,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1920x1080", value_parser = parse_resolution)]
     pub resolution: (u32, u32),
-    /// Thread counts to run the soft rasterizer with, comma-separated.
+    /// Thread counts to run the soft rasterizer with, comma-separated, each 1
+    /// to 256.
     #[arg(long, value_delimiter = ',', default_values_t = [1, 2],
-          value_parser = clap::value_parser!(u32).range(1..=256))]
+          value_parser = |s: &str| parse_threads(s).map(|t| t as u32))]
     pub threads: Vec<u32>,
     /// Whether to also measure the wgpu backend: `auto` when a GPU adapter opens,
     /// `off`, or `required` (a missing adapter is an error).
@@ -70,14 +72,6 @@ pub enum GpuChoice {
     Off,
     /// Always: a missing adapter is an error.
     Required,
-}
-
-/// A positive, finite number of seconds.
-fn parse_seconds(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("'{s}' is not a positive number of seconds")),
-    }
 }
 
 /// One fill-rate measurement.
@@ -521,9 +515,9 @@ pub fn measure(
     progress.set_length((per_backend * backends.len()) as u64);
     let mut rows = Vec::new();
     for &n in &args.sizes {
-        let count = args
-            .triangles_per_size
-            .map_or_else(|| workload::triangles_for_screens(width, height, n, 2.0), |c| c as usize);
+        let count = args.triangles_per_size.unwrap_or_else(|| {
+            (workload::triangles_for_screens(width, height, n, 2.0) as u64).min(MAX_TRIANGLES_PER_CALL)
+        }) as usize;
         let triangles = workload::right_triangles(width, height, n as f32, count);
         for backend in backends.iter_mut() {
             progress.set_message(format!("fill rate, N = {n}, {}", label(backend.as_ref())));
@@ -596,13 +590,12 @@ pub fn run(args: &RasterBenchArgs) -> Result<()> {
     let progress = crate::progress::bar(0, "rows");
     let report = measure(args, &mut backends, &progress)?;
     progress.finish_and_clear();
-    print!("{}", render(&report, args));
     if let Some(path) = &args.json {
         let json = serde_json::to_string_pretty(&report)?;
         std::fs::write(path, json + "\n").with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
-    Ok(())
+    crate::stdout::print(&render(&report, args))
 }
 
 #[cfg(test)]

@@ -40,13 +40,27 @@ figure { margin: 0.5em 0; }
 figure svg { max-width: 100%; height: auto; }
 ";
 
-/// Reads the reports of one bench JSON file: one [`BenchReport`] object or a
-/// non-empty array of them. Anything else is an error naming `path` and saying
-/// what is wrong (not JSON, not an object, a missing key, ...).
+/// The largest bench JSON file read, bytes.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// Reads the reports of one bench JSON file (a regular file of at most
+/// [`MAX_FILE_BYTES`]) as [`parse`] does.
 pub fn load(path: &Path) -> Result<Vec<BenchReport>> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {name}"))?;
-    let value: Value = serde_json::from_str(&text).with_context(|| format!("{name} is not valid JSON"))?;
+    let text = occlude_core::input_file::read_text(path, MAX_FILE_BYTES)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Parses the reports of one bench JSON document: one [`BenchReport`]
+/// object or a non-empty array of them (a leading byte-order mark is
+/// ignored), every figure finite and within
+/// ±[`crate::figures::MAX_FIGURE`]. Anything else is an error naming the
+/// file `name` and saying what is wrong (not JSON, not an object, a missing
+/// key, a figure out of range, ...).
+pub fn parse(text: &str, name: &str) -> Result<Vec<BenchReport>> {
+    let value: Value = serde_json::from_str(occlude_core::input_file::strip_bom(text))
+        .with_context(|| format!("{name} is not valid JSON"))?;
+    crate::figures::check_input(&value).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     let (items, in_array) = match value {
         Value::Array(items) => (items, true),
         Value::Object(mut tables) if tables.contains_key("tables") => match tables.remove("reports") {

@@ -22,7 +22,7 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--methods", "vfc,magic"], "magic");
     assert_usage_error(&["bench", "--frames", "0"], "frames");
     assert_usage_error(&["bench", "--frames", "some"], "'some' is not a frame count");
-    assert_usage_error(&["bench", "--fps", "0"], "--fps 0 is out of range");
+    assert_usage_error(&["bench", "--fps", "0"], "'0' is not a frame rate above 0 and at most 1000");
     assert_usage_error(&["bench", "--resolution", "12by4"], "12by4");
     assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
     assert_usage_error(&["bench", "--queries", "occlusion"], "expected 'hardware' or 'hib'");

@@ -93,7 +93,7 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
                     )
                 })
                 .collect();
-            for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {
+            for (f, camera) in cameras(&scene, &cfg).unwrap().iter().enumerate() {
                 let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
                 let seen: HashSet<u32> = oracle.oracle(camera, &all).visible.into_iter().collect();
                 for (method, backend, drawn) in &mut lanes {

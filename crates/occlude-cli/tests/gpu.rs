@@ -46,7 +46,7 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
         // between frames that see much the same (90 frames spread over the
         // plant's 130 s have `roc` draw more than `vfc`).
         let cfg = BenchConfig { fps: Some(2.5), ..config(name, hierarchy, ALL_FRAMES) };
-        let frames = cameras(&scene, &cfg).len();
+        let frames = cameras(&scene, &cfg).unwrap().len();
         let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
         assert_eq!(run.aborted, None);
         assert!(run.adapter.is_some());
@@ -190,7 +190,7 @@ fn soft_and_gpu_see_the_same_objects() {
         let mut on_gpu = WgpuBackend::new(gpu, &scene, w, h);
         let mut soft = SoftBackend::new(&scene, w, h, cfg.gpu_model.clone());
         let mut compared = 0;
-        for (k, camera) in cameras(&scene, &cfg).iter().enumerate() {
+        for (k, camera) in cameras(&scene, &cfg).unwrap().iter().enumerate() {
             let frustum = camera.frustum();
             let candidates: Vec<u32> = (0..scene.instances.len() as u32)
                 .filter(|&i| frustum.intersects(&scene.instances[i as usize].bounds))
@@ -362,7 +362,7 @@ fn hib_counts_equal_hardware_counts() {
         let mut soft_hib = SoftBackend::new(&scene, w, h, cfg.gpu_model.clone());
         soft_hib.set_query_mode(QueryMode::Hib);
         let (mut partial, mut zero) = (0, 0);
-        for camera in cameras(&scene, &cfg).iter().step_by(10) {
+        for camera in cameras(&scene, &cfg).unwrap().iter().step_by(10) {
             let frustum = camera.frustum();
             let in_view: Vec<u32> = (0..scene.instances.len() as u32)
                 .filter(|&i| frustum.intersects(&scene.instances[i as usize].bounds))

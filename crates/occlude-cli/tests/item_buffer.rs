@@ -93,7 +93,7 @@ fn soft_item_buffer_counts_every_instance_and_tile_exactly() {
         let (w, h) = cfg.resolution;
         let mut soft = SoftBackend::new(&scene, w, h, cfg.gpu_model.clone());
         let (mut depth, mut tied, mut instanced) = (Vec::new(), 0, false);
-        for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {
+        for (f, camera) in cameras(&scene, &cfg).unwrap().iter().enumerate() {
             let what = format!("soft {name} frame {f}");
             let layout = ItemLayout::new(&scene, &in_view(&scene, camera), LEVEL).unwrap();
             instanced |= (0..layout.objects()).any(|o| layout.object_slots(o).len() > 1);
@@ -120,7 +120,7 @@ fn gpu_item_buffer_counts_every_instance_and_tile_exactly() {
         let gpu = Arc::new(GpuScene::new(Arc::clone(&ctx), &scene).unwrap());
         let mut backend = WgpuBackend::new(gpu, &scene, w, h);
         let (mut depth, mut tied) = (Vec::new(), 0);
-        for (f, camera) in cameras(&scene, &cfg).iter().enumerate() {
+        for (f, camera) in cameras(&scene, &cfg).unwrap().iter().enumerate() {
             let what = format!("wgpu {name} frame {f}");
             let layout = ItemLayout::new(&scene, &in_view(&scene, camera), LEVEL).unwrap();
             let counts = backend.item_buffer(camera, &layout).expect("lavapipe runs compute");

@@ -63,6 +63,7 @@ pub mod gvq;
 pub mod hierarchy;
 pub mod host_culling;
 pub mod inner_box;
+pub mod input_file;
 pub mod item_buffer;
 pub mod methods;
 pub mod mock;

@@ -113,23 +113,38 @@ impl CameraPath {
         })
     }
 
+    /// How many frames `sampling` takes of this path (0 without keyframes),
+    /// computed without allocating them, so that a caller can bound a run
+    /// before [`Self::frame_times`] makes them; a path too long to count
+    /// gives `usize::MAX`.
+    pub fn frame_count(&self, sampling: Sampling) -> usize {
+        if self.keyframes.is_empty() {
+            return 0;
+        }
+        match sampling {
+            Sampling::Spread(frames) => frames,
+            Sampling::Rate { fps, limit } => {
+                // Every frame whose time lies on the path; the small margin
+                // keeps a path of whole frames from losing its last one to
+                // rounding. The float-to-integer cast saturates, the `+ 1`
+                // must too.
+                let whole = ((f64::from(self.duration()) * f64::from(fps) + 1e-6).floor() as usize).saturating_add(1);
+                limit.map_or(whole, |l| l.min(whole))
+            }
+        }
+    }
+
     /// The walkthrough times (seconds, from the first keyframe's) of the
     /// frames `sampling` asks for; empty for a path without keyframes.
     pub fn frame_times(&self, sampling: Sampling) -> Vec<f32> {
         let Some(start) = self.keyframes.first().map(|k| k.time) else { return Vec::new() };
         let span = self.duration();
+        let count = self.frame_count(sampling);
         match sampling {
-            Sampling::Spread(frames) => (0..frames)
+            Sampling::Spread(frames) => (0..count)
                 .map(|f| if frames > 1 { start + span * f as f32 / (frames - 1) as f32 } else { start })
                 .collect(),
-            Sampling::Rate { fps, limit } => {
-                // Every frame whose time lies on the path; the small margin
-                // keeps a path of whole frames from losing its last one to
-                // rounding.
-                let whole = (f64::from(span) * f64::from(fps) + 1e-6).floor() as usize + 1;
-                let count = limit.map_or(whole, |l| l.min(whole));
-                (0..count).map(|f| start + (f as f64 / f64::from(fps)) as f32).collect()
-            }
+            Sampling::Rate { fps, .. } => (0..count).map(|f| start + (f as f64 / f64::from(fps)) as f32).collect(),
         }
     }
 
@@ -193,5 +208,15 @@ mod tests {
         let cams = path.sample_with(Sampling::Rate { fps: 30.0, limit: None }, 1.0, 0.1, 10.0);
         assert_eq!(cams.len(), 61);
         assert_eq!(cams[60].position, Vec3::X);
+    }
+
+    #[test]
+    fn a_path_too_long_to_count_saturates_instead_of_wrapping() {
+        let mut path = CameraPath::through([(Vec3::ZERO, Vec3::X), (Vec3::X, Vec3::X * 2.0)], 60.0);
+        path.keyframes[1].time = 1e30;
+        assert_eq!(path.frame_count(Sampling::Rate { fps: 30.0, limit: None }), usize::MAX);
+        assert_eq!(path.frame_count(Sampling::Rate { fps: 30.0, limit: Some(5) }), 5);
+        assert_eq!(path.frame_times(Sampling::Rate { fps: 30.0, limit: Some(5) }).len(), 5);
+        assert_eq!(CameraPath::default().frame_count(Sampling::Spread(3)), 0);
     }
 }

@@ -486,16 +486,26 @@ fn invalid_json_is_an_error() {
     assert!(matches!(e, LoadError::Malformed { format: "glTF", .. }), "{e:?}");
 }
 
+/// Every OBJ index must name an element of the file, and is checked before
+/// `tobj` reads it: indices that would wrap its offset arithmetic (and
+/// panic inside it) are an error naming the line like any other.
 #[test]
 fn obj_indices_out_of_range_are_an_error_but_relative_ones_are_legal() {
     let dir = tempfile::tempdir().unwrap();
-    let vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\n";
     let ok = import_file(&write(dir.path(), "relative.obj", format!("{vertices}f -3 -2 -1\n")), Default::default());
     assert_eq!(ok.scene.triangle_count(), 1);
-    for (name, face) in [("minus.obj", "f -1 -2 -9\n"), ("past.obj", "f 1 2 7\n"), ("zero.obj", "f 0 1 2\n")] {
-        let (e, message) = error(&write(dir.path(), name, format!("{vertices}{face}")));
+    for (name, face) in [
+        ("minus.obj", "f -1 -2 -9"),
+        ("past.obj", "f 1 2 7"),
+        ("zero.obj", "f 0 1 2"),
+        ("wrap.obj", "f 1//6148914691236517206 2//1 3//1"),
+        ("texture.obj", "f 1/9223372036854775807 2/1 3/1"),
+        ("behind.obj", "f 1//-3 2//1 3//1"),
+    ] {
+        let (e, message) = error(&write(dir.path(), name, format!("{vertices}{face}\n")));
         assert!(matches!(e, LoadError::Malformed { format: "OBJ", .. }), "{e:?}");
-        assert!(message.contains("out of bounds"), "{message}");
+        assert!(message.contains("line 6") && message.contains("out of range"), "{message}");
     }
 }
 
@@ -783,4 +793,72 @@ fn zeros_without_bytes_are_capped_per_file() {
     assert!(matches!(e, LoadError::Invalid { .. }), "{e:?}");
     let problem = "mesh 0 primitive 1: accessor 1 has no buffer view and claims 3000000 elements of zeros";
     assert!(message.contains(problem) && message.contains("(1194304 left)"), "{message}");
+}
+
+/// A model reads only regular files inside its folder, and of a glTF buffer
+/// only its declared length: every reference that leaves the folder (by a
+/// root, `..`, an escape that decodes to either, a link, a URL) or names a
+/// device is refused naming it, and a longer file is cut at `byteLength`.
+#[test]
+fn referenced_files_are_read_inside_the_models_folder_up_to_their_declared_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = room();
+    let reference = import_file(&model.write(dir.path(), "a.gltf"), ImportOptions::default()).scene;
+    let mut longer = model.bin.clone();
+    longer.extend([0xAB; 4096]);
+    std::fs::write(dir.path().join("long.bin"), &longer).unwrap();
+    let long = write_json(dir.path(), "long.gltf", &model.document(Some("long.bin".into())));
+    assert_eq!(import_file(&long, ImportOptions::default()).scene.bounds(), reference.bounds());
+    std::fs::create_dir(dir.path().join("models")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("models").join("zero.bin")).unwrap();
+    for (uri, why) in [
+        ("/dev/zero", "leaves the model's folder"),
+        ("%2Fdev%2Furandom", "leaves the model's folder"),
+        ("../../dev/zero", "leaves the model's folder"),
+        ("../long.bin", "leaves the model's folder"),
+        ("zero.bin", "link that leaves"),
+        ("http://example.com/long.bin", "is a URL"),
+    ] {
+        let path = write_json(&dir.path().join("models"), "m.gltf", &model.document(Some(uri.into())));
+        let (e, message) = error(&path);
+        assert!(matches!(e, LoadError::Invalid { .. }), "{uri}: {e:?}");
+        assert!(message.contains("buffer 0") && message.contains(why), "{message}");
+    }
+    std::fs::create_dir(dir.path().join("folder.bin")).unwrap();
+    let (e, message) = error(&write_json(dir.path(), "dir.gltf", &model.document(Some("folder.bin".into()))));
+    assert!(matches!(e, LoadError::MissingFile { .. }) && message.contains("not a regular file"), "{message}");
+
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    for (mtl, why) in [("/dev/zero", "leaves the model's folder"), ("../x.mtl", "leaves"), ("folder.bin", "regular")] {
+        let obj = write(dir.path(), "m.obj", format!("mtllib {mtl}\n{triangle}"));
+        let imported = import_file(&obj, ImportOptions::default());
+        assert_eq!(imported.scene.triangle_count(), 1);
+        assert!(imported.warnings.iter().any(|w| w.contains(mtl) && w.contains(why)), "{:?}", imported.warnings);
+    }
+}
+
+/// Without a scene, every node is a root or below one: nodes that are each
+/// other's children (a cycle no root reaches) are an error, with or without
+/// another root beside them.
+#[test]
+fn a_node_cycle_without_a_scene_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    for extra_root in [false, true] {
+        let mut g = Gltf::default();
+        let cube = g.cube(None);
+        g.node(json!({"mesh": cube, "children": [1]}));
+        g.node(json!({"mesh": cube, "children": [0]}));
+        if extra_root {
+            g.node(json!({ "mesh": cube }));
+        }
+        let mut document = g.document(Some(format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&g.bin)
+        )));
+        let object = document.as_object_mut().unwrap();
+        object.remove("scene");
+        object.remove("scenes");
+        let (_, message) = error(&write_json(dir.path(), "cycle.gltf", &document));
+        assert!(message.contains("node 0 is in a cycle") && message.contains("not a tree"), "{message}");
+    }
 }

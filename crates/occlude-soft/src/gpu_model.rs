@@ -145,13 +145,15 @@ pub enum GpuModelError {
     /// The name is neither a preset nor a readable file.
     #[error("unknown GPU model '{0}': expected a preset ({presets}) or a TOML file", presets = GpuModel::PRESETS.join(", "))]
     Unknown(String),
-    /// The file could not be read.
-    #[error("cannot read GPU model file {path}: {source}")]
+    /// The file could not be read (not a regular file, larger than
+    /// [`GpuModel::MAX_FILE_BYTES`], or a system error). The reason is part
+    /// of the message, not a separate source, so that it is printed once.
+    #[error("cannot read GPU model file {path}: {reason}")]
     Io {
         /// The file.
         path: String,
         /// Why reading failed.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// The file is not a valid model.
     #[error("invalid GPU model file {path}: {message}")]
@@ -166,6 +168,14 @@ pub enum GpuModelError {
 impl GpuModel {
     /// Names of the built-in presets.
     pub const PRESETS: [&'static str; 2] = ["gpu-2004", "modern"];
+
+    /// The largest GPU model file read, bytes.
+    pub const MAX_FILE_BYTES: u64 = 1 << 20;
+
+    /// The largest cost, in the cost's own unit (µs or ns): a second per
+    /// triangle or fragment is already absurd, and with costs this size a
+    /// run's simulated times stay finite.
+    pub const MAX_COST: f64 = 1e6;
 
     /// Close to the CHC paper's GeForce FX 5950 / Pentium 4 (2004): slow draw
     /// calls, long query round trips and a driver that lets the CPU run no
@@ -311,8 +321,8 @@ impl GpuModel {
         if !path.exists() {
             return Err(GpuModelError::Unknown(name_or_path.to_string()));
         }
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| GpuModelError::Io { path: name_or_path.to_string(), source })?;
+        let text = occlude_core::input_file::read_text(path, Self::MAX_FILE_BYTES)
+            .map_err(|reason| GpuModelError::Io { path: name_or_path.to_string(), reason })?;
         Self::from_toml(&text).map_err(|message| GpuModelError::Invalid { path: name_or_path.to_string(), message })
     }
 
@@ -332,8 +342,8 @@ impl GpuModel {
         Ok(model)
     }
 
-    /// Every cost must be a finite, non-negative number; the driver's queue
-    /// a non-negative one or `inf`.
+    /// Every cost must be a number from 0 to [`Self::MAX_COST`]; the driver's
+    /// queue a non-negative one or `inf`.
     pub fn validate(&self) -> Result<(), String> {
         let costs = [
             ("cpu_draw_call_us", self.cpu_draw_call_us),
@@ -365,8 +375,11 @@ impl GpuModel {
             ("cpu_moc_box_ns", self.cpu_moc_box_ns),
             ("cpu_moc_subtile_read_ns", self.cpu_moc_subtile_read_ns),
         ];
-        if let Some((name, v)) = costs.iter().find(|(_, v)| !v.is_finite() || *v < 0.0) {
-            return Err(format!("{name} = {v}: costs must be finite and >= 0"));
+        if let Some((name, v)) = costs.iter().find(|(_, v)| !(0.0..=Self::MAX_COST).contains(v)) {
+            // Huge and tiny values in exponent form, as a TOML file would
+            // write them, not as hundreds of digits.
+            let v = if (1e-6..1e15).contains(&v.abs()) || *v == 0.0 { v.to_string() } else { format!("{v:e}") };
+            return Err(format!("{name} = {v}: costs must be numbers from 0 to {:e}", Self::MAX_COST));
         }
         if self.driver_queue_us.is_nan() || self.driver_queue_us < 0.0 {
             return Err(format!("driver_queue_us = {}: must be >= 0 (inf: unbounded)", self.driver_queue_us));
@@ -476,5 +489,17 @@ mod tests {
         assert!(matches!(GpuModel::load("nonexistent-model"), Err(GpuModelError::Unknown(_))));
         assert!(GpuModel::from_toml("driver_queue_us = -1.0").unwrap_err().contains("driver_queue_us"));
         assert!(GpuModel::from_toml("driver_queue_us = nan").unwrap_err().contains("driver_queue_us"));
+        let huge = GpuModel::from_toml("gpu_fragment_ns = 1e305").unwrap_err();
+        assert!(huge.contains("gpu_fragment_ns = 1e305") && huge.contains("from 0 to 1e6"), "{huge}");
+        GpuModel::from_toml("gpu_fragment_ns = 1e6").unwrap();
+    }
+
+    #[test]
+    fn only_a_small_regular_file_is_read_and_its_error_said_once() {
+        let e = GpuModel::load("/dev/zero").unwrap_err().to_string();
+        assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+        let folder = std::env::temp_dir();
+        let e = GpuModel::load(folder.to_str().unwrap()).unwrap_err();
+        assert!(std::error::Error::source(&e).is_none(), "the reason is in the message, not a source too");
     }
 }

@@ -1,13 +1,12 @@
 //! What a benchmark run is asked to do, checked before any work starts.
 
 use super::ideal::{IDEAL, SOURCE};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
 use occlude_core::{CameraPath, HierarchyKind, QueryMode, Sampling};
 use occlude_scenes::{ImportOptions, Size};
 use occlude_soft::GpuModel;
-use std::path::Path;
 
 /// Near clipping distance of every walkthrough camera, metres.
 pub const NEAR_PLANE: f32 = 0.25;
@@ -156,22 +155,16 @@ impl BenchConfig {
         if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
             bail!("method '{}' is listed twice", dup.1);
         }
-        if self.frames == 0 {
-            bail!("--frames must be at least 1");
+        if self.frames != ALL_FRAMES {
+            crate::limits::check_frame_count(self.frames).map_err(|e| anyhow::anyhow!("--frames: {e}"))?;
         }
-        if self.fps.is_some_and(|f| !(f > 0.0 && f <= MAX_FPS)) {
-            bail!(
-                "--fps {} is out of range: expected a frame rate above 0 and at most {MAX_FPS}",
-                self.fps.unwrap_or(0.0)
-            );
+        if let Some(fps) = self.fps {
+            crate::limits::check_fps(fps).map_err(|e| anyhow::anyhow!("--fps: {e}"))?;
         }
         if let Some(k) = self.dump_frame.filter(|&k| k >= self.frames) {
             bail!("--dump-frame {k} is past the last frame: frames are numbered 0 to {}", self.frames - 1);
         }
-        let (w, h) = self.resolution;
-        if w == 0 || h == 0 || w > 16384 || h > 16384 {
-            bail!("resolution {w}x{h} is out of range: each side must be 1 to 16384 pixels");
-        }
+        crate::limits::check_resolution(self.resolution).map_err(anyhow::Error::msg)?;
         if self.build.leaf_size == 0 {
             bail!("--leaf-size must be at least 1");
         }
@@ -181,9 +174,6 @@ impl BenchConfig {
         Ok(())
     }
 }
-
-/// The highest frame rate `--fps` accepts.
-const MAX_FPS: f32 = 1000.0;
 
 impl BenchConfig {
     /// How the walkthrough is cut into frames: [`Self::fps`] and
@@ -196,48 +186,14 @@ impl BenchConfig {
     }
 }
 
-/// Parses `--frames`: a count of at least 1, or `all` ([`ALL_FRAMES`]).
+/// Parses `--frames`: a count of 1 to [`crate::limits::MAX_FRAMES`], or
+/// `all` ([`ALL_FRAMES`]: every frame of the walkthrough, which may then
+/// hold at most that many).
 pub fn parse_frames(s: &str) -> Result<usize, String> {
     match s.trim() {
         "all" => Ok(ALL_FRAMES),
-        n => n.parse::<usize>().map_err(|_| format!("'{s}' is not a frame count (a whole number, or 'all')")),
+        n => crate::limits::parse_frame_count(n).map_err(|e| format!("{e}, or 'all'")),
     }
-}
-
-/// Reads a walkthrough from a JSON file of camera keyframes,
-/// `{"keyframes":[{"time":0,"position":[x,y,z],"target":[x,y,z],"fov_y_deg":60}, ...]}`
-/// (the serde form of [`CameraPath`]), and checks that it can be replayed:
-/// at least one keyframe, finite values, times strictly increasing, a field
-/// of view between 0 and 180 degrees, a target apart from the position.
-pub fn load_camera_path(path: &Path) -> Result<CameraPath> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read camera path {}", path.display()))?;
-    let camera_path: CameraPath = serde_json::from_str(&text)
-        .with_context(|| format!("{} is not a camera path (JSON of keyframes)", path.display()))?;
-    if camera_path.keyframes.is_empty() {
-        bail!("camera path {} has no keyframes", path.display());
-    }
-    for (i, k) in camera_path.keyframes.iter().enumerate() {
-        let finite = k.time.is_finite() && k.position.is_finite() && k.target.is_finite();
-        let usable = finite && k.fov_y_deg > 0.0 && k.fov_y_deg < 180.0 && k.position != k.target;
-        if !usable {
-            bail!(
-                "camera path {}: keyframe {i} needs finite values, a target apart from the position \
-                 and fov_y_deg between 0 and 180",
-                path.display()
-            );
-        }
-        if i > 0 && k.time <= camera_path.keyframes[i - 1].time {
-            bail!("camera path {}: keyframe {i} is not later than the one before", path.display());
-        }
-    }
-    Ok(camera_path)
-}
-
-/// Parses `WIDTHxHEIGHT`.
-pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 1024x768)"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{s}' is not WIDTHxHEIGHT (e.g. 1024x768)"));
-    Ok((parse(w)?, parse(h)?))
 }
 
 #[cfg(test)]
@@ -255,13 +211,6 @@ mod tests {
         assert_eq!(c.sampling(), Sampling::Rate { fps: 30.0, limit: None });
         let c = BenchConfig { fps: None, frames: 12, ..c };
         assert_eq!(c.sampling(), Sampling::Spread(12));
-    }
-
-    #[test]
-    fn resolution_parses_and_rejects() {
-        assert_eq!(parse_resolution("640x480"), Ok((640, 480)));
-        assert!(parse_resolution("640").is_err());
-        assert!(parse_resolution("ax480").is_err());
     }
 
     #[test]
@@ -283,7 +232,9 @@ mod tests {
         c.options = MethodOptions::parse(&["ideal.x=1"]).unwrap();
         assert!(c.validate().unwrap_err().to_string().contains("takes no parameters"));
         c = BenchConfig { fps: Some(0.0), ..BenchConfig::default() };
-        assert!(c.validate().unwrap_err().to_string().contains("--fps 0"));
+        assert!(c.validate().unwrap_err().to_string().contains("--fps: '0'"));
+        c = BenchConfig { frames: crate::limits::MAX_FRAMES + 1, ..BenchConfig::default() };
+        assert!(c.validate().unwrap_err().to_string().contains("--frames: '100001'"));
         c = BenchConfig { fps: Some(f32::NAN), ..BenchConfig::default() };
         assert!(c.validate().is_err());
         c = BenchConfig { frames: 5, dump_frame: Some(4), ..BenchConfig::default() };

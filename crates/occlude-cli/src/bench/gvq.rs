@@ -18,14 +18,13 @@
 //! otherwise, over the walkthrough circling the objects; both region modes
 //! are run (the paper's Table 2 does not say which it used).
 
-use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
+use super::config::{BackendKind, BenchConfig};
 use super::gvq_parts::{self, PartsRow};
 use super::gvq_parts_gpu;
 use super::gvq_shadows::{self, ShadowRow};
 use super::gvq_shadows_gpu;
 use super::paper_tables::{PaperTables, Table};
 use super::published::{self, PublishedTable};
-use super::runner::far_plane;
 use anyhow::Result;
 use indicatif::ProgressBar;
 use occlude_core::gvq::{RegionMode, SatConfig};
@@ -265,7 +264,7 @@ fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result
     let mut rows = Vec::new();
     for &objects in counts {
         let scene = scattered(objects, base.seed);
-        let cameras = scene.path.sample_with(base.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(&scene));
+        let cameras = super::runner::cameras(&scene, base)?;
         progress.set_message(format!("gvq: {objects} objects"));
         progress.inc_length(cameras.len() as u64);
         let mut sat = SoftSat::new(w, h);

@@ -225,6 +225,9 @@ struct Panel<'a> {
     series: Vec<Series<'a>>,
 }
 
+/// The most powers of ten a logarithmic axis spans.
+const MAX_DECADES: i32 = 12;
+
 /// The y-axis a panel's values call for.
 #[derive(Debug, PartialEq)]
 enum YAxis {
@@ -238,11 +241,16 @@ enum YAxis {
 /// `Auto` and they span more than [`LOG_RATIO`], from the power of ten
 /// below them to the one above, so that at least two labels (which a log
 /// axis puts at powers of ten) show; linear from 0 otherwise. A plot with
-/// no positive value gets the linear range 0 to 1.
+/// no positive value gets the linear range 0 to 1. The axis is finite
+/// whatever the values: it spans at most [`MAX_DECADES`] powers of ten below
+/// the largest value, and values near `f64::MAX` are cut at
+/// [`crate::figures::MAX_FIGURE`], so that no axis has infinitely many ticks.
 fn y_axis(values: impl Iterator<Item = f64>, scale: TimeScale) -> YAxis {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
+        .map(|v| v.min(crate::figures::MAX_FIGURE))
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let lo = lo.max(hi / 10f64.powi(MAX_DECADES));
     if hi <= 0.0 {
         YAxis::Linear(1.0)
     } else if scale == TimeScale::Log || (scale == TimeScale::Auto && hi / lo > LOG_RATIO) {
@@ -553,5 +561,19 @@ mod tests {
         assert_eq!(y_axis([0.0, 1.0, 2.0].into_iter(), Log), YAxis::Log(0.1, 10.0));
         assert_eq!(y_axis([20.0, 30.0].into_iter(), Log), YAxis::Log(10.0, 100.0));
         assert_eq!(y_axis([0.0, -3.0].into_iter(), Log), YAxis::Linear(1.0));
+    }
+
+    #[test]
+    fn every_axis_is_finite_and_spans_a_bounded_number_of_decades() {
+        let extremes = [f64::MAX, 5e-324, f64::MIN_POSITIVE, 1.0];
+        for scale in [TimeScale::Auto, TimeScale::Linear, TimeScale::Log] {
+            match y_axis(extremes.into_iter(), scale) {
+                YAxis::Linear(top) => assert!(top.is_finite() && top > 0.0, "{top}"),
+                YAxis::Log(lo, hi) => {
+                    assert!(lo > 0.0 && hi.is_finite(), "{lo} {hi}");
+                    assert!((hi / lo).log10() <= f64::from(MAX_DECADES) + 2.0, "{lo} {hi}");
+                }
+            }
+        }
     }
 }

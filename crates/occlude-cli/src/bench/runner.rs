@@ -336,10 +336,12 @@ pub fn far_plane(scene: &Scene) -> f32 {
 }
 
 /// The walkthrough's cameras for `scene` at the configured resolution,
-/// sampled as configured ([`BenchConfig::sampling`]).
-pub fn cameras(scene: &Scene, config: &BenchConfig) -> Vec<Camera> {
+/// sampled as configured ([`BenchConfig::sampling`]) and checked by
+/// [`crate::camera_path::cameras`] (bounded in number, each able to render).
+pub fn cameras(scene: &Scene, config: &BenchConfig) -> Result<Vec<Camera>> {
     let (w, h) = config.resolution;
-    scene.path.sample_with(config.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
+    crate::camera_path::cameras(&scene.path, config.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
+        .with_context(|| format!("scene '{}'", scene.name))
 }
 
 /// Generates or imports the scene (an import error stays an
@@ -406,7 +408,7 @@ fn run_scene_here(
     let mut hierarchy = stage(progress, &format!("building the {}", config.hierarchy), || {
         Hierarchy::build(scene, config.hierarchy, config.build)
     });
-    let cameras = cameras(scene, config);
+    let cameras = cameras(scene, config)?;
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
     let times = scene.path.frame_times(config.sampling());
     let motion = (config.motion > 0.0).then(|| SceneMotion::new(scene, config.motion, config.seed));
@@ -597,7 +599,7 @@ mod tests {
         // Three threads, so that lanes overlap even on a one-core machine.
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
         let mut drawn = 0;
-        for camera in cameras(&scene, &config) {
+        for camera in cameras(&scene, &config).unwrap() {
             pool.install(|| side_by_side.frame(&scene, &hierarchy, &camera)).unwrap();
             one_by_one.frame(&scene, &hierarchy, &camera).unwrap();
             for (a, b) in side_by_side.iter().zip(one_by_one.iter()) {
@@ -631,7 +633,7 @@ mod tests {
         lanes.push(Lane::new(ideal(), backend(Draws::Replay(counts))), Some(1));
         lanes.push(Lane::new(ideal(), backend(Draws::Own)), Some(1));
         let mut fragments = 0;
-        for camera in cameras(&scene, &config) {
+        for camera in cameras(&scene, &config).unwrap() {
             lanes.frame(&scene, &hierarchy, &camera).unwrap();
             let (replayed, rasterized) = (&lanes.chains[1][1], &lanes.chains[1][2]);
             assert_eq!(simulated(replayed.stats), simulated(rasterized.stats));

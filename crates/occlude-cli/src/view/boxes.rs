@@ -231,7 +231,9 @@ impl BoxRenderer {
     }
 
     /// Encodes drawing `geometry` seen by `camera` over `target`: faces
-    /// first, outlines over them.
+    /// first, outlines over them. Either may be empty (a frame where every
+    /// box is visible has no faces): only a part with vertices is uploaded
+    /// and drawn, as a vertex buffer may not be empty.
     pub fn draw(
         &self,
         device: &wgpu::Device,
@@ -241,26 +243,28 @@ impl BoxRenderer {
         camera: &Camera,
         geometry: &BoxGeometry,
     ) {
-        if geometry.edges.is_empty() {
+        let parts: Vec<_> = [(&self.faces, &geometry.faces), (&self.edges, &geometry.edges)]
+            .into_iter()
+            .filter(|(_, vertices)| !vertices.is_empty())
+            .map(|(pipeline, vertices)| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("box vertices"),
+                    contents: bytemuck::cast_slice(vertices),
+                    usage: wgpu::BufferUsages::VERTEX,
+                });
+                (pipeline, buffer, vertices.len() as u32)
+            })
+            .collect();
+        if parts.is_empty() {
             return;
         }
         queue.write_buffer(&self.camera, 0, bytemuck::cast_slice(&camera.view_projection().to_cols_array()));
-        let upload = |vertices: &[BoxVertex]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("box vertices"),
-                contents: bytemuck::cast_slice(vertices),
-                usage: wgpu::BufferUsages::VERTEX,
-            })
-        };
-        let (faces, edges) = (upload(&geometry.faces), upload(&geometry.edges));
         let mut pass = draw_over(encoder, target, "query boxes");
         pass.set_bind_group(0, &self.group, &[]);
-        for (pipeline, buffer, count) in
-            [(&self.faces, &faces, geometry.faces.len()), (&self.edges, &edges, geometry.edges.len())]
-        {
+        for (pipeline, buffer, count) in &parts {
             pass.set_pipeline(pipeline);
             pass.set_vertex_buffer(0, buffer.slice(..));
-            pass.draw(0..count as u32, 0..1);
+            pass.draw(0..*count, 0..1);
         }
     }
 }
@@ -269,6 +273,50 @@ impl BoxRenderer {
 mod tests {
     use super::*;
     use glam::Vec3;
+
+    /// Drawing never binds an empty vertex buffer: a frame whose boxes are
+    /// all visible (outlines, no faces) and one without boxes draw on a real
+    /// device (lavapipe will do) without wgpu's validation failing. Skipped
+    /// without an adapter unless `OCCLUDE_REQUIRE_GPU=1`.
+    #[test]
+    fn boxes_draw_whichever_of_faces_and_outlines_is_empty() {
+        let ctx = match occlude_wgpu::GpuContext::new() {
+            Ok(ctx) => ctx,
+            Err(e) if std::env::var("OCCLUDE_REQUIRE_GPU").is_ok_and(|v| v == "1") => panic!("no adapter: {e}"),
+            Err(e) => return eprintln!("skipping: no GPU adapter ({e})"),
+        };
+        let format = wgpu::TextureFormat::Rgba8Unorm;
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("boxes test"),
+            size: wgpu::Extent3d { width: 16, height: 16, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let target = texture.create_view(&Default::default());
+        let renderer = BoxRenderer::new(&ctx.device, format);
+        let eye = occlude_core::Keyframe {
+            time: 0.0,
+            position: Vec3::new(0.5, 0.5, 5.0),
+            target: Vec3::ZERO,
+            fov_y_deg: 60.0,
+        };
+        let camera = eye.camera(1.0, 0.1, 100.0);
+        let unit = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let shown = |outcome| ShownBox { aabb: &unit, outcome, level: None };
+        for boxes in [vec![shown(QueryOutcome::Visible)], vec![], vec![shown(QueryOutcome::Occluded)]] {
+            let geometry = geometry(boxes, Colouring::Outcome);
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            renderer.draw(&ctx.device, &ctx.queue, &mut encoder, &target, &camera, &geometry);
+            ctx.queue.submit([encoder.finish()]);
+            ctx.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+            let failure = ctx.failure();
+            assert!(failure.is_none(), "{} faces, {} edges: {failure:?}", geometry.faces.len(), geometry.edges.len());
+        }
+    }
 
     #[test]
     fn every_box_gets_its_faces_and_edges_in_its_outcome_colour() {

@@ -59,7 +59,7 @@ pub fn write(path: &CameraPath, file: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::config::load_camera_path;
+    use crate::camera_path::load as load_camera_path;
     use glam::Vec3;
     use occlude_core::Keyframe;
 

@@ -19,6 +19,7 @@ pub fn cameras_from_matrices(scene: &Scene, cfg: &BenchConfig) -> Vec<(&'static 
     let half_height = scene.bounds().extent().length() * 0.1;
     let far = far_plane(scene);
     cameras(scene, cfg)
+        .unwrap()
         .into_iter()
         .flat_map(|c| {
             let fov = c.fov_y_deg.to_radians();

@@ -117,7 +117,8 @@ const LEVEL: &str = "a depth N >= 0, 'deepest' or 'deepest-K'";
 
 impl IocParams {
     /// Reads `ioc.start` and `ioc.bottom`; a start below the bottom, when
-    /// both count from the same end, is an error naming both.
+    /// both count from the same end, is an error naming both (not with
+    /// `ioc.auto`, which chooses the start itself, so `ioc.start` is unused).
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
         let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
         let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
@@ -128,7 +129,7 @@ impl IocParams {
             (Level::AboveDeepest(s), Level::AboveDeepest(b)) => s < b,
             _ => false,
         };
-        if inverted {
+        if inverted && !auto {
             return Err(OptionError::BadValue {
                 method: "ioc".into(),
                 key: "start".into(),
@@ -177,14 +178,15 @@ impl IterativeOcclusion {
 }
 
 /// The start and bottom depths of `params` in `h`, clamped to its depth,
-/// and a warning for each depth clamped.
+/// and a warning for each depth clamped (none for the start with
+/// `ioc.auto`, which does not use it).
 fn resolve_depths(params: &IocParams, h: &Hierarchy) -> ((u32, u32), Vec<String>) {
     let mut warnings = Vec::new();
     let deepest = h.max_depth();
     let (mut start, start_clamped) = params.start.resolve(deepest);
     let (bottom, bottom_clamped) = params.bottom.resolve(deepest);
     for (key, level, clamped) in [("start", params.start, start_clamped), ("bottom", params.bottom, bottom_clamped)] {
-        if clamped {
+        if clamped && !(key == "start" && params.auto) {
             warnings.push(format!(
                 "ioc.{key} = {level} is past the hierarchy's depth {deepest}: using {}",
                 if key == "start" { start } else { bottom }
@@ -192,10 +194,12 @@ fn resolve_depths(params: &IocParams, h: &Hierarchy) -> ((u32, u32), Vec<String>
         }
     }
     if start > bottom {
-        warnings.push(format!(
-            "ioc.start = {} (depth {start}) lies below ioc.bottom = {} (depth {bottom}) in this hierarchy: starting at {bottom}",
-            params.start, params.bottom
-        ));
+        if !params.auto {
+            warnings.push(format!(
+                "ioc.start = {} (depth {start}) lies below ioc.bottom = {} (depth {bottom}) in this hierarchy: starting at {bottom}",
+                params.start, params.bottom
+            ));
+        }
         start = bottom;
     }
     ((start, bottom), warnings)
@@ -448,6 +452,7 @@ mod tests {
         assert!(err.contains("ioc.start = 7") && err.contains("ioc.bottom = 5"), "{err}");
         let err = read(&["ioc.start=deepest-1", "ioc.bottom=deepest-3"]).unwrap_err().to_string();
         assert!(err.contains("ioc.start = deepest-1") && err.contains("ioc.bottom = deepest-3"), "{err}");
+        assert!(read(&["ioc.auto=on", "ioc.bottom=0"]).is_ok(), "with ioc.auto the start is not ioc.start");
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! GLB chunks, buffers and accessors are read here, with every byte range
 //! checked against the bytes really present.
 
-use super::{Builder, LoadError};
+use super::{referenced, Builder, LoadError};
 use base64::Engine;
 use glam::{Mat4, Vec3};
 use gltf::accessor::sparse::IndexType;
@@ -34,7 +34,8 @@ pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Resul
     let buffers = load_buffers(builder, &document, blob)?;
     let default_material = document.materials().len() as u32;
 
-    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+    let scene = document.default_scene().or_else(|| document.scenes().next());
+    let roots: Vec<gltf::Node> = match &scene {
         Some(scene) => scene.nodes().collect(),
         None => {
             let mut is_child = vec![false; document.nodes().len()];
@@ -65,6 +66,13 @@ pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Resul
             }
         }
         stack.extend(node.children().collect::<Vec<_>>().into_iter().rev().map(|c| (c, world)));
+    }
+    // Without a scene every node is a root or below one, unless some nodes
+    // are each other's children: a cycle, which no root reaches.
+    if let (None, Some(node)) = (scene, visited.iter().position(|v| !v)) {
+        return Err(builder.invalid(format!(
+            "node {node} is in a cycle of children (no root reaches it): the node hierarchy is not a tree"
+        )));
     }
     Ok(())
 }
@@ -146,7 +154,8 @@ struct Buffers<'b> {
 }
 
 /// The bytes of every buffer of `document`: the GLB binary chunk, a base64
-/// data URI, or a file beside the model (its URI percent-decoded); each at
+/// data URI, or a file inside the model's folder (its URI percent-decoded,
+/// resolved by [`referenced`], at most its declared length read); each at
 /// least its declared length.
 fn load_buffers<'b>(builder: &Builder, document: &Document, blob: Option<&'b [u8]>) -> Result<Buffers<'b>, LoadError> {
     let bytes = document
@@ -168,10 +177,12 @@ fn load_buffers<'b>(builder: &Builder, document: &Document, blob: Option<&'b [u8
                 }
                 gltf::buffer::Source::Uri(uri) => {
                     let relative = percent_decode(uri).map_err(|e| builder.invalid(format!("buffer {i}: {e}")))?;
-                    let file = builder.path.parent().unwrap_or(std::path::Path::new("")).join(relative);
-                    std::fs::read(&file)
-                        .map_err(|reason| LoadError::MissingFile { path: builder.path.clone(), file, reason })?
-                        .into()
+                    // Only the declared bytes are read: a longer file (or a
+                    // device, which `referenced` refuses anyway) cannot make
+                    // the import allocate more than the model declares.
+                    let (bytes, _) = referenced::read_up_to(&builder.path, &relative, buffer.length() as u64)
+                        .map_err(|refused| builder.refused(&format!("buffer {i}"), refused))?;
+                    bytes.into()
                 }
             };
             if data.len() < buffer.length() {

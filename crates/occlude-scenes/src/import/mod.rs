@@ -13,13 +13,19 @@
 //! bad input gives a [`LoadError`] naming the file and the problem, never a
 //! panic, and nothing is allocated from a size a file claims, only from the
 //! bytes it really has (the one exception, sparse glTF accessors on a base of
-//! zeros, is capped per file). Placed meshes must stay within
+//! zeros, is capped per file). The files a model refers to (glTF buffers,
+//! OBJ material libraries) are read only inside the model's folder, only
+//! when they are regular files, and only up to the size declared (a glTF
+//! buffer's `byteLength`) or [`MAX_MATERIAL_BYTES`]; OBJ face indices are
+//! checked before `tobj` reads them. Placed meshes must stay within
 //! [`MAX_COORDINATE`] of the origin; meshes without triangles are left out.
 //! Both importers are fuzzed (`fuzz/` at the workspace root).
 
 mod autopath;
 mod gltf;
 mod obj;
+mod obj_indices;
+mod referenced;
 mod split;
 use crate::{generate, GenerateError, Size, SCENE_NAMES};
 use glam::{Mat4, Vec3};
@@ -33,6 +39,13 @@ use thiserror::Error;
 /// overflow from about 1e19; 1e9 m (beyond the Moon's orbit) leaves room
 /// for any real model, even in millimetres or geocentric coordinates.
 pub const MAX_COORDINATE: f32 = 1e9;
+
+/// The largest model file read, bytes (4 GiB; a GLB's header cannot
+/// address more).
+pub const MAX_MODEL_BYTES: u64 = 4 << 30;
+
+/// The largest OBJ material library (`.mtl`) read, bytes.
+pub const MAX_MATERIAL_BYTES: u64 = 64 << 20;
 
 /// The file extensions [`load`] imports, lower case, without the dot.
 pub const MODEL_EXTENSIONS: [&str; 3] = ["gltf", "glb", "obj"];
@@ -116,7 +129,8 @@ pub enum LoadError {
         /// What the system said.
         reason: io::Error,
     },
-    /// A file the model refers to (a glTF buffer) cannot be read.
+    /// A file the model refers to (a glTF buffer) cannot be read: it is
+    /// missing, or not a regular file.
     #[error("{}: cannot read its buffer file {}: {reason}", path.display(), file.display())]
     MissingFile {
         /// The model file.
@@ -139,7 +153,8 @@ pub enum LoadError {
     },
     /// The file is well formed but its data is not usable (a byte range
     /// outside its buffer, an index past the vertices, a non-finite position
-    /// or transform, a node hierarchy that is not a tree).
+    /// or transform, a node hierarchy that is not a tree, a buffer or
+    /// material file outside the model's folder).
     #[error("{}: {problem}", path.display())]
     Invalid {
         /// The model file.
@@ -241,7 +256,8 @@ pub fn load(name_or_path: &str, size: Size, seed: u64, options: &ImportOptions) 
 /// Imports the model file `path` of `format`, checked by
 /// [`Scene::validate`], with its automatic walkthrough.
 pub fn import(path: &Path, format: ModelFormat, options: &ImportOptions) -> Result<Imported, LoadError> {
-    let bytes = std::fs::read(path).map_err(|reason| LoadError::Io { path: path.to_path_buf(), reason })?;
+    let bytes = occlude_core::input_file::read(path, MAX_MODEL_BYTES)
+        .map_err(|reason| LoadError::Io { path: path.to_path_buf(), reason })?;
     import_bytes(path, &bytes, format, options)
 }
 
@@ -279,6 +295,17 @@ impl Builder {
     /// Error `problem` about the file being imported.
     fn invalid(&self, problem: impl Into<String>) -> LoadError {
         LoadError::Invalid { path: self.path.clone(), problem: problem.into() }
+    }
+
+    /// Error: the file `what` refers to (`buffer 2`) was refused or cannot
+    /// be read.
+    fn refused(&self, what: &str, refused: referenced::Refused) -> LoadError {
+        match refused {
+            referenced::Refused::Reference(why) => self.invalid(format!("{what}: {why}")),
+            referenced::Refused::Unreadable(file, reason) => {
+                LoadError::MissingFile { path: self.path.clone(), file, reason }
+            }
+        }
     }
 
     /// Error: the file is not well-formed `format`.
