@@ -195,8 +195,15 @@ impl Hierarchy {
             }
         }
         // Children have higher ids than their parent: refit in decreasing id
-        // order and every child is done before its parent.
-        dirty.sort_unstable_by(|a, b| b.cmp(a));
+        // order and every child is done before its parent. Many dirty nodes
+        // are found by a scan of the flags, cheaper than sorting them.
+        let visited = dirty.len();
+        if visited > self.nodes.len() / 16 {
+            dirty.clear();
+            dirty.extend((0..self.nodes.len() as NodeId).rev().filter(|&n| self.dirty[n as usize]));
+        } else {
+            dirty.sort_unstable_by(|a, b| b.cmp(a));
+        }
         self.changes.nodes.clear();
         for &n in &dirty {
             self.dirty[n as usize] = false;
@@ -217,7 +224,7 @@ impl Hierarchy {
         self.changes.instances.clear();
         self.changes.instances.extend_from_slice(changed);
         self.version.refit += 1;
-        dirty.len()
+        visited
     }
 
     /// Brings the tree up to date with `scene` after `changed` instances
@@ -302,6 +309,13 @@ mod tests {
         assert_eq!(h.since(None), Since::New);
         h.refit(&scene, &[]);
         assert_eq!(h.since(Some(before)), Since::Refit(None), "two refits since: any box");
+        // One instance of many: few dirty nodes, refitted in sorted order
+        // rather than found by a scan.
+        let one = [InstanceChange::Move { instance: 5, transform: Mat4::from_translation(Vec3::splat(60.0)) }];
+        let changed = scene.apply(&one).unwrap();
+        let visited = h.refit(&scene, &changed);
+        assert!(visited > 0 && visited <= h.node_count() / 16, "{visited} of {} nodes", h.node_count());
+        assert_tight_and_nested(&scene, &h);
     }
 
     #[test]
