@@ -120,6 +120,7 @@ impl IocParams {
     /// both count from the same end, is an error naming both (not with
     /// `ioc.auto`, which chooses the start itself, so `ioc.start` is unused).
     pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
+        let start_given = r.is_set("start");
         let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
         let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
         let frustum = r.flag("frustum", true)?;
@@ -130,12 +131,13 @@ impl IocParams {
             _ => false,
         };
         if inverted && !auto {
-            return Err(OptionError::BadValue {
-                method: "ioc".into(),
-                key: "start".into(),
-                value: start.to_string(),
-                expected: format!("a level no deeper than ioc.bottom = {bottom}"),
-            });
+            // Blame the one the user set: a default is nobody's mistake.
+            let (key, value, expected) = if start_given {
+                ("start", start.to_string(), format!("a level no deeper than ioc.bottom = {bottom}"))
+            } else {
+                ("bottom", bottom.to_string(), format!("a level no shallower than ioc.start = {start} (its default)"))
+            };
+            return Err(OptionError::BadValue { method: "ioc".into(), key: key.into(), value, expected });
         }
         Ok(Self { start, bottom, frustum, auto })
     }
@@ -450,6 +452,8 @@ mod tests {
     fn a_start_below_the_bottom_names_both() {
         let err = read(&["ioc.start=7", "ioc.bottom=5"]).unwrap_err().to_string();
         assert!(err.contains("ioc.start = 7") && err.contains("ioc.bottom = 5"), "{err}");
+        let err = read(&["ioc.bottom=0"]).unwrap_err().to_string();
+        assert!(err.contains("ioc.bottom = 0") && err.contains("ioc.start = 4 (its default)"), "{err}");
         let err = read(&["ioc.start=deepest-1", "ioc.bottom=deepest-3"]).unwrap_err().to_string();
         assert!(err.contains("ioc.start = deepest-1") && err.contains("ioc.bottom = deepest-3"), "{err}");
         assert!(read(&["ioc.auto=on", "ioc.bottom=0"]).is_ok(), "with ioc.auto the start is not ioc.start");

@@ -123,6 +123,12 @@ impl OptionReader {
         Ok(value)
     }
 
+    /// Whether the user gave `key` (before it is read): an error about two
+    /// parameters then names the one the user set, not a default.
+    pub fn is_set(&self, key: &str) -> bool {
+        self.values.contains_key(key)
+    }
+
     /// A boolean switch (`true`/`false`, `on`/`off`, `1`/`0`).
     pub fn flag(&mut self, key: &'static str, default: bool) -> Result<bool, OptionError> {
         self.known.push(key);
