@@ -1,9 +1,9 @@
 //! Scenes in motion: what a renderer tells occlude once per frame.
 //!
 //! Online occlusion culling needs no preprocessing, so it "allows for fully
-//! dynamic scenes" (CHC++ paper, section 2), provided "the bounding box
-//! hierarchy of the scene graph [is] up to date in each frame"
-//! (occupancy-map paper, section 1). A frame of a moving scene is:
+//! dynamic scenes" (CHC++ paper, section 2); the occupancy-map paper
+//! (section 1) asks only that "the bounding box hierarchy of the scene graph
+//! has to be up to date in each frame". A frame of a moving scene is:
 //!
 //! 1. [`Scene::apply`] the frame's [`InstanceChange`]s (rigid motion of
 //!    whole instances, hiding and showing them): every change is checked
