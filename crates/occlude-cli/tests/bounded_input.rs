@@ -112,6 +112,9 @@ fn walkthroughs_too_long_or_through_their_target_are_refused() {
     // Halfway, at frame 15 of 31, position and target meet.
     let through = short_run("all", &["--camera-path", &swap]);
     assert_usage_error(&str_args(&through), &["frame 15", "passes through its target"]);
+    // The viewer refuses the walkthrough it would play, before any window.
+    let view = ["view", "--camera-path", &swap, "--record", "unused.json", "--play"];
+    assert_usage_error(&view, &["frame 15", "passes through its target"]);
 }
 
 /// Files first, table second: with standard output closed before the run

@@ -10,7 +10,9 @@ use super::path_recorder::{self, PathRecorder};
 use super::present::{Blit, Presenter};
 use super::{ViewConfig, ViewError};
 use crate::bench::config::NEAR_PLANE;
-use crate::bench::runner::{far_plane, load_scene};
+use crate::bench::runner::{cameras, far_plane, load_scene};
+use crate::bench::BenchConfig;
+use crate::limits::MAX_FRAMES;
 use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, METHOD_NAMES};
@@ -38,12 +40,22 @@ const MAX_STEP: f32 = 0.25;
 /// Opens the window system, loads the scene and runs the viewer until its
 /// window closes.
 pub(super) fn run(config: &ViewConfig) -> Result<()> {
-    let event_loop = open_event_loop()?;
     let scene = load_scene(&config.scene)?;
+    // The walkthrough as `--play` shows it, checked as bench checks its
+    // frames: a path through its target is refused, naming the frame.
+    if !scene.path.keyframes.is_empty() {
+        let played = BenchConfig { fps: Some(PLAYBACK_CHECK_FPS), frames: MAX_FRAMES, ..config.scene.clone() };
+        cameras(&scene, &played)?;
+    }
+    let event_loop = open_event_loop()?;
     let mut viewer = Viewer::new(&scene, config)?;
     event_loop.run_app(&mut viewer).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
     viewer.finish()
 }
+
+/// The frame rate at which the walkthrough's cameras are checked before
+/// it plays (playback itself follows the clock).
+const PLAYBACK_CHECK_FPS: f32 = 30.0;
 
 /// The event loop, or [`ViewError::NoDisplay`]. winit reports a missing
 /// display as an error but panics on some broken ones (an X server without
