@@ -185,7 +185,7 @@ struct BenchArgs {
     /// titled with the paper's figure.
     #[arg(long, value_parser = parse_output_path)]
     plot: Option<PathBuf>,
-    /// Plot queries and state changes per frame (.svg or .png; with --paper,
+    /// Plot queries, state changes and material switches per frame (.svg or .png; with --paper,
     /// one per scene, named as --plot's).
     #[arg(long, value_parser = parse_output_path)]
     plot_queries: Option<PathBuf>,

@@ -7,7 +7,8 @@
 //! comparison table of `occlude bench`, for the GPU-driven methods (`roc`,
 //! `ioc`, `hiz`: compute dispatches) their culling passes, and two plots
 //! over the walkthrough:
-//! frame times, and queries and state changes (the CHC++ paper's Figure 10).
+//! frame times, and queries, state changes and material switches (the CHC++
+//! paper's Figure 10).
 //! The HTML page needs nothing beside it (inline CSS, inline SVG), so it can be
 //! mailed or attached to an issue as one file. Both renderings are made from
 //! the same list of `Block`s, so they cannot drift apart.
@@ -384,6 +385,7 @@ mod tests {
             wait_ms_per_frame: 0.1,
             draw_calls_per_frame: 40.0,
             state_changes_per_frame: 9.5,
+            material_switches_per_frame: 3.5,
             triangles_per_frame: 12345.0,
             visible_objects_per_frame: 30.0,
             missing_pixels: 0,
@@ -447,6 +449,9 @@ mod tests {
         // The simulated times are labelled so, as in the text table.
         assert!(page.contains("<th>sim ms</th>") && page.contains("sim = simulated GPU clock"));
         assert!(page.contains("<td>3.33</td>"), "chcpp's speedup over vfc (20 / 6) is missing");
+        // State changes and material switches, each in a column of its own.
+        assert!(page.contains("<th>states</th><th>materials</th>"), "{page}");
+        assert!(page.contains("<td>9.5</td><td>3.5</td>"), "state changes and material switches missing");
     }
 
     /// A GPU-driven method's passes get their own table (early = GPU

@@ -1,12 +1,13 @@
 //! The correctness rule of `docs/design.md` on every frame of every `small` scene
 //! and of an imported building, for both hierarchies: conservative methods
-//! produce view-frustum culling's depth image bit for bit, and `opt` draws
-//! exactly the leaves holding an instance that the oracle sees.
+//! produce view-frustum culling's depth image bit for bit and never draw
+//! fewer triangles than `opt`, which draws exactly the instances the oracle
+//! sees (and with `opt.granularity=node` the leaves holding them).
 
 mod common;
 
 use indicatif::ProgressBar;
-use occlude_cli::bench::ideal::IDEAL;
+use occlude_cli::bench::ideal::IDEALS;
 use occlude_cli::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
 use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
@@ -36,25 +37,40 @@ fn small(scene: &str) -> Scene {
     s
 }
 
+/// Every method (and `opt.granularity=node`) on every frame of every small
+/// scene, both hierarchies: view-frustum culling's image, and no fewer
+/// triangles than `opt`.
 #[test]
 fn conservative_methods_match_vfc_on_every_frame() {
     for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
-            // `ideal` (the CHC paper's ideal) is no method of its own: the
-            // runner records the draw calls `sw` makes in the frame and
-            // `ideal` replays them on its own backend, without queries. Its
-            // depth image checked against vfc's, as every lane's is, checks
-            // that the replay draws the whole of `sw`'s visible set.
+            // `ideal` (the CHC paper's ideal) and `ideal-sorted` (the CHC++
+            // paper's OPT) are no methods of their own: the runner records
+            // the draw calls `sw` makes in the frame and they draw them on
+            // backends of their own, without queries. Their depth images
+            // checked against vfc's, as every lane's is, check that they
+            // draw the whole of `sw`'s visible set.
             let mut cfg = config(name, hierarchy);
-            cfg.methods.push(IDEAL.into());
-            let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
-            assert_eq!(run.methods.last().map(|m| m.name.as_str()), Some(IDEAL));
-            for m in &run.methods {
+            cfg.methods = METHOD_NAMES.map(String::from).to_vec();
+            cfg.methods.extend(IDEALS.map(String::from));
+            let leaves =
+                Variant { method: "opt".into(), options: MethodOptions::parse(&["opt.granularity=node"]).unwrap() };
+            let run = run_scene_with_variants(&scene, &cfg, &[leaves], &ProgressBar::hidden()).unwrap();
+            assert_eq!(run.methods.last().map(|m| m.name.as_str()), IDEALS.last().copied());
+            for m in run.methods.iter().chain(&run.variants) {
                 for (f, stats) in m.frames.iter().enumerate() {
                     assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
                 }
             }
+            common::assert_opt_is_a_lower_bound(&run, &format!("{name}/{hierarchy}"));
+            // View-frustum culling makes no state change (it never
+            // queries), only material switches; the methods that query do
+            // make state changes.
+            assert!(run.reference.iter().all(|f| f.state_changes == 0), "{name}/{hierarchy}: vfc");
+            assert!(run.reference.iter().any(|f| f.material_switches > 0), "{name}/{hierarchy}: vfc");
+            let changes = |m: usize| run.methods[m].frames.iter().map(|f| f.state_changes).sum::<u64>();
+            assert!(changes(1) > 0 && changes(3) > 0, "{name}/{hierarchy}: sw and chcpp switch to queries");
             // The walkthrough must show something and let occlusion work.
             let vfc = &run.methods[0].frames;
             let sw = &run.methods[1].frames;
@@ -74,8 +90,10 @@ fn conservative_methods_match_vfc_on_every_frame() {
     }
 }
 
+/// `opt` draws exactly the instances the oracle sees, `opt.granularity=node`
+/// the leaves holding them, and `sw` draws them all too.
 #[test]
-fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
+fn opt_draws_exactly_what_the_oracle_sees_and_sw_draws_it_too() {
     for name in PAPER_SCENES {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
@@ -83,11 +101,12 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
             let h = Hierarchy::build(&scene, hierarchy, cfg.build);
             let (w, ht) = cfg.resolution;
             let mut oracle = SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone());
-            let mut lanes: Vec<_> = ["sw", "opt"]
+            let lanes: [(&str, &[&str]); 3] = [("sw", &[]), ("opt", &[]), ("opt", &["opt.granularity=node"])];
+            let mut lanes: Vec<_> = lanes
                 .iter()
-                .map(|m| {
+                .map(|&(m, opts)| {
                     (
-                        create(m, &Default::default()).unwrap().method,
+                        create(m, &MethodOptions::parse(opts).unwrap()).unwrap(),
                         SoftBackend::new(&scene, w, ht, cfg.gpu_model.clone()),
                         DrawnSet::default(),
                     )
@@ -96,7 +115,9 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
             for (f, camera) in cameras(&scene, &cfg).unwrap().iter().enumerate() {
                 let all: Vec<u32> = (0..scene.instances.len() as u32).collect();
                 let seen: HashSet<u32> = oracle.oracle(camera, &all).visible.into_iter().collect();
-                for (method, backend, drawn) in &mut lanes {
+                for (built, backend, drawn) in &mut lanes {
+                    let method = &mut built.method;
+                    let leaves = built.params.contains(&("granularity".to_string(), "node".to_string()));
                     let mut ctx = FrameContext::new(&scene, &h, *camera, drawn);
                     method.prepare(&mut ctx, backend);
                     backend.begin_frame(camera);
@@ -109,7 +130,14 @@ fn opt_draws_exactly_the_leaves_the_oracle_sees_and_sw_draws_them_too() {
                             method.name()
                         );
                     }
-                    if method.name() == "opt" {
+                    if method.name() == "opt" && !leaves {
+                        for i in (0..scene.instances.len() as u32).filter(|i| !seen.contains(i)) {
+                            assert!(
+                                !ctx.was_drawn(i),
+                                "{name}/{hierarchy}: frame {f}: opt drew {i}, which is not seen"
+                            );
+                        }
+                    } else if method.name() == "opt" {
                         // Nothing beyond the leaves that hold a seen instance.
                         let allowed: HashSet<u32> = (0..h.node_count() as u32)
                             .filter(|&n| h.is_leaf(n) && h.instances(n).iter().any(|i| seen.contains(i)))
@@ -485,7 +513,7 @@ fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
         let scene = small(name);
         let mut cfg = config(name, HierarchyKind::Bvh);
         cfg.methods = METHOD_NAMES.map(String::from).to_vec();
-        cfg.methods.push(IDEAL.into());
+        cfg.methods.extend(IDEALS.map(String::from));
         cfg.frames = 40;
         cfg.motion = 0.3;
         let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
@@ -495,6 +523,7 @@ fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
                 assert!(stats.instances_moved > 0, "{name}: nothing moved before frame {f}");
             }
         }
+        common::assert_opt_is_a_lower_bound(&run, &format!("{name} in motion"));
         let still = BenchConfig { motion: 0.0, methods: vec!["vfc".into()], ..cfg };
         let still = run_scene(&scene, &still, &ProgressBar::hidden()).unwrap();
         let tris = |r: &occlude_cli::bench::BenchRun| r.reference.iter().map(|f| f.triangles).collect::<Vec<_>>();

@@ -56,6 +56,9 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
                 assert_eq!(stats.missing_pixels, 0, "{name}/{hierarchy}/{}: frame {f} differs from vfc", m.name);
             }
         }
+        // No method draws fewer triangles than the instances owning a
+        // pixel (the GPU's oracle: `opt`).
+        common::assert_opt_is_a_lower_bound(&run, &format!("{name}/{hierarchy} on the GPU"));
         // Occlusion works on the GPU too: the occlusion methods draw less.
         // Not `ioc`: every object in view below a visible bottom node is
         // drawn, hidden or not, which can add up to more than vfc.

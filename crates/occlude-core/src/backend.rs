@@ -168,8 +168,10 @@ impl std::ops::AddAssign for CpuCullingWork {
 }
 
 /// The render state a command needs: a material for draws, the query state
-/// (depth writes off) for occlusion queries. Switching it between commands is
-/// a state change (CHC++ paper, section 4).
+/// (depth writes off) for occlusion queries. Switching between a drawing
+/// state and [`RenderState::Query`] is a state change as the CHC++ paper
+/// counts them (section 4); switching between two drawing states is a
+/// material switch ([`FrameCounter::set_state`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RenderState {
     /// Drawing with this material.
@@ -190,15 +192,21 @@ impl StateTracker {
     /// Moves to `state`; true when that is a change (setting the frame's
     /// first state is not).
     pub fn switch(&mut self, state: RenderState) -> bool {
-        let changed = self.0.is_some_and(|s| s != state);
+        self.switch_from(state).is_some()
+    }
+
+    /// Moves to `state`; the state it left when that is a change, `None`
+    /// otherwise (setting the frame's first state is no change).
+    pub fn switch_from(&mut self, state: RenderState) -> Option<RenderState> {
+        let left = self.0.filter(|&s| s != state);
         self.0 = Some(state);
-        changed
+        left
     }
 }
 
 /// The counts every backend keeps by the same rules while it records a
 /// frame: draw calls, triangles, distinct instances drawn, render-state
-/// changes, queries and their boxes, indirect draws and traversal steps. A
+/// changes (split into state changes and material switches), queries and their boxes, indirect draws and traversal steps. A
 /// backend adds its own figures (times, fragments, dispatches) to
 /// [`FrameCounter::stats`].
 #[derive(Clone, Debug, Default)]
@@ -223,11 +231,21 @@ impl FrameCounter {
     }
 
     /// Moves to render state `state`; true (and counted) when that is a
-    /// change.
+    /// change. A switch into or out of [`RenderState::Query`] counts in
+    /// `state_changes` (the CHC++ paper's state change: color and depth
+    /// writes disabled for queries, enabled again for drawing); a switch
+    /// between two drawing states (materials, indirect multi-draws) counts
+    /// in `material_switches`. Each change is one pipeline switch, so a
+    /// draw right after a query counts once, as a state change, whatever
+    /// material was drawn before the query.
     pub fn set_state(&mut self, state: RenderState) -> bool {
-        let changed = self.state.switch(state);
-        self.stats.state_changes += u64::from(changed);
-        changed
+        let Some(left) = self.state.switch_from(state) else { return false };
+        if left == RenderState::Query || state == RenderState::Query {
+            self.stats.state_changes += 1;
+        } else {
+            self.stats.material_switches += 1;
+        }
+        true
     }
 
     /// Counts one draw call of instance `instance`, of `triangles`
@@ -292,5 +310,33 @@ impl OracleView {
     pub fn new(candidates: &[u32], pixels: Vec<u64>, depth: Vec<f32>, width: u32, height: u32) -> Self {
         let visible = candidates.iter().zip(&pixels).filter(|(_, &p)| p > 0).map(|(&i, _)| i).collect();
         Self { visible, pixels, depth, width, height }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Switches to and from queries are state changes, switches between
+    /// drawing states material switches; staying in a state, and the
+    /// frame's first state, neither.
+    #[test]
+    fn frame_counter_tells_state_changes_from_material_switches() {
+        let mut c = FrameCounter::new(4);
+        c.begin_frame();
+        let (a, b) = (RenderState::Material(0), RenderState::Material(1));
+        let changed: Vec<bool> = [a, a, b, RenderState::Query, RenderState::Query, a, RenderState::Indirect, b]
+            .into_iter()
+            .map(|s| c.set_state(s))
+            .collect();
+        assert_eq!(changed, [false, false, true, true, false, true, true, true]);
+        // Material 0 to 1, indirect and back to material 1: three material
+        // switches; into queries and out again: two state changes.
+        assert_eq!((c.stats.state_changes, c.stats.material_switches), (2, 3));
+        assert!(c.query(2), "a query after a draw is a state change");
+        assert_eq!((c.stats.state_changes, c.stats.material_switches, c.stats.queries), (3, 3, 1));
+        c.begin_frame();
+        assert!(!c.query(1), "the frame's first state is no change");
+        assert_eq!((c.stats.state_changes, c.stats.material_switches), (0, 0));
     }
 }

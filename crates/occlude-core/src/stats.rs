@@ -30,9 +30,16 @@ pub struct FrameStats {
     pub query_boxes: u64,
     /// Draw calls (one per instance drawn).
     pub draw_calls: u64,
-    /// Render-state changes: material switches and switches between
-    /// drawing and querying (CHC++ paper, section 4).
+    /// State changes as the CHC++ paper counts them (section 4): switches
+    /// between drawing and querying (occlusion queries or batched box
+    /// tests), each of which disables or re-enables color and depth writes.
+    /// View-frustum culling makes none.
     pub state_changes: u64,
+    /// Switches from one drawing state to another (one material to
+    /// another, or to or from an indirect multi-draw) with no query
+    /// between them; not counted in `state_changes`.
+    #[serde(default)]
+    pub material_switches: u64,
     /// Triangles submitted for drawing.
     pub triangles: u64,
     /// Pixels covered by drawn triangles (before the depth test).

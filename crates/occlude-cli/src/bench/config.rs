@@ -1,6 +1,6 @@
 //! What a benchmark run is asked to do, checked before any work starts.
 
-use super::ideal::{IDEAL, SOURCE};
+use super::ideal::{IDEALS, SOURCE};
 use anyhow::{bail, Result};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
@@ -142,14 +142,16 @@ impl BenchConfig {
         if self.methods.is_empty() {
             bail!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
         }
-        for m in self.methods.iter().filter(|m| m.as_str() != IDEAL) {
+        for m in self.methods.iter().filter(|m| !IDEALS.contains(&m.as_str())) {
             create(m, &self.options)?;
         }
-        if let Some(i) = self.methods.iter().position(|m| m == IDEAL) {
-            if !self.methods[..i].iter().any(|m| m == SOURCE) {
-                bail!("method {IDEAL} renders {SOURCE}'s visible set without queries: list {SOURCE} before it (e.g. --methods vfc,{SOURCE},{IDEAL})");
+        for ideal in IDEALS {
+            if let Some(i) = self.methods.iter().position(|m| m == ideal) {
+                if !self.methods[..i].iter().any(|m| m == SOURCE) {
+                    bail!("method {ideal} renders {SOURCE}'s visible set without queries: list {SOURCE} before it (e.g. --methods vfc,{SOURCE},{ideal})");
+                }
+                self.options.for_method(ideal).finish()?;
             }
-            self.options.for_method(IDEAL).finish()?;
         }
         self.options.check_methods(&self.methods)?;
         if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {

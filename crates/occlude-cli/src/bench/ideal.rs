@@ -1,17 +1,24 @@
-//! `ideal`: the CHC paper's "ideal" algorithm (Bittner et al. 2004, section
-//! 6.2), also the CHC++ paper's OPT (Mattausch et al. 2008, section 8): "the
-//! visible objects found by the S&W algorithm" rendered "without performing
-//! any visibility tests", the fastest any method can be on the same
-//! hierarchy.
+//! The papers' ideal methods, which draw the nodes stop-and-wait finds
+//! visible without any query:
+//!
+//! - `ideal`: the CHC paper's "ideal" algorithm (Bittner et al. 2004,
+//!   section 6.2): "the visible objects found by the S&W algorithm" rendered
+//!   "without performing any visibility tests", in `sw`'s own order.
+//! - `ideal-sorted`: the CHC++ paper's OPT (Mattausch et al. 2008, section
+//!   8): "only the visible nodes (recorded by S&W) without any occlusion
+//!   queries", here drawn in one batch through the material-sorted render
+//!   queue `chcpp` uses (`FrameContext::draw_instances` after a stable sort
+//!   by material), so that CHC++'s sorting gains nothing over it.
 //!
 //! The runner records the draw calls `sw` makes in a frame ([`DrawLog`], a
 //! backend that forwards everything and keeps the draws) and [`Ideal`]
-//! replays them in the same frame on its own backend: the same objects, in
-//! the same order and the same calls, with no query and no traversal. It is
-//! the paper's ideal, not the pixel-exact set of `opt`, which is kept beside
-//! it. On the soft backend, `ideal`'s backend takes the counts and image of
-//! `sw`'s instead of rasterizing the same draws again
-//! ([`occlude_soft::DrawReplay`], wired by the runner).
+//! draws them in the same frame on its own backend, with no query and no
+//! traversal: the same objects, and for `ideal` the same calls in the same
+//! order. Neither is the per-instance lower bound `opt`, which is kept
+//! beside them. On the soft backend, `ideal`'s backend takes the counts and
+//! image of `sw`'s instead of rasterizing the same draws again
+//! ([`occlude_soft::DrawReplay`], wired by the runner); `ideal-sorted`'s,
+//! drawing in another order, rasterizes its own.
 
 use occlude_core::{
     Aabb, Backend, Camera, CostModel, CpuCullingWork, CullingMethod, FrameContext, FrameStats, GpuCulling,
@@ -19,8 +26,14 @@ use occlude_core::{
 };
 use std::sync::{Arc, Mutex, PoisonError};
 
-/// The method's name, as `--methods` lists it.
+/// The CHC paper's ideal, as `--methods` lists it.
 pub const IDEAL: &str = "ideal";
+
+/// The CHC++ paper's OPT, as `--methods` lists it.
+pub const IDEAL_SORTED: &str = "ideal-sorted";
+
+/// The methods that draw [`SOURCE`]'s visible set, each listed after it.
+pub const IDEALS: [&str; 2] = [IDEAL, IDEAL_SORTED];
 
 /// The method whose visible set [`Ideal`] renders, listed before it.
 pub const SOURCE: &str = "sw";
@@ -100,27 +113,60 @@ impl<B: Backend + ?Sized> Backend for DrawLog<B> {
     }
 }
 
-/// `ideal`: replays the draw calls [`SOURCE`] made in this frame.
+/// `ideal` and `ideal-sorted`: draw the instances [`SOURCE`] drew in this
+/// frame, without queries.
 pub struct Ideal {
     calls: DrawCalls,
+    sorted: bool,
 }
 
 impl Ideal {
-    /// Replays what a [`DrawLog`] sharing `calls` recorded.
+    /// `ideal`: replays what a [`DrawLog`] sharing `calls` recorded, call by
+    /// call.
     pub fn new(calls: DrawCalls) -> Self {
-        Self { calls }
+        Self { calls, sorted: false }
+    }
+
+    /// `ideal-sorted`: draws the instances a [`DrawLog`] sharing `calls`
+    /// recorded in one batch ordered by material (stable, so `sw`'s order
+    /// within a material).
+    pub fn sorted(calls: DrawCalls) -> Self {
+        Self { calls, sorted: true }
+    }
+
+    /// The method called `name` (one of [`IDEALS`]) drawing what a
+    /// [`DrawLog`] sharing `calls` recorded.
+    pub fn named(name: &str, calls: DrawCalls) -> Self {
+        assert!(IDEALS.contains(&name), "not an ideal method: {name}");
+        if name == IDEAL_SORTED {
+            Self::sorted(calls)
+        } else {
+            Self::new(calls)
+        }
     }
 }
 
 impl CullingMethod for Ideal {
     fn name(&self) -> &'static str {
-        IDEAL
+        if self.sorted {
+            IDEAL_SORTED
+        } else {
+            IDEAL
+        }
     }
 
-    fn render(&mut self, _ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        for instances in lock(&self.calls).iter() {
-            backend.draw(instances);
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let calls = lock(&self.calls);
+        if !self.sorted {
+            for instances in calls.iter() {
+                backend.draw(instances);
+            }
+            return;
         }
+        let mut queue: Vec<u32> = calls.iter().flatten().copied().collect();
+        let instances = &ctx.scene.instances;
+        queue.sort_by_key(|&i| instances[i as usize].material);
+        ctx.draw_instances(backend, &queue);
     }
 }
 

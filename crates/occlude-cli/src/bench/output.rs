@@ -14,7 +14,7 @@ pub fn write_json<T: serde::Serialize + ?Sized>(report: &T, path: &Path) -> Resu
 }
 
 /// The CSV header row.
-pub const CSV_HEADER: &str = "method,frame,frame_ms,cpu_ms,gpu_ms,wait_ms,queries,query_boxes,draw_calls,state_changes,triangles,fragments,visible_objects,traversal_steps,missing_pixels,wall_ms";
+pub const CSV_HEADER: &str = "method,frame,frame_ms,cpu_ms,gpu_ms,wait_ms,queries,query_boxes,draw_calls,state_changes,triangles,fragments,visible_objects,traversal_steps,missing_pixels,wall_ms,material_switches";
 
 /// Writes one row per method and frame.
 pub fn write_csv(report: &BenchReport, path: &Path) -> Result<()> {
@@ -59,7 +59,7 @@ fn write_method_rows(w: &mut dyn Write, lead: &str, m: &MethodSummary) -> std::i
     for (i, f) in m.per_frame.iter().enumerate() {
         writeln!(
             w,
-            "{lead}{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{lead}{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.name,
             i,
             f.frame_ms,
@@ -75,7 +75,8 @@ fn write_method_rows(w: &mut dyn Write, lead: &str, m: &MethodSummary) -> std::i
             f.visible_objects,
             f.traversal_steps,
             f.missing_pixels,
-            f.wall_ms
+            f.wall_ms,
+            f.material_switches
         )?;
     }
     Ok(())

@@ -5,12 +5,18 @@
 //! whether the order of the methods agrees ([`super::paper_tables`]).
 //!
 //! - `chc` (Bittner et al. 2004, section 6): kD-tree, `gpu-2004`; Table 1
-//!   (VFC, S&W, CHC and the paper's ideal, S&W's visible set without queries
-//!   ([`super::ideal`]), with `opt` beside them) and Table 2 (CHC with
-//!   `tav` = 2, and with `tav` = 2 and `nvp` = 25).
+//!   (VFC, S&W, CHC and the paper's ideal, `ideal`: S&W's draws replayed
+//!   without queries ([`super::ideal`]), with `opt`, the per-instance lower
+//!   bound, beside them) and Table 2 (CHC with `tav` = 2, and with `tav` =
+//!   2 and `nvp` = 25).
 //! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
-//!   comparison of VFC, S&W, CHC, CHC++, the ideal (the paper's OPT) and
-//!   `opt`, and an ablation of CHC++'s components.
+//!   comparison of VFC, S&W, CHC, CHC++, NOHC, NOHC-OPT, the paper's OPT
+//!   (`ideal-sorted`: S&W's visible nodes drawn without queries through
+//!   the material-sorted render queue) and `opt`, and an ablation of
+//!   CHC++'s components.
+//!
+//! Each table of methods says under it which ideal it uses
+//! (`Experiment::ideals`).
 //! - `om` (Staneker, Bartz, Straßer): city and plant, BVH, `gpu-2004`, 800 x
 //!   600 (the paper's); single queries (`sw`) against multiple queries
 //!   without occupancy-map grouping and `om`.
@@ -33,7 +39,7 @@
 //! ran, so scenes run apart give the same rows as one whole run.
 
 use super::config::BenchConfig;
-use super::ideal::IDEAL;
+use super::ideal::{IDEAL, IDEAL_SORTED};
 use super::paper_tables::{PaperTables, Row, Table};
 use super::published;
 use super::runner::{run_scene, run_scene_with_variants, Variant};
@@ -67,6 +73,9 @@ struct Experiment {
     compared: &'static str,
     /// The method whose options the tables of variants vary.
     varied: &'static str,
+    /// Which definition of the ideal the compared table uses, printed under
+    /// it.
+    ideals: &'static str,
     /// The tables of variants of `varied`.
     variant_tables: &'static [VariantTable],
 }
@@ -117,6 +126,8 @@ const CHC: Experiment = Experiment {
     methods: &["vfc", "sw", "chc", IDEAL, "opt"],
     compared: "Table 1",
     varied: "chc",
+    ideals: "ideal: the CHC paper's (section 6.2), S&W's draws replayed without queries, in S&W's order; \
+             opt (not in the paper): the per-instance lower bound, the instances owning a pixel, sorted by material",
     variant_tables: &[VariantTable {
         name: "Table 2",
         variants: &[("", &[]), ("", &["chc.tav=2"]), ("", &["chc.tav=2", "chc.nvp=25"])],
@@ -129,9 +140,12 @@ const CHCPP: Experiment = Experiment {
     scenes: CHC_SCENES,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::modern,
-    methods: &["vfc", "sw", "chc", "chcpp", "nohc", "nohc-opt", IDEAL, "opt"],
+    methods: &["vfc", "sw", "chc", "chcpp", "nohc", "nohc-opt", IDEAL_SORTED, "opt"],
     compared: "methods compared",
     varied: "chcpp",
+    ideals: "ideal-sorted: the CHC++ paper's OPT (section 8), the nodes S&W finds visible drawn without queries \
+             through chcpp's material-sorted render queue; opt (not in the paper): the per-instance lower bound, \
+             the instances owning a pixel, sorted by material",
     variant_tables: &[
         VariantTable {
             name: "ablation",
@@ -159,6 +173,7 @@ const OM: Experiment = Experiment {
     methods: &["vfc", "sw", "om", "opt"],
     compared: "methods compared",
     varied: "om",
+    ideals: "opt (not in the paper): the per-instance lower bound, the instances owning a pixel, sorted by material",
     variant_tables: &[VariantTable { name: "variants", variants: &[("", &[]), ("", &["om.grouping=off"])] }],
 };
 
@@ -336,6 +351,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
     }
     let mut tables = vec![Table::new(e.compared, published, compared)];
     let mut text = tables[0].render(e.title);
+    let _ = writeln!(text, "ideal rows: {}", e.ideals);
     text.push_str(&published::claims_text(e.paper, &tables[0].rows));
     for (table, rows) in e.variant_tables.iter().zip(varied) {
         let t = Table::new(table.name, published::table(e.paper, table.name), rows);
@@ -371,6 +387,8 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Resul
     );
     let mut figure = String::from(
         "IOC poster — Figure 4: frame time per frame, ms (the poster's chart gives no figures)\n\
+         ideal row: opt, the per-instance lower bound (the instances owning a pixel, sorted by material; \
+         not the poster's)\n\
          scene          method  frame ms  speedup vs vfc  rendered triangles  missing px\n",
     );
     let mut reports = Vec::new();
@@ -507,7 +525,18 @@ mod tests {
         let names: Vec<&str> = result.tables.tables.iter().map(|t| t.name.as_str()).collect();
         assert_eq!(names, ["methods compared", "ablation", "Figure 8"]);
         let [compared, ablation, figure8] = &result.tables.tables[..] else { unreachable!() };
-        assert_eq!(compared.rows.len(), 3 * 8, "3 scenes x vfc, sw, chc, chcpp, nohc, nohc-opt, ideal, opt");
+        assert_eq!(compared.rows.len(), 3 * 8, "3 scenes x vfc, sw, chc, chcpp, nohc, nohc-opt, ideal-sorted, opt");
+        // The paper's OPT: S&W's visible set, no query, so no state change,
+        // and no more material switches than the materials it draws.
+        for scene in CHC_SCENES {
+            let row = |m: &str| compared.rows.iter().find(|r| r.scene == *scene && r.method == m).unwrap();
+            let (sw, opt) = (row("sw"), row(IDEAL_SORTED));
+            assert_eq!((opt.triangles, opt.queries, opt.state_changes), (sw.triangles, 0.0, 0.0), "{scene}");
+            assert!(opt.material_switches <= sw.material_switches + sw.state_changes, "{scene}: {opt:?}");
+            assert_eq!(row("vfc").state_changes, 0.0, "{scene}");
+            assert!(row("chcpp").state_changes > 0.0, "{scene}");
+        }
+        assert!(result.text.contains("ideal rows: ideal-sorted: the CHC++ paper's OPT"), "{}", result.text);
         assert_eq!(ablation.rows.len(), 3 * 8);
         assert_eq!(figure8.rows.len(), 3 * 5);
         for t in [compared, ablation, figure8] {

@@ -79,8 +79,11 @@ pub struct Row {
     pub speedup_of_means: f64,
     /// The paper's.
     pub published_speedup: Option<f64>,
-    /// State changes per frame.
+    /// State changes (switches between drawing and querying) per frame.
     pub state_changes: f64,
+    /// Material switches per frame.
+    #[serde(default)]
+    pub material_switches: f64,
     /// Pixels differing from VFC's image, over all frames.
     pub missing_pixels: u64,
 }
@@ -105,6 +108,7 @@ impl Row {
             speedup_of_means: m.speedup_vs_vfc,
             published_speedup: p.and_then(|p| p.speedup),
             state_changes: m.state_changes_per_frame,
+            material_switches: m.material_switches_per_frame,
             missing_pixels: m.missing_pixels,
         }
     }
@@ -165,7 +169,7 @@ impl Table {
         let width = self.rows.iter().map(|r| r.label().chars().count()).max().unwrap_or(0).max(28);
         let _ = writeln!(
             out,
-            "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8} {:>10}  order",
+            "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8} {:>9} {:>10}  order",
             "scene",
             "method",
             "frame ms (paper)",
@@ -174,6 +178,7 @@ impl Table {
             "wait ms (paper)",
             "triangles (paper)",
             "states",
+            "materials",
             "missing px"
         );
         let paper = |v: Option<f64>, decimals: usize| v.map_or("-".to_string(), |v| format!("{v:.decimals$}"));
@@ -191,7 +196,7 @@ impl Table {
             previous = &r.scene;
             let _ = writeln!(
                 out,
-                "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8.0} {:>10}  {order}",
+                "{:<8} {:<width$} {:>18} {:>24} {:>16} {:>16} {:>22} {:>8.0} {:>9.0} {:>10}  {order}",
                 r.scene,
                 r.label(),
                 format!("{:.2} ({})", r.frame_ms, paper(r.published_frame_ms, 2)),
@@ -200,6 +205,7 @@ impl Table {
                 format!("{:.2} ({})", r.wait_ms, paper(r.published_wait_ms, 2)),
                 format!("{:.0} ({})", r.triangles, paper(r.published_triangles, 0)),
                 r.state_changes,
+                r.material_switches,
                 r.missing_pixels,
             );
         }

@@ -1,6 +1,8 @@
 //! Plots of a [`BenchReport`] over the walkthrough, as SVG or PNG: frame times
 //! per method (the CHC paper's Figures 5-7, the CHC++ paper's Figure 7) and
-//! queries and state changes per frame (the CHC++ paper's Figure 10).
+//! queries, state changes and material switches per frame (the CHC++
+//! paper's Figure 10, whose state changes are switches between drawing and
+//! querying).
 //!
 //! Text in PNGs is drawn with the DejaVu Sans font that the `dejavu` crate
 //! embeds, so no system font library or installed font is needed.
@@ -20,8 +22,8 @@ use std::sync::OnceLock;
 pub enum PlotKind {
     /// Frame time over the walkthrough, one line per method.
     FrameTime,
-    /// Occlusion queries and render-state changes per frame, one line per
-    /// method in each of two stacked panels.
+    /// Occlusion queries, state changes and material switches per frame,
+    /// one line per method in each of three stacked panels.
     QueriesAndStateChanges,
 }
 
@@ -179,25 +181,22 @@ where
         }
         PlotKind::QueriesAndStateChanges => {
             let root = root.titled(&title("Queries and state changes"), (FONT, 20))?;
-            let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
-            let queries = Panel {
-                caption: "occlusion queries per frame".into(),
+            let third = root.dim_in_pixel().1 / 3;
+            let (top, rest) = root.split_vertically(third);
+            let (middle, bottom) = rest.split_vertically(third);
+            // Three panels of counts per frame, one line per method each.
+            let counts = |caption: &str, y_desc: &'static str, value: fn(&FrameStats) -> f64| Panel {
+                caption: caption.into(),
                 x_desc: &x_desc,
-                y_desc: "queries",
+                y_desc,
                 counts: true,
                 scale: TimeScale::Linear,
-                series: series(&report.methods, |f| f.queries as f64),
+                series: series(&report.methods, value),
             };
-            queries.draw(&top)?;
-            let changes = Panel {
-                caption: "render-state changes per frame".into(),
-                x_desc: &x_desc,
-                y_desc: "state changes",
-                counts: true,
-                scale: TimeScale::Linear,
-                series: series(&report.methods, |f| f.state_changes as f64),
-            };
-            changes.draw(&bottom)
+            counts("occlusion queries per frame", "queries", |f| f.queries as f64).draw(&top)?;
+            let changes = "state changes per frame (switches between drawing and querying)";
+            counts(changes, "state changes", |f| f.state_changes as f64).draw(&middle)?;
+            counts("material switches per frame", "material switches", |f| f.material_switches as f64).draw(&bottom)
         }
     }
 }
@@ -369,6 +368,7 @@ mod tests {
             wait_ms_per_frame: 0.0,
             draw_calls_per_frame: 0.0,
             state_changes_per_frame: 0.0,
+            material_switches_per_frame: 0.0,
             triangles_per_frame: 0.0,
             visible_objects_per_frame: 0.0,
             missing_pixels: 0,

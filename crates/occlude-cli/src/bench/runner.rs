@@ -8,7 +8,7 @@
 
 use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
 use super::dump::FrameDump;
-use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL};
+use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL, IDEALS};
 use super::summary::{BenchReport, SceneStats};
 use crate::progress::stage;
 use anyhow::{Context, Result};
@@ -497,16 +497,19 @@ fn build_lanes(scene: &Scene, config: &BenchConfig, variants: Vec<BuiltMethod>, 
     let reference = Lane::new(create("vfc", &config.options)?, renderer.backend(scene, config, Draws::Own)?);
     let mut lanes = Lanes::new(reference, renderer.parallel_lanes(config));
     // `ideal` replays the draw calls `sw` (listed before it) made in the
-    // frame, after it in its chain, with the counts of `sw`'s backend.
-    let replayed = config.methods.iter().any(|m| m == IDEAL);
+    // frame, after it in its chain, with the counts of `sw`'s backend;
+    // `ideal-sorted` draws them in another order, after it in its chain, on
+    // a backend of its own.
+    let replayed = config.methods.iter().any(|m| IDEALS.contains(&m.as_str()));
     let (calls, counts) = (DrawCalls::default(), DrawReplay::default());
     let mut source = None;
     for m in config.methods.iter().filter(|m| m.as_str() != "vfc") {
         match m.as_str() {
-            IDEAL => {
-                let built = BuiltMethod { method: Box::new(Ideal::new(Arc::clone(&calls))), params: Vec::new() };
-                let backend = renderer.backend(scene, config, Draws::Replay(counts.clone()))?;
-                lanes.push(Lane::new(built, backend), source);
+            name if IDEALS.contains(&name) => {
+                let built =
+                    BuiltMethod { method: Box::new(Ideal::named(name, Arc::clone(&calls))), params: Vec::new() };
+                let draws = if name == IDEAL { Draws::Replay(counts.clone()) } else { Draws::Own };
+                lanes.push(Lane::new(built, renderer.backend(scene, config, draws)?), source);
             }
             ideal::SOURCE if replayed => {
                 source = Some(lanes.len());

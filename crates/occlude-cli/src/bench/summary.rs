@@ -67,8 +67,13 @@ pub struct MethodSummary {
     pub submit_wait_ms_per_frame: f64,
     /// Draw calls per frame.
     pub draw_calls_per_frame: f64,
-    /// Render-state changes per frame.
+    /// State changes per frame: switches between drawing and querying, as
+    /// the CHC++ paper counts them (`FrameStats::state_changes`).
     pub state_changes_per_frame: f64,
+    /// Material switches per frame: switches between drawing states with
+    /// no query between them (`FrameStats::material_switches`).
+    #[serde(default)]
+    pub material_switches_per_frame: f64,
     /// Triangles drawn per frame.
     pub triangles_per_frame: f64,
     /// Objects drawn per frame.
@@ -233,6 +238,7 @@ impl BenchReport {
                     submit_wait_ms_per_frame: mean(frames, |f| f.submit_wait_ms),
                     draw_calls_per_frame: mean(frames, |f| f.draw_calls as f64),
                     state_changes_per_frame: mean(frames, |f| f.state_changes as f64),
+                    material_switches_per_frame: mean(frames, |f| f.material_switches as f64),
                     triangles_per_frame: mean(frames, |f| f.triangles as f64),
                     visible_objects_per_frame: mean(frames, |f| f.visible_objects as f64),
                     missing_pixels: frames.iter().map(|f| f.missing_pixels).sum(),

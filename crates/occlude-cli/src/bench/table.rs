@@ -50,7 +50,7 @@ pub fn render(report: &BenchReport) -> String {
 }
 
 /// Columns of the comparison table.
-pub const COLUMNS: usize = 12;
+pub const COLUMNS: usize = 13;
 
 /// The comparison table's header and one row per method, formatted but not
 /// aligned, so that the text table and the HTML and Markdown reports show the
@@ -67,6 +67,7 @@ pub fn cells(report: &BenchReport) -> ([String; COLUMNS], Vec<[String; COLUMNS]>
         format!("{sim}wait ms"),
         "draws".into(),
         "states".into(),
+        "materials".into(),
         "triangles".into(),
         "missing px".into(),
         "wall ms".into(),
@@ -85,6 +86,7 @@ pub fn cells(report: &BenchReport) -> ([String; COLUMNS], Vec<[String; COLUMNS]>
                 format!("{:.3}", m.wait_ms_per_frame),
                 format!("{:.1}", m.draw_calls_per_frame),
                 format!("{:.1}", m.state_changes_per_frame),
+                format!("{:.1}", m.material_switches_per_frame),
                 format!("{:.0}", m.triangles_per_frame),
                 m.missing_pixels.to_string(),
                 format!("{:.1}", m.wall_ms),

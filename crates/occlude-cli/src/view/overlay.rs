@@ -40,8 +40,10 @@ pub struct ShownStats {
     pub queries: f64,
     /// Draw calls per frame.
     pub draw_calls: f64,
-    /// Render-state changes per frame.
+    /// State changes (switches between drawing and querying) per frame.
     pub state_changes: f64,
+    /// Material switches per frame.
+    pub material_switches: f64,
     /// Triangles drawn per frame.
     pub triangles: f64,
     /// Distinct objects drawn per frame.
@@ -65,6 +67,7 @@ impl StatsAverage {
             queries: mean(|s| s.queries as f64),
             draw_calls: mean(|s| s.draw_calls as f64),
             state_changes: mean(|s| s.state_changes as f64),
+            material_switches: mean(|s| s.material_switches as f64),
             triangles: mean(|s| s.triangles as f64),
             visible_objects: mean(|s| s.visible_objects as f64),
         })
@@ -77,8 +80,8 @@ impl ShownStats {
         [
             format!("frame {:.2} ms   wait {:.2} ms", self.frame_ms, self.wait_ms),
             format!(
-                "queries {:.0}   draw calls {:.0}   state changes {:.0}",
-                self.queries, self.draw_calls, self.state_changes
+                "queries {:.0}   draw calls {:.0}   state changes {:.0}   material switches {:.0}",
+                self.queries, self.draw_calls, self.state_changes, self.material_switches
             ),
             format!("triangles {}   visible objects {:.0}", thousands(self.triangles), self.visible_objects),
         ]

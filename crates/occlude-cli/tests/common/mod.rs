@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Quat, Vec3};
 use occlude_cli::bench::runner::{cameras, far_plane};
-use occlude_cli::bench::BenchConfig;
+use occlude_cli::bench::{BenchConfig, BenchRun};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{check_support, create, DrawnSet};
 use occlude_core::{
@@ -169,4 +169,30 @@ pub fn assert_methods_match_vfc_in_motion(
         }
     }
     rebuilds
+}
+
+/// `opt` (the instances owning a pixel of the final image, a method of
+/// `run`) is a lower bound: every method and variant of `run`, each of which
+/// the caller has checked draws view-frustum culling's image, draws at least
+/// `opt`'s triangles on every frame. `what` names the run in messages. The
+/// bound is checked not to be empty or trivial: `opt` draws something, and
+/// less than `vfc`, over the run.
+pub fn assert_opt_is_a_lower_bound(run: &BenchRun, what: &str) {
+    let opt = run.methods.iter().find(|m| m.name == "opt").expect("opt is one of the run's methods");
+    for m in run.methods.iter().chain(&run.variants).filter(|m| !std::ptr::eq(*m, opt)) {
+        assert_eq!(m.frames.len(), opt.frames.len(), "{what}/{}", m.name);
+        for (f, (stats, bound)) in m.frames.iter().zip(&opt.frames).enumerate() {
+            assert!(
+                stats.triangles >= bound.triangles,
+                "{what}/{} {:?}: frame {f}: {} triangles, fewer than opt's {}",
+                m.name,
+                m.params,
+                stats.triangles,
+                bound.triangles
+            );
+        }
+    }
+    let total = |frames: &[occlude_core::FrameStats]| frames.iter().map(|f| f.triangles).sum::<u64>();
+    let (opt, vfc) = (total(&opt.frames), total(&run.reference));
+    assert!(0 < opt && opt < vfc, "{what}: opt drew {opt} triangles, vfc {vfc}");
 }

@@ -89,7 +89,7 @@ pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, Method
     let method: Box<dyn CullingMethod + Send> = match name {
         "vfc" => Box::new(vfc::ViewFrustumCulling),
         "sw" => Box::new(sw::StopAndWait),
-        "opt" => Box::new(opt::Optimal::default()),
+        "opt" => Box::new(opt::Optimal::new(opt::OptParams::read(&mut reader)?)),
         "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
         "chcpp" => Box::new(chcpp::Chcpp::new(chcpp::ChcppParams::read(&mut reader)?)),
         "nohc" => Box::new(nohc::Nohc::new(nohc::Estimate::Model)),

@@ -172,12 +172,13 @@ fn culled_frame(b: &mut dyn Backend, h: Handles) {
 
 /// The counts of `stats`, leaving out times and fragments (which the wgpu
 /// backend does not count).
-fn counts(s: &FrameStats) -> [u64; 11] {
+fn counts(s: &FrameStats) -> [u64; 12] {
     [
         s.queries,
         s.query_boxes,
         s.draw_calls,
         s.state_changes,
+        s.material_switches,
         s.triangles,
         s.visible_objects,
         s.traversal_steps,
@@ -253,9 +254,11 @@ fn list_draws_match_cpu_draws(test: &str, multi_draw_count: bool) {
         visible_objects: 5,
         // The boxes in the frustum and away from the eye.
         query_boxes: 4,
-        // To the box test, the list draw, the last draw (the first state is
-        // no change).
-        state_changes: 3,
+        // To the box test and back to drawing for the list draw (the first
+        // state is no change).
+        state_changes: 2,
+        // From the list draw to the last draw's material.
+        material_switches: 1,
         indirect_draws: 2,
         dispatches: 4,
         readbacks: 1,
