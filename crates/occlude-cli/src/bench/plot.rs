@@ -441,7 +441,12 @@ mod tests {
         let r = sample();
         for (kind, file, label) in [
             (PlotKind::FrameTime, "t.svg", "simulated frame time (ms)"),
-            (PlotKind::QueriesAndStateChanges, "q.svg", "render-state changes per frame"),
+            (
+                PlotKind::QueriesAndStateChanges,
+                "q.svg",
+                "state changes per frame (switches between drawing and querying)",
+            ),
+            (PlotKind::QueriesAndStateChanges, "q.svg", "material switches per frame"),
         ] {
             let path = dir.join(file);
             write_plot(&r, kind, &path).unwrap();
@@ -453,7 +458,7 @@ mod tests {
             assert!(svg.contains(label), "{file} lacks {label:?}");
             let lines = svg.matches("<polyline").count();
             // One line per method (per panel), plus its legend sample.
-            let panels = if kind == PlotKind::FrameTime { 1 } else { 2 };
+            let panels = if kind == PlotKind::FrameTime { 1 } else { 3 };
             assert!(lines >= 2 * r.methods.len() * panels, "{file}: only {lines} polylines");
         }
     }
