@@ -184,11 +184,10 @@ struct Lane {
     /// after frame.
     image: Vec<f32>,
     /// The upkeep of a moving scene before the coming frame (only its
-    /// `update_ms`, `instances_moved` and `rebuilds`).
+    /// `update_ms`, `update_charged_ms`, `instances_moved` and `rebuilds`):
+    /// the charged time is CPU work done before the frame begins (each
+    /// frame starts with the GPU idle).
     update: FrameStats,
-    /// The time that upkeep adds to the coming frame, CPU work done before
-    /// the frame begins (each frame starts with the GPU idle).
-    update_charge_ms: f64,
 }
 
 impl Lane {
@@ -202,7 +201,6 @@ impl Lane {
             stats: FrameStats::default(),
             image: Vec::new(),
             update: FrameStats::default(),
-            update_charge_ms: 0.0,
         }
     }
 
@@ -220,13 +218,11 @@ impl Lane {
     fn frame(&mut self, scene: &Scene, hierarchy: &Hierarchy, camera: &Camera) -> Result<()> {
         let method = self.built.method.as_mut();
         self.stats = render_frame(method, self.backend.as_mut(), scene, hierarchy, camera, &mut self.drawn);
-        let update = std::mem::take(&mut self.update);
-        (self.stats.update_ms, self.stats.instances_moved, self.stats.rebuilds) =
-            (update.update_ms, update.instances_moved, update.rebuilds);
-        let charge = std::mem::take(&mut self.update_charge_ms);
-        self.stats.frame_ms += charge;
-        self.stats.cpu_ms += charge;
-        self.stats.update_charged_ms = charge;
+        let u = std::mem::take(&mut self.update);
+        self.stats.frame_ms += u.update_charged_ms;
+        self.stats.cpu_ms += u.update_charged_ms;
+        (self.stats.update_ms, self.stats.update_charged_ms, self.stats.instances_moved, self.stats.rebuilds) =
+            (u.update_ms, u.update_charged_ms, u.instances_moved, u.rebuilds);
         for (name, value) in self.built.method.counters() {
             self.counters.entry(name.to_string()).or_default().push(value);
         }
@@ -293,11 +289,11 @@ impl Lanes {
             let update_ms = (upkeep.time + start.elapsed()).as_secs_f64() * 1e3;
             lane.update = FrameStats {
                 update_ms,
+                update_charged_ms: modelled_ms.unwrap_or(update_ms),
                 instances_moved: upkeep.instances as u64,
                 rebuilds: u64::from(upkeep.rebuilt),
                 ..FrameStats::default()
             };
-            lane.update_charge_ms = modelled_ms.unwrap_or(update_ms);
         }
     }
 

@@ -5,10 +5,10 @@ use glam::{Mat4, Quat, Vec3};
 use occlude_cli::bench::runner::{cameras, far_plane};
 use occlude_cli::bench::{BenchConfig, BenchRun};
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::{check_support, create, DrawnSet};
+use occlude_core::methods::{check_support, create, DrawnSet, MethodOptions};
 use occlude_core::{
-    differing_pixels, render_frame, Aabb, Backend, Camera, Hierarchy, HierarchyKind, InstanceChange, Mesh, Scene,
-    UpdatePolicy,
+    differing_pixels, render_frame, Aabb, Backend, Camera, CullingMethod, FrameStats, Hierarchy, HierarchyKind,
+    InstanceChange, Mesh, Scene, UpdatePolicy,
 };
 
 /// Cameras from matrices: each walkthrough camera's view with a reverse-Z
@@ -50,35 +50,73 @@ pub fn cameras_from_matrices(scene: &Scene, cfg: &BenchConfig) -> Vec<(&'static 
 pub fn assert_methods_match_vfc_with_cameras_from_matrices<'b>(
     scene: &Scene,
     cfg: &BenchConfig,
-    mut backend: impl FnMut() -> Box<dyn Backend + 'b>,
+    backend: impl FnMut() -> Box<dyn Backend + 'b>,
 ) -> Vec<(String, usize)> {
-    assert_eq!(cfg.methods.first().map(String::as_str), Some("vfc"), "vfc is the reference, listed first");
     let h = Hierarchy::build(scene, cfg.hierarchy, cfg.build);
-    let mut lanes: Vec<_> =
-        cfg.methods.iter().map(|m| (create(m, &cfg.options).unwrap().method, backend(), DrawnSet::default())).collect();
-    for (method, backend, _) in &mut lanes {
-        check_support(method.as_ref(), backend.as_mut()).expect("the backend runs every method given");
-    }
-    let mut culled = vec![0; lanes.len()];
-    let (mut reference, mut image) = (Vec::new(), Vec::new());
+    let mut lanes = Lanes::new(&cfg.methods, &cfg.options, backend);
+    let mut culled = vec![0; lanes.0.len()];
     for (f, (kind, camera)) in cameras_from_matrices(scene, cfg).iter().enumerate() {
-        let mut vfc_draws = 0;
-        for (k, (method, backend, drawn)) in lanes.iter_mut().enumerate() {
-            let stats = render_frame(method.as_mut(), backend.as_mut(), scene, &h, camera, drawn);
-            assert_eq!(backend.failure(), None, "{kind} camera {f}: {}", method.name());
-            let out = if k == 0 { &mut reference } else { &mut image };
-            backend.instruments().expect("the backend has a depth image").depth_image(out);
-            if k == 0 {
-                assert!(reference.iter().any(|&d| d < 1.0), "{kind} camera {f}: vfc drew nothing");
-                vfc_draws = stats.draw_calls;
-            } else {
-                let differ = differing_pixels(&reference, &image);
-                assert_eq!(differ, 0, "{kind} camera {f}: {} differs from vfc in {differ} pixels", method.name());
-                culled[k] += usize::from(stats.draw_calls < vfc_draws);
-            }
+        let stats = lanes.frame(scene, &h, camera, &format!("{kind} camera {f}"));
+        for (k, s) in stats.iter().enumerate().skip(1) {
+            culled[k] += usize::from(s.draw_calls < stats[0].draw_calls);
         }
     }
-    lanes.iter().map(|(m, ..)| m.name().to_string()).zip(culled).skip(1).collect()
+    lanes.0.iter().map(|l| l.method.name().to_string()).zip(culled).skip(1).collect()
+}
+
+/// A method on a backend of its own, with its draw bookkeeping.
+struct Lane<'b> {
+    method: Box<dyn CullingMethod + Send>,
+    backend: Box<dyn Backend + 'b>,
+    drawn: DrawnSet,
+}
+
+/// Methods (`vfc` first, the reference) rendering the same frames.
+struct Lanes<'b>(Vec<Lane<'b>>);
+
+impl<'b> Lanes<'b> {
+    /// `methods` with `options`, each on a backend from `backend`, which
+    /// must run it (never its fallback).
+    fn new<S: AsRef<str>>(
+        methods: &[S],
+        options: &MethodOptions,
+        mut backend: impl FnMut() -> Box<dyn Backend + 'b>,
+    ) -> Self {
+        assert_eq!(methods.first().map(AsRef::as_ref), Some("vfc"), "vfc is the reference, listed first");
+        let mut lanes: Vec<_> = methods
+            .iter()
+            .map(|m| Lane {
+                method: create(m.as_ref(), options).unwrap().method,
+                backend: backend(),
+                drawn: DrawnSet::default(),
+            })
+            .collect();
+        for l in &mut lanes {
+            check_support(l.method.as_ref(), l.backend.as_mut()).expect("the backend runs every method given");
+        }
+        Self(lanes)
+    }
+
+    /// Renders one frame on every lane and asserts that vfc draws something
+    /// and every other method's depth image equals vfc's; `what` names the
+    /// frame in messages. Returns each lane's statistics.
+    fn frame(&mut self, scene: &Scene, h: &Hierarchy, camera: &Camera, what: &str) -> Vec<FrameStats> {
+        let (mut reference, mut image) = (Vec::new(), Vec::new());
+        let mut stats = Vec::with_capacity(self.0.len());
+        for (k, l) in self.0.iter_mut().enumerate() {
+            stats.push(render_frame(l.method.as_mut(), l.backend.as_mut(), scene, h, camera, &mut l.drawn));
+            assert_eq!(l.backend.failure(), None, "{what}: {}", l.method.name());
+            let out = if k == 0 { &mut reference } else { &mut image };
+            l.backend.instruments().expect("the backend has a depth image").depth_image(out);
+            if k == 0 {
+                assert!(reference.iter().any(|&d| d < 1.0), "{what}: vfc drew nothing");
+            } else {
+                let differ = differing_pixels(&reference, &image);
+                assert_eq!(differ, 0, "{what}: {} differs from vfc in {differ} pixels", l.method.name());
+            }
+        }
+        stats
+    }
 }
 
 /// A stage for scripted motion, seen by a camera that stands still: a wall
@@ -140,33 +178,18 @@ pub fn assert_methods_match_vfc_in_motion(
     policy: UpdatePolicy,
     mut backend: impl FnMut(&Scene) -> Box<dyn Backend>,
 ) -> usize {
-    assert_eq!(methods.first(), Some(&"vfc"), "vfc is the reference, listed first");
     let (mut scene, camera, script) = motion_stage();
     let options = BuildOptions { leaf_size: 1, ..BuildOptions::default() };
     let mut h = Hierarchy::build(&scene, kind, options);
-    let mut lanes: Vec<_> = methods
-        .iter()
-        .map(|m| (create(m, &Default::default()).unwrap().method, backend(&scene), DrawnSet::default()))
-        .collect();
-    for (method, backend, _) in &mut lanes {
-        check_support(method.as_ref(), backend.as_mut()).expect("the backend runs every method given");
-    }
-    let (mut reference, mut image) = (Vec::new(), Vec::new());
+    let mut lanes = Lanes::new(methods, &MethodOptions::default(), || backend(&scene));
     let mut rebuilds = 0;
     for (f, changes) in script.iter().enumerate() {
         let changed = scene.apply(changes).unwrap();
         rebuilds += usize::from(h.update(&scene, &changed, policy).rebuilt);
-        for (k, (method, backend, drawn)) in lanes.iter_mut().enumerate() {
-            backend.update_instances(&scene, &changed);
-            render_frame(method.as_mut(), backend.as_mut(), &scene, &h, &camera, drawn);
-            assert_eq!(backend.failure(), None, "frame {f}: {}", method.name());
-            let out = if k == 0 { &mut reference } else { &mut image };
-            backend.instruments().expect("the backend has a depth image").depth_image(out);
-            if k > 0 {
-                let differ = differing_pixels(&reference, &image);
-                assert_eq!(differ, 0, "{kind} frame {f}: {} differs from vfc in {differ} pixels", method.name());
-            }
+        for l in &mut lanes.0 {
+            l.backend.update_instances(&scene, &changed);
         }
+        lanes.frame(&scene, &h, &camera, &format!("{kind} frame {f}"));
     }
     rebuilds
 }
