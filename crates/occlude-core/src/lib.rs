@@ -16,7 +16,7 @@
 //! ```
 //! use glam::{Mat4, Vec3};
 //! use occlude_core::hierarchy::BuildOptions;
-//! use occlude_core::methods::{check_support, create, MethodOptions};
+//! use occlude_core::methods::{check_support, chcpp::ChcppParams, Method};
 //! use occlude_core::mock::MockBackend;
 //! use occlude_core::{render_frame, Aabb, Camera, DrawnSet, Hierarchy, HierarchyKind, Mesh, Scene};
 //!
@@ -38,7 +38,8 @@
 //! // A backend (yours, or the mock), and a method it can run.
 //! let mut backend = MockBackend::new(&scene, 64, 64);
 //! backend.set_visible(1, false);
-//! let mut method = create("chcpp", &MethodOptions::default())?.method;
+//! // The paper's CHC++ with a batch of 25; `"chcpp".parse()` gives the defaults.
+//! let mut method = Method::Chcpp(ChcppParams { batch: 25, ..Default::default() }).build()?;
 //! check_support(method.as_ref(), &mut backend)?;
 //!
 //! // Frame after frame: the method draws what the queries find visible.

@@ -12,6 +12,30 @@ pub enum MergeMode {
     QuickMask,
 }
 
+impl MergeMode {
+    /// The mode's short name: `layer` or `quick`.
+    pub fn name(self) -> &'static str {
+        match self {
+            MergeMode::LayerMerge => "layer",
+            MergeMode::QuickMask => "quick",
+        }
+    }
+}
+
+impl std::fmt::Display for MergeMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for MergeMode {
+    type Err = ();
+    /// Parses [`MergeMode::name`].
+    fn from_str(s: &str) -> Result<Self, ()> {
+        [MergeMode::LayerMerge, MergeMode::QuickMask].into_iter().find(|m| m.name() == s).ok_or(())
+    }
+}
+
 /// Errors from building or configuring a buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Error {

@@ -30,7 +30,7 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! use occlude::glam::{Mat4, Vec3};
 //! use occlude::hierarchy::BuildOptions;
-//! use occlude::methods::{check_support, create, MethodOptions};
+//! use occlude::methods::{check_support, chcpp::ChcppParams, Method};
 //! use occlude::soft::{GpuModel, SoftBackend};
 //! use occlude::{render_frame, Aabb, Camera, DrawnSet, Hierarchy, HierarchyKind, Mesh, Scene};
 //!
@@ -53,7 +53,8 @@
 //! let camera = Camera::from_matrices(view, projection, false)?;
 //!
 //! let mut backend = SoftBackend::new(&scene, 64, 64, GpuModel::modern());
-//! let mut method = create("chcpp", &MethodOptions::default())?.method;
+//! // The paper's CHC++ with a batch of 25; `"chcpp".parse()` gives the defaults.
+//! let mut method = Method::Chcpp(ChcppParams { batch: 25, ..Default::default() }).build()?;
 //! check_support(method.as_ref(), &mut backend)?;
 //! let mut drawn = DrawnSet::default();
 //! for _ in 0..4 {

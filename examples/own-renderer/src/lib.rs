@@ -12,7 +12,8 @@
 //! the README).
 
 use glam::{Mat4, Vec3};
-use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, RASTER_FEATURES};
+use occlude::methods::Method;
+use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, RASTER_FEATURES};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -175,14 +176,14 @@ impl Renderer {
     }
 
     /// Culls with occlude's method `method` from now on (`None`: culling off).
-    pub fn set_culling(&mut self, method: Option<&str>) -> Result<(), Box<dyn Error>> {
+    pub fn set_culling(&mut self, method: Option<Method>) -> Result<(), Box<dyn Error>> {
         // occlude: the attachments, the instance boxes and the method, once.
         let attachments =
             Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
         self.culling = match method {
-            Some(method) if GPU_METHODS.contains(&method) => {
+            Some(method) if method.is_gpu_driven() => {
                 let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
-                let culler = GpuCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draw)?;
+                let culler = GpuCuller::new(&self.device, &self.queue, attachments, &self.bounds, &method, draw)?;
                 Some(Culling::Gpu(culler.with_list_pipeline(&self.listed, 1, 0)?))
             }
             Some(method) => {

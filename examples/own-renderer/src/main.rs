@@ -43,7 +43,7 @@ fn run() -> Result<(), Box<dyn Error>> {
     let (device, queue) = open_device()?;
     let mut renderer = Renderer::new(device, queue, options);
     for mode in culling.split(',') {
-        renderer.set_culling((mode != "off").then_some(mode))?;
+        renderer.set_culling((mode != "off").then(|| mode.parse()).transpose()?)?;
         let (mut total_ms, mut total_drawn) = (0.0, 0);
         for frame in 0..frames {
             let t = if frames > 1 { frame as f32 / (frames - 1) as f32 } else { 0.0 };

@@ -8,6 +8,10 @@
 //! message where there is none, unless `OCCLUDE_REQUIRE_GPU=1`.
 
 use occlude::glam::{Mat4, Vec3};
+use occlude::methods::hiz::{Granularity, HizParams};
+use occlude::methods::ioc::IocParams;
+use occlude::methods::roc::{RocMode, RocParams};
+use occlude::methods::Method;
 use occlude::wgpu::embed::{
     Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
@@ -61,7 +65,7 @@ fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::Text
     let mut in_frustum = Vec::new();
     for method in QUERY_METHODS.into_iter().chain(GPU_METHODS) {
         let mut on = Renderer::new(device.clone(), queue.clone(), options);
-        on.set_culling(Some(method)).unwrap();
+        on.set_culling(Some(method.parse().unwrap())).unwrap();
         for (frame, (color, depth)) in reference.iter().enumerate() {
             let t = frame as f32 / (FRAMES - 1) as f32;
             let drawn = on.render(t).unwrap();
@@ -110,7 +114,9 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_embedding_refuses_what_it_cannot_cull") else { return };
     let (attachments, bounds) = one_box();
     let depth_format = attachments.depth;
-    let new = |attachments, bounds: &[Aabb], method| Culler::new(&device, &queue, attachments, bounds, method).err();
+    let new = |attachments, bounds: &[Aabb], method: &str| {
+        Culler::new(&device, &queue, attachments, bounds, method.parse().unwrap()).err()
+    };
     assert!(matches!(new(attachments, &bounds, "opt"), Some(EmbedError::Unsupported(_))));
     assert!(matches!(new(attachments, &bounds, "roc"), Some(EmbedError::Unsupported(_))));
     assert!(matches!(new(attachments, &bounds, "hiz"), Some(EmbedError::Unsupported(_))));
@@ -120,7 +126,7 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let colour_as_depth = Attachments { depth: wgpu::TextureFormat::Rgba8Unorm, ..attachments };
     assert!(matches!(new(colour_as_depth, &bounds, "chcpp"), Some(EmbedError::Attachments(_))));
 
-    let mut culler = Culler::new(&device, &queue, attachments, &bounds, "chcpp").unwrap();
+    let mut culler = Culler::new(&device, &queue, attachments, &bounds, Method::default()).unwrap();
     let view = |format, size| texture_view(&device, format, size, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let depth = view(depth_format, 8);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
@@ -157,7 +163,7 @@ fn the_embedding_counts_the_triangles_it_is_given() {
         if let Some(counts) = counts {
             scene = scene.with_triangle_counts(&counts).unwrap();
         }
-        let mut culler = Culler::for_scene(&device, &queue, attachments, scene, "vfc").unwrap();
+        let mut culler = Culler::for_scene(&device, &queue, attachments, scene, Method::Vfc).unwrap();
         let stats = culler.render(&camera, target, |_, _| {}).unwrap();
         assert_eq!((stats.draw_calls, stats.triangles), (1, triangles), "counts {counts:?}");
     }
@@ -199,11 +205,26 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     let Some((device, queue)) = device("the_gpu_driven_embedding_refuses_what_it_cannot_cull") else { return };
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-    let new =
-        |attachments, bounds: &[Aabb], method| GpuCuller::new(&device, &queue, attachments, bounds, method, draw).err();
+    let new = |attachments, bounds: &[Aabb], method: &str| {
+        GpuCuller::new(&device, &queue, attachments, bounds, &method.parse().unwrap(), draw).err()
+    };
     for method in ["chcpp", "opt"] {
         assert!(matches!(new(attachments, &bounds, method), Some(EmbedError::Unsupported(_))), "{method}");
     }
+    // Settings the GPU-driven embedding does not run, and values out of
+    // range, are refused by name.
+    let node = Method::Hiz(HizParams { granularity: Granularity::Node, ..Default::default() });
+    let last = Method::Roc(RocParams { mode: RocMode::Last });
+    let auto = Method::Ioc(IocParams { auto: true, ..Default::default() });
+    for (method, setting) in [(node, "hiz.granularity=node"), (last, "roc.mode=last"), (auto, "ioc.auto=on")] {
+        match GpuCuller::new(&device, &queue, attachments, &bounds, &method, draw).err() {
+            Some(EmbedError::UnsupportedSetting(named)) => assert_eq!(named, setting),
+            other => panic!("{setting}: {other:?}"),
+        }
+    }
+    let zero = Method::Hiz(HizParams { texels: 0, ..Default::default() });
+    let refused = GpuCuller::new(&device, &queue, attachments, &bounds, &zero, draw).err();
+    assert!(matches!(refused, Some(EmbedError::Method(_))), "{refused:?}");
     for method in GPU_METHODS {
         assert!(matches!(new(attachments, &[], method), Some(EmbedError::Scene(_))), "{method}");
         let always = Attachments { compare: wgpu::CompareFunction::Always, ..attachments };
@@ -234,14 +255,14 @@ fn the_gpu_driven_embedding_draws_its_lists(
     // buffer at that binding: an error.
     let pipeline = list_pipeline(device, depth_format);
     let bind = |group, binding| {
-        let culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
+        let culler = GpuCuller::new(device, queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
         culler.with_list_pipeline(&pipeline, group, binding).err()
     };
     for (group, binding) in [(0, 0), (1, 3), (2, 0)] {
         assert!(matches!(bind(group, binding), Some(EmbedError::Binding(_))), "group {group}, binding {binding}");
     }
 
-    let mut culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
+    let mut culler = GpuCuller::new(device, queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
     let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
     let depth = texture_view(device, depth_format, 8, sampled);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
@@ -275,7 +296,7 @@ fn the_gpu_driven_embedding_draws_its_lists(
     // 1's test (its pyramid, or its depth for roc), so frame 2's early list
     // is empty and its late list has it again. Were the lists not drawn,
     // frame 2 would be frame 1.
-    let culler = GpuCuller::new(device, queue, attachments, &bounds, method, draw).unwrap();
+    let culler = GpuCuller::new(device, queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
     let mut culler = culler.with_list_pipeline(&pipeline, 1, 0).unwrap();
     let ones: Vec<u8> = [1f32; 4].iter().flat_map(|x| x.to_le_bytes()).collect();
     let uniform = wgpu::util::DeviceExt::create_buffer_init(
@@ -314,7 +335,7 @@ fn box_tests_are_refused_on_a_device_without_forced_early_depth_tests() {
     assert!(!device.features().contains(RASTER_FEATURES));
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-    let new = |method| GpuCuller::new(&device, &queue, attachments, &bounds, method, draw);
+    let new = |method: &str| GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw);
     for method in ["roc", "ioc"] {
         match new(method).err() {
             Some(EmbedError::Adapter(message)) => assert!(message.contains("SHADER_EARLY_DEPTH_TEST"), "{message}"),

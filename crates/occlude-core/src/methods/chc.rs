@@ -11,8 +11,8 @@
 
 use super::tracked::Tracked;
 use super::{
-    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
-    OptionReader,
+    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, MethodParams,
+    OptionError, ParamVisitor,
 };
 use crate::backend::{Backend, QueryHandle};
 use crate::hierarchy::{NodeId, Since};
@@ -33,14 +33,19 @@ pub struct ChcParams {
     pub speculation_triangles: u64,
 }
 
-impl ChcParams {
-    /// Reads `tav`, `nvp` and `spec`.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self {
-            assumed_visible_frames: r.get("tav", 0, "an integer from 0 to 1000", |v| v <= 1000)?,
-            visible_pixel_threshold: r.get("nvp", 0, "an integer >= 0 (pixels)", |_| true)?,
-            speculation_triangles: r.get("spec", 0, "an integer >= 0 (triangles)", |_| true)?,
-        })
+/// Every option off: the paper's basic algorithm (section 4).
+impl Default for ChcParams {
+    fn default() -> Self {
+        Self { assumed_visible_frames: 0, visible_pixel_threshold: 0, speculation_triangles: 0 }
+    }
+}
+
+impl MethodParams for ChcParams {
+    const METHOD: &'static str = "chc";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("tav", &mut self.assumed_visible_frames, "an integer from 0 to 1000", |&f| f <= 1000)?;
+        v.value("nvp", &mut self.visible_pixel_threshold, "an integer >= 0 (pixels)", |_| true)?;
+        v.value("spec", &mut self.speculation_triangles, "an integer >= 0 (triangles)", |_| true)
     }
 }
 

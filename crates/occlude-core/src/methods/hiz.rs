@@ -51,7 +51,7 @@ use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::{AllInstances, TemporalSet};
 use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, OptionError, OptionReader};
+use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
 use crate::gpu_culling::{ExpandInto, Flags, IdList, Pyramid};
 use std::fmt;
@@ -98,13 +98,17 @@ pub struct HizParams {
     pub granularity: Granularity,
 }
 
-impl HizParams {
-    /// Reads `hiz.texels` and `hiz.granularity`.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self {
-            texels: r.get("texels", 8, "an integer from 1 to 16", |t| (1..=16).contains(&t))?,
-            granularity: r.get("granularity", Granularity::Instance, "instance or node", |_| true)?,
-        })
+impl Default for HizParams {
+    fn default() -> Self {
+        Self { texels: 8, granularity: Granularity::Instance }
+    }
+}
+
+impl MethodParams for HizParams {
+    const METHOD: &'static str = "hiz";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("texels", &mut self.texels, "an integer from 1 to 16", |t| (1..=16).contains(t))?;
+        v.value("granularity", &mut self.granularity, "instance or node", |_| true)
     }
 }
 
@@ -231,7 +235,7 @@ mod tests {
 
     #[test]
     fn texels_default_to_eight_and_stay_in_range() {
-        let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
+        let read = |opts: &[&str]| HizParams::from_options(&MethodOptions::parse(opts).unwrap());
         let instance = Granularity::Instance;
         assert_eq!(read(&[]), Ok(HizParams { texels: 8, granularity: instance }));
         assert_eq!(read(&["hiz.texels=2"]), Ok(HizParams { texels: 2, granularity: instance }));
@@ -291,7 +295,7 @@ mod tests {
 
     #[test]
     fn granularity_reads_instance_or_node() {
-        let read = |opts: &[&str]| HizParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("hiz"));
+        let read = |opts: &[&str]| HizParams::from_options(&MethodOptions::parse(opts).unwrap());
         assert_eq!(read(&["hiz.granularity=node"]).unwrap().granularity, Granularity::Node);
         assert_eq!(read(&["hiz.granularity=instance"]).unwrap().granularity, Granularity::Instance);
         let err = read(&["hiz.granularity=leaf"]).unwrap_err();

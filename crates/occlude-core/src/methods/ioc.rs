@@ -39,7 +39,7 @@ use super::node_walk::{walk_tables, NodeTest, NodeWalk};
 use super::roc::TemporalSet;
 use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, OptionError, OptionReader};
+use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
 use crate::gpu_culling::{BoxSet, ExpandInto, IdList, ItemRange, RangeTable, TableData};
 use crate::hierarchy::{Hierarchy, NodeId};
@@ -115,31 +115,38 @@ const AUTO_SPAN: f32 = 0.5;
 
 const LEVEL: &str = "a depth N >= 0, 'deepest' or 'deepest-K'";
 
-impl IocParams {
-    /// Reads `ioc.start` and `ioc.bottom`; a start below the bottom, when
-    /// both count from the same end, is an error naming both (not with
+impl Default for IocParams {
+    fn default() -> Self {
+        Self { start: Level::FromRoot(4), bottom: Level::AboveDeepest(2), frustum: true, auto: false }
+    }
+}
+
+impl MethodParams for IocParams {
+    const METHOD: &'static str = "ioc";
+    /// `ioc.start` and `ioc.bottom`; a start below the bottom, when both
+    /// count from the same end, is an error naming both (not with
     /// `ioc.auto`, which chooses the start itself, so `ioc.start` is unused).
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        let start_given = r.is_set("start");
-        let start = r.get("start", Level::FromRoot(4), LEVEL, |_| true)?;
-        let bottom = r.get("bottom", Level::AboveDeepest(2), LEVEL, |_| true)?;
-        let frustum = r.flag("frustum", true)?;
-        let auto = r.flag("auto", false)?;
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        let start_given = v.is_set("start");
+        v.value("start", &mut self.start, LEVEL, |_| true)?;
+        v.value("bottom", &mut self.bottom, LEVEL, |_| true)?;
+        v.flag("frustum", &mut self.frustum)?;
+        v.flag("auto", &mut self.auto)?;
+        let (start, bottom) = (self.start, self.bottom);
         let inverted = match (start, bottom) {
             (Level::FromRoot(s), Level::FromRoot(b)) => s > b,
             (Level::AboveDeepest(s), Level::AboveDeepest(b)) => s < b,
             _ => false,
         };
-        if inverted && !auto {
+        if inverted && !self.auto {
             // Blame the one the user set: a default is nobody's mistake.
-            let (key, value, expected) = if start_given {
-                ("start", start.to_string(), format!("a level no deeper than ioc.bottom = {bottom}"))
+            return Err(if start_given {
+                v.bad_value("start", start, format!("a level no deeper than ioc.bottom = {bottom}"))
             } else {
-                ("bottom", bottom.to_string(), format!("a level no shallower than ioc.start = {start} (its default)"))
-            };
-            return Err(OptionError::BadValue { method: "ioc".into(), key: key.into(), value, expected });
+                v.bad_value("bottom", bottom, format!("a level no shallower than ioc.start = {start} (its default)"))
+            });
         }
-        Ok(Self { start, bottom, frustum, auto })
+        Ok(())
     }
 }
 
@@ -387,7 +394,7 @@ mod tests {
     use crate::methods::MethodOptions;
 
     fn read(opts: &[&str]) -> Result<IocParams, OptionError> {
-        IocParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("ioc"))
+        IocParams::from_options(&MethodOptions::parse(opts).unwrap())
     }
 
     #[test]

@@ -145,7 +145,7 @@
 //! [`query_box::padded`]: crate::query_box::padded
 
 use super::occluder_proxies::OccluderProxies;
-use super::{CullingMethod, FrameContext, FrontToBack, OptionError, OptionReader};
+use super::{CullingMethod, FrameContext, FrontToBack, MethodParams, OptionError, ParamVisitor};
 use crate::backend::{Backend, CpuCullingWork};
 use crate::geometry::Aabb;
 use crate::query_box::{padded, QUERY_DEPTH_BIAS};
@@ -187,30 +187,6 @@ impl FromStr for Occluders {
     }
 }
 
-/// `moc.merge`: the buffer's merge rule.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Merge(MergeMode);
-
-impl fmt::Display for Merge {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self.0 {
-            MergeMode::LayerMerge => "layer",
-            MergeMode::QuickMask => "quick",
-        })
-    }
-}
-
-impl FromStr for Merge {
-    type Err = ();
-    fn from_str(s: &str) -> Result<Self, ()> {
-        match s {
-            "layer" => Ok(Merge(MergeMode::LayerMerge)),
-            "quick" => Ok(Merge(MergeMode::QuickMask)),
-            _ => Err(()),
-        }
-    }
-}
-
 /// Parameters of `moc`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MocParams {
@@ -225,14 +201,19 @@ pub struct MocParams {
     pub proxies: bool,
 }
 
-impl MocParams {
-    /// Reads `moc.occluders`, `moc.count`, `moc.merge` and `moc.proxies`.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        let occluders = r.get("occluders", Occluders::Drawn, "drawn, last or largest", |_| true)?;
-        let count = r.get("count", 64u32, "an integer from 1 to 65536", |v| (1..=65536).contains(&v))?;
-        let Merge(merge) = r.get("merge", Merge(MergeMode::LayerMerge), "layer or quick", |_| true)?;
-        let proxies = r.flag("proxies", false)?;
-        Ok(Self { occluders, count, merge, proxies })
+impl Default for MocParams {
+    fn default() -> Self {
+        Self { occluders: Occluders::Drawn, count: 64, merge: MergeMode::LayerMerge, proxies: false }
+    }
+}
+
+impl MethodParams for MocParams {
+    const METHOD: &'static str = "moc";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("occluders", &mut self.occluders, "drawn, last or largest", |_| true)?;
+        v.value("count", &mut self.count, "an integer from 1 to 65536", |c| (1..=65536).contains(c))?;
+        v.value("merge", &mut self.merge, "layer or quick", |_| true)?;
+        v.flag("proxies", &mut self.proxies)
     }
 }
 

@@ -12,6 +12,7 @@ pub mod debug;
 mod front_to_back;
 pub mod hiz;
 pub mod ioc;
+mod method;
 pub mod moc;
 mod node_walk;
 pub mod nohc;
@@ -28,7 +29,8 @@ pub mod vfc;
 
 pub use debug::{DebugView, NdcRect, NodeClass};
 pub use front_to_back::FrontToBack;
-pub use options::{MethodOptions, OptionError, OptionReader};
+pub use method::Method;
+pub use options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
 
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
@@ -83,25 +85,10 @@ pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> R
 }
 
 /// The method called `name`, freshly constructed (no state from earlier
-/// frames), with its parameters read from `options`.
+/// frames), with its parameters read from `options` ([`Method::parse`]).
 pub fn create(name: &str, options: &MethodOptions) -> Result<BuiltMethod, MethodError> {
-    let mut reader = options.for_method(name);
-    let method: Box<dyn CullingMethod + Send> = match name {
-        "vfc" => Box::new(vfc::ViewFrustumCulling),
-        "sw" => Box::new(sw::StopAndWait),
-        "opt" => Box::new(opt::Optimal::new(opt::OptParams::read(&mut reader)?)),
-        "chc" => Box::new(chc::Chc::new(chc::ChcParams::read(&mut reader)?)),
-        "chcpp" => Box::new(chcpp::Chcpp::new(chcpp::ChcppParams::read(&mut reader)?)),
-        "nohc" => Box::new(nohc::Nohc::new(nohc::Estimate::Model)),
-        "nohc-opt" => Box::new(nohc::Nohc::new(nohc::Estimate::Oracle)),
-        "om" => Box::new(om::OccupancyMap::new(om::OmParams::read(&mut reader)?)),
-        "roc" => Box::new(roc::RasterOcclusion::new(roc::RocParams::read(&mut reader)?)),
-        "ioc" => Box::new(ioc::IterativeOcclusion::new(ioc::IocParams::read(&mut reader)?)),
-        "hiz" => Box::new(hiz::TwoPhaseHiZ::new(hiz::HizParams::read(&mut reader)?)),
-        "moc" => Box::new(moc::MaskedOcclusion::new(moc::MocParams::read(&mut reader)?)),
-        _ => return Err(MethodError::Unknown(name.to_string())),
-    };
-    Ok(BuiltMethod { method, params: reader.finish()? })
+    let method = Method::parse(name, options)?;
+    Ok(BuiltMethod { method: method.build()?, params: method.params()? })
 }
 
 /// A visibility-culling method. Implementations keep whatever they carry from

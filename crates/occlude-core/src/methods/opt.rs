@@ -20,7 +20,7 @@
 //! visible, in the benchmark runner (`occlude::bench::ideal`).
 
 use super::hiz::Granularity;
-use super::options::{OptionError, OptionReader};
+use super::options::{MethodParams, OptionError, ParamVisitor};
 use super::{CullingMethod, FrameContext};
 use crate::backend::{Backend, OracleView};
 use crate::camera::Camera;
@@ -36,16 +36,16 @@ pub struct OptParams {
     pub granularity: Granularity,
 }
 
-impl OptParams {
-    /// Reads `opt.granularity`.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self { granularity: r.get("granularity", Granularity::Instance, "instance or node", |_| true)? })
-    }
-}
-
 impl Default for OptParams {
     fn default() -> Self {
         Self { granularity: Granularity::Instance }
+    }
+}
+
+impl MethodParams for OptParams {
+    const METHOD: &'static str = "opt";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("granularity", &mut self.granularity, "instance or node", |_| true)
     }
 }
 

@@ -1,6 +1,8 @@
-//! Method parameters from the command line (`--method-opt chc.tav=2`), read
-//! by each method with its valid range, so that a bad value is an error naming
-//! the parameter and the range, and an unknown key is never silently ignored.
+//! Method parameters: typed ([`MethodParams`], each with its defaults) and
+//! from the command line (`--method-opt chc.tav=2`, [`MethodOptions`]). Each
+//! method describes its parameters once, with their valid ranges, so that a
+//! bad value is an error naming the parameter and the range, whether it came
+//! as a string or was set in Rust, and an unknown key is never ignored.
 
 use std::collections::BTreeMap;
 use std::fmt::Display;
@@ -77,84 +79,134 @@ impl MethodOptions {
         }
     }
 
-    /// The reader for one method's parameters.
-    pub fn for_method(&self, method: &str) -> OptionReader {
-        let values =
+    /// A visitor reading one method's parameters from these options.
+    pub fn for_method(&self, method: &str) -> ParamVisitor {
+        let given =
             self.entries.iter().filter(|((m, _), _)| m == method).map(|((_, k), v)| (k.clone(), v.clone())).collect();
-        OptionReader { method: method.to_string(), values, known: Vec::new(), chosen: Vec::new() }
+        ParamVisitor { method: method.to_string(), given: Some(given), known: Vec::new(), seen: Vec::new() }
     }
 }
 
-/// Reads one method's parameters, each with a default and a valid range.
-#[derive(Debug)]
-pub struct OptionReader {
-    method: String,
-    values: BTreeMap<String, String>,
-    known: Vec<&'static str>,
-    chosen: Vec<(String, String)>,
+/// One method's parameters as a Rust type with its defaults
+/// ([`Default`]). [`MethodParams::visit`] names each parameter once, with
+/// its key, its field and its valid range; that one description reads the
+/// command line's strings, checks values a program set, and lists the
+/// values for the report.
+pub trait MethodParams: Clone + Default {
+    /// The method whose parameters these are (the `chc` of `chc.tav`).
+    const METHOD: &'static str;
+
+    /// Visits every parameter in a fixed order (see [`ParamVisitor`]).
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError>;
+
+    /// The defaults with `options`' values for this method put in; a key
+    /// the method does not have, or a value out of range, is an error.
+    fn from_options(options: &MethodOptions) -> Result<Self, OptionError> {
+        let mut params = Self::default();
+        let mut v = options.for_method(Self::METHOD);
+        params.visit(&mut v)?;
+        v.finish()?;
+        Ok(params)
+    }
+
+    /// Fails on the first value out of its range, named as on the command
+    /// line.
+    fn check(&self) -> Result<(), OptionError> {
+        self.values().map(drop)
+    }
+
+    /// `(key, value)` pairs in visiting order, each value as the command
+    /// line writes it; an error for a value out of its range.
+    fn values(&self) -> Result<Vec<(String, String)>, OptionError> {
+        let mut v = ParamVisitor::checking(Self::METHOD);
+        self.clone().visit(&mut v)?;
+        v.finish()
+    }
 }
 
-impl OptionReader {
-    /// The value of `key` (or `default`), which must parse as `T` and
-    /// satisfy `valid`, described by `expected` in the error.
-    pub fn get<T: FromStr + Display + Copy>(
+/// Walks one method's parameters ([`MethodParams::visit`]): reading the
+/// command line's values into the fields, or checking the fields as set.
+/// Either way it collects each value for the report.
+#[derive(Debug)]
+pub struct ParamVisitor {
+    method: String,
+    /// The command line's values not yet read; `None` when checking.
+    given: Option<BTreeMap<String, String>>,
+    known: Vec<&'static str>,
+    seen: Vec<(String, String)>,
+}
+
+impl ParamVisitor {
+    /// A visitor that checks the fields as they stand.
+    pub(crate) fn checking(method: &str) -> Self {
+        Self { method: method.to_string(), given: None, known: Vec::new(), seen: Vec::new() }
+    }
+
+    /// The parameter `key` held in `field`, described by `expected` in an
+    /// error, valid where `valid` says so. A value given for `key` on the
+    /// command line replaces the field.
+    pub fn value<T: FromStr + Display>(
         &mut self,
         key: &'static str,
-        default: T,
+        field: &mut T,
         expected: &str,
-        valid: impl Fn(T) -> bool,
-    ) -> Result<T, OptionError> {
-        self.known.push(key);
-        let value = match self.values.remove(key) {
-            None => default,
-            Some(text) => match text.parse::<T>() {
-                Ok(v) if valid(v) => v,
-                _ => {
-                    return Err(OptionError::BadValue {
-                        method: self.method.clone(),
-                        key: key.to_string(),
-                        value: text,
-                        expected: expected.to_string(),
-                    })
-                }
-            },
-        };
-        self.chosen.push((key.to_string(), value.to_string()));
-        Ok(value)
-    }
-
-    /// Whether the user gave `key` (before it is read): an error about two
-    /// parameters then names the one the user set, not a default.
-    pub fn is_set(&self, key: &str) -> bool {
-        self.values.contains_key(key)
+        valid: impl Fn(&T) -> bool,
+    ) -> Result<(), OptionError> {
+        self.visit(key, field, expected, |text| text.parse().ok(), valid)
     }
 
     /// A boolean switch (`true`/`false`, `on`/`off`, `1`/`0`).
-    pub fn flag(&mut self, key: &'static str, default: bool) -> Result<bool, OptionError> {
-        self.known.push(key);
-        let value = match self.values.remove(key) {
-            None => default,
-            Some(text) => match text.as_str() {
-                "true" | "on" | "1" => true,
-                "false" | "off" | "0" => false,
-                _ => {
-                    return Err(OptionError::BadValue {
-                        method: self.method.clone(),
-                        key: key.to_string(),
-                        value: text,
-                        expected: "true or false".to_string(),
-                    })
-                }
-            },
+    pub fn flag(&mut self, key: &'static str, field: &mut bool) -> Result<(), OptionError> {
+        let parse = |text: &str| match text {
+            "true" | "on" | "1" => Some(true),
+            "false" | "off" | "0" => Some(false),
+            _ => None,
         };
-        self.chosen.push((key.to_string(), value.to_string()));
-        Ok(value)
+        self.visit(key, field, "true or false", parse, |_| true)
     }
 
-    /// Ends reading: fails on a key the method did not ask for; returns the
+    /// Whether the user gave `key` (before it is visited), or, when
+    /// checking, always: an error about two parameters then names the one
+    /// the user set, not a default.
+    pub fn is_set(&self, key: &str) -> bool {
+        self.given.as_ref().is_none_or(|given| given.contains_key(key))
+    }
+
+    /// An error about `key`'s `value`.
+    pub fn bad_value(&self, key: &str, value: impl Display, expected: impl Into<String>) -> OptionError {
+        OptionError::BadValue {
+            method: self.method.clone(),
+            key: key.to_string(),
+            value: value.to_string(),
+            expected: expected.into(),
+        }
+    }
+
+    fn visit<T: Display>(
+        &mut self,
+        key: &'static str,
+        field: &mut T,
+        expected: &str,
+        parse: impl Fn(&str) -> Option<T>,
+        valid: impl Fn(&T) -> bool,
+    ) -> Result<(), OptionError> {
+        self.known.push(key);
+        match self.given.as_mut().and_then(|given| given.remove(key)) {
+            Some(text) => match parse(&text) {
+                Some(v) if valid(&v) => *field = v,
+                _ => return Err(self.bad_value(key, text, expected)),
+            },
+            None if !valid(field) => return Err(self.bad_value(key, &*field, expected)),
+            None => {}
+        }
+        self.seen.push((key.to_string(), field.to_string()));
+        Ok(())
+    }
+
+    /// Ends the walk: fails on a key the method did not visit; returns the
     /// values in use (defaults included) for the report.
     pub fn finish(self) -> Result<Vec<(String, String)>, OptionError> {
-        if let Some(key) = self.values.into_keys().next() {
+        if let Some(key) = self.given.and_then(|given| given.into_keys().next()) {
             let known = if self.known.is_empty() {
                 " (it takes no parameters)".to_string()
             } else {
@@ -162,7 +214,7 @@ impl OptionReader {
             };
             return Err(OptionError::UnknownKey { method: self.method, key, known });
         }
-        Ok(self.chosen)
+        Ok(self.seen)
     }
 }
 
@@ -170,23 +222,56 @@ impl OptionReader {
 mod tests {
     use super::*;
 
-    #[test]
-    fn reads_values_defaults_and_rejects_bad_ones() {
-        let opts = MethodOptions::parse(&["chc.tav=2", "chc.nvp = 25"]).unwrap();
-        let mut r = opts.for_method("chc");
-        assert_eq!(r.get("tav", 0u32, "an integer >= 0", |_| true), Ok(2));
-        assert_eq!(r.get("nvp", 0u32, "an integer >= 0", |_| true), Ok(25));
-        assert_eq!(r.get("b", 50u32, "an integer >= 1", |v| v >= 1), Ok(50));
-        assert_eq!(r.finish().unwrap().len(), 3);
+    /// Parameters of a method made up for the tests.
+    #[derive(Clone, Debug, PartialEq)]
+    struct Demo {
+        tav: u32,
+        smax: f32,
+        tight: bool,
+    }
 
-        let opts = MethodOptions::parse(&["chcpp.smax=0.5", "chcpp.zzz=1"]).unwrap();
-        let mut r = opts.for_method("chcpp");
-        let err = r.get("smax", 1.4f32, "a number >= 1", |v| v >= 1.0).unwrap_err();
-        assert!(err.to_string().contains("chcpp.smax = 0.5: expected a number >= 1"), "{err}");
-        let mut r = opts.for_method("chcpp");
-        r.get("smax", 1.4f32, "any number", |_| true).unwrap();
-        r.flag("tight", true).unwrap();
-        assert!(r.finish().unwrap_err().to_string().contains("no parameter 'zzz'"));
+    impl Default for Demo {
+        fn default() -> Self {
+            Self { tav: 0, smax: 1.4, tight: true }
+        }
+    }
+
+    impl MethodParams for Demo {
+        const METHOD: &'static str = "demo";
+        fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+            v.value("tav", &mut self.tav, "an integer from 0 to 10", |&t| t <= 10)?;
+            v.value("smax", &mut self.smax, "a number >= 1", |&s| s >= 1.0)?;
+            v.flag("tight", &mut self.tight)
+        }
+    }
+
+    fn read(items: &[&str]) -> Result<Demo, OptionError> {
+        Demo::from_options(&MethodOptions::parse(items).unwrap())
+    }
+
+    #[test]
+    fn strings_fill_the_typed_parameters_over_their_defaults() {
+        assert_eq!(read(&[]), Ok(Demo::default()));
+        assert_eq!(read(&["demo.tav=2", "demo.tight = off"]), Ok(Demo { tav: 2, smax: 1.4, tight: false }));
+        assert_eq!(read(&["other.tav=2"]), Ok(Demo::default()));
+        let err = read(&["demo.smax=0.5"]).unwrap_err().to_string();
+        assert!(err.contains("demo.smax = 0.5: expected a number >= 1"), "{err}");
+        let err = read(&["demo.tight=maybe"]).unwrap_err().to_string();
+        assert!(err.contains("expected true or false"), "{err}");
+        let err = read(&["demo.zzz=1"]).unwrap_err().to_string();
+        assert!(err.contains("no parameter 'zzz' (its parameters: tav, smax, tight)"), "{err}");
+    }
+
+    #[test]
+    fn typed_values_are_checked_and_listed_as_the_command_line_writes_them() {
+        let params = Demo { tav: 3, smax: 2.5, tight: false };
+        assert_eq!(params.check(), Ok(()));
+        let listed = params.values().unwrap();
+        assert_eq!(listed, [("tav", "3"), ("smax", "2.5"), ("tight", "false")].map(|(k, v)| (k.into(), v.into())));
+        let items: Vec<String> = listed.iter().map(|(k, v)| format!("demo.{k}={v}")).collect();
+        assert_eq!(Demo::from_options(&MethodOptions::parse(&items).unwrap()), Ok(params));
+        let err = Demo { tav: 11, ..Demo::default() }.check().unwrap_err().to_string();
+        assert!(err.contains("demo.tav = 11: expected an integer from 0 to 10"), "{err}");
     }
 
     #[test]
@@ -197,7 +282,7 @@ mod tests {
         let opts = MethodOptions::parse(&["chc.tav=1"]).unwrap();
         assert!(opts.check_methods(&["vfc".to_string()]).is_err());
         assert!(opts.check_methods(&["chc".to_string()]).is_ok());
-        let mut r = MethodOptions::parse(&["vfc.x=1"]).unwrap().for_method("vfc");
-        assert!(r.flag("y", false).is_ok());
+        let err = MethodOptions::parse(&["vfc.x=1"]).unwrap().for_method("vfc").finish().unwrap_err();
+        assert!(err.to_string().contains("(it takes no parameters)"), "{err}");
     }
 }

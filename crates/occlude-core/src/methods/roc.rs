@@ -24,7 +24,7 @@
 
 use super::tracked::{update_instance_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, OptionError, OptionReader};
+use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
 use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
 use crate::scene::Scene;
@@ -68,10 +68,16 @@ pub struct RocParams {
     pub mode: RocMode,
 }
 
-impl RocParams {
-    /// Reads `roc.mode`.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self { mode: r.get("mode", RocMode::Exact, "exact or last", |_| true)? })
+impl Default for RocParams {
+    fn default() -> Self {
+        Self { mode: RocMode::Exact }
+    }
+}
+
+impl MethodParams for RocParams {
+    const METHOD: &'static str = "roc";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("mode", &mut self.mode, "exact or last", |_| true)
     }
 }
 
@@ -215,7 +221,7 @@ mod tests {
 
     #[test]
     fn mode_defaults_to_exact_and_rejects_others() {
-        let read = |opts: &[&str]| RocParams::read(&mut MethodOptions::parse(opts).unwrap().for_method("roc"));
+        let read = |opts: &[&str]| RocParams::from_options(&MethodOptions::parse(opts).unwrap());
         assert_eq!(read(&[]), Ok(RocParams { mode: RocMode::Exact }));
         assert_eq!(read(&["roc.mode=last"]), Ok(RocParams { mode: RocMode::Last }));
         let err = read(&["roc.mode=fast"]).unwrap_err();

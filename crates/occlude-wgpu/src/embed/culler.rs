@@ -3,7 +3,7 @@
 
 use super::{Attachments, EmbedError, FrameTarget, QueryBackend};
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::{create, MethodOptions};
+use occlude_core::methods::Method;
 use occlude_core::{
     render_frame, Aabb, Camera, CullingMethod, DrawnSet, FrameStats, Hierarchy, HierarchyKind, InstanceChange, Scene,
     UpdatePolicy, Upkeep,
@@ -31,8 +31,8 @@ pub struct Culler {
 
 impl Culler {
     /// Culls instances whose world-space boxes are `bounds` (instance `i`
-    /// is `bounds[i]`; its draws must stay inside that box) with the method
-    /// called `method` (one of [`QUERY_METHODS`], default parameters) on
+    /// is `bounds[i]`; its draws must stay inside that box) with `method`
+    /// (one of [`QUERY_METHODS`], with any parameters) on
     /// the renderer's `device` and `queue`, whose passes draw into
     /// `attachments`. Builds a BVH over the boxes once. A method that does
     /// not run embedded, bad boxes or attachments are an error. Each
@@ -43,7 +43,7 @@ impl Culler {
         queue: &wgpu::Queue,
         attachments: Attachments,
         bounds: &[Aabb],
-        method: &str,
+        method: Method,
     ) -> Result<Self, EmbedError> {
         Self::for_scene(device, queue, attachments, Scene::from_bounds("embedded", bounds)?, method)
     }
@@ -60,12 +60,12 @@ impl Culler {
         queue: &wgpu::Queue,
         attachments: Attachments,
         scene: Scene,
-        method: &str,
+        method: Method,
     ) -> Result<Self, EmbedError> {
-        if !QUERY_METHODS.contains(&method) {
-            return Err(EmbedError::Unsupported(method.to_string()));
+        if !QUERY_METHODS.contains(&method.name()) {
+            return Err(EmbedError::Unsupported(method.name().to_string()));
         }
-        let method = create(method, &MethodOptions::default())?.method;
+        let method = method.build()?;
         scene.validate()?;
         let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
         let backend = QueryBackend::new(device, queue, attachments, &scene)?;

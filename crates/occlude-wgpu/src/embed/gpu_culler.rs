@@ -25,9 +25,10 @@ use crate::culling::{
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::hiz::HizParams;
-use occlude_core::methods::ioc::{IocParams, IocWalk};
-use occlude_core::methods::{MethodError, MethodOptions};
+use occlude_core::methods::hiz::Granularity;
+use occlude_core::methods::ioc::IocWalk;
+use occlude_core::methods::roc::RocMode;
+use occlude_core::methods::{Method, MethodError};
 use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
 
 /// The methods [`GpuCuller`] runs: `hiz`, whose every step is a compute
@@ -222,32 +223,44 @@ pub struct GpuCuller {
 }
 
 impl GpuCuller {
+    /// Whether `method` runs in a [`GpuCuller`]: `hiz` with any
+    /// `hiz.texels` at instance granularity, `roc` in its exact mode, `ioc`
+    /// with any start and bottom levels, its frustum test on and no
+    /// `ioc.auto`. Anything else is an error naming the method or the
+    /// setting.
+    pub fn check_method(method: &Method) -> Result<(), EmbedError> {
+        method.params().map_err(MethodError::from)?;
+        let setting = match method {
+            Method::Hiz(p) if p.granularity != Granularity::Instance => "hiz.granularity=node",
+            Method::Roc(p) if p.mode != RocMode::Exact => "roc.mode=last",
+            Method::Ioc(p) if !p.frustum => "ioc.frustum=off",
+            Method::Ioc(p) if p.auto => "ioc.auto=on",
+            Method::Hiz(_) | Method::Roc(_) | Method::Ioc(_) => return Ok(()),
+            other => return Err(EmbedError::Unsupported(other.name().to_string())),
+        };
+        Err(EmbedError::UnsupportedSetting(setting.to_string()))
+    }
+
     /// Culls instances whose world-space boxes are `bounds` (instance `i`
     /// is `bounds[i]`; its draws must stay inside that box) with the
-    /// GPU-driven method `method` (one of [`GPU_METHODS`], default
-    /// parameters) on the renderer's `device` and `queue`, whose passes
-    /// draw into `attachments`, each instance drawn as `draw` says. A
-    /// method that does not run here, bad boxes or attachments, or a device
-    /// without what the method needs (compute passes; for `roc` and `ioc`
-    /// also `SHADER_EARLY_DEPTH_TEST`) are an error.
+    /// GPU-driven method `method` (one of [`GPU_METHODS`]; the parameters
+    /// [`GpuCuller::check_method`] accepts) on the renderer's `device` and
+    /// `queue`, whose passes draw into `attachments`, each instance drawn
+    /// as `draw` says. A method that does not run here, bad boxes or
+    /// attachments, or a device without what the method needs (compute
+    /// passes; for `roc` and `ioc` also `SHADER_EARLY_DEPTH_TEST`) are an
+    /// error.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         attachments: Attachments,
         bounds: &[Aabb],
-        method: &str,
+        method: &Method,
         draw: IndirectDraw,
     ) -> Result<Self, EmbedError> {
-        if !GPU_METHODS.contains(&method) {
-            return Err(EmbedError::Unsupported(method.to_string()));
-        }
-        let raster = method != "hiz";
-        let options = MethodOptions::default();
-        let reach = if raster {
-            0
-        } else {
-            HizParams::read(&mut options.for_method(method)).map_err(MethodError::from)?.texels
-        };
+        Self::check_method(method)?;
+        let raster = !matches!(method, Method::Hiz(_));
+        let reach = if let Method::Hiz(p) = method { p.texels } else { 0 };
         attachments.check()?;
         check_device(device, raster)?;
         let scene = Scene::from_bounds("embedded", bounds)?;
@@ -290,13 +303,12 @@ impl GpuCuller {
         let compact_late = compute("cs_compact_unless");
         let late_groups =
             parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &lists[1].ids)]);
-        let late = if method == "ioc" {
-            let params = IocParams::read(&mut options.for_method(method)).map_err(MethodError::from)?;
+        let late = if let Method::Ioc(params) = method {
             let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
             let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
             // Depths past the tree's are clamped to it, as `ioc` does
             // (IocWalk::warnings say so; the embedding runs the defaults).
-            let walk = IocWalk::new(&params, &hierarchy);
+            let walk = IocWalk::new(params, &hierarchy);
             let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
             let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
             LateTest::Nodes(tests, levels)

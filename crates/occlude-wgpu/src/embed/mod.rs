@@ -84,7 +84,7 @@
 //!     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
 //!     Aabb::new(at, at + Vec3::ONE)
 //! }).collect();
-//! let mut culler = Culler::new(device, queue, attachments, &bounds, "chcpp")?;
+//! let mut culler = Culler::new(device, queue, attachments, &bounds, "chcpp".parse()?)?;
 //!
 //! // Each frame: your camera, your views, your draws.
 //! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
@@ -221,10 +221,10 @@
 //! - One mesh range per culler: every instance is drawn by the same
 //!   indirect draw (different meshes need a culler each, or your own
 //!   compute pass over the list).
-//! - `hiz`, `roc` and `ioc` ([`GPU_METHODS`]), each with its default
-//!   parameters only (`roc.mode=exact`; `ioc.start=4`,
-//!   `ioc.bottom=deepest-2`, clamped to the BVH's depth, `ioc.frustum` on,
-//!   no `ioc.auto`).
+//! - `hiz`, `roc` and `ioc` ([`GPU_METHODS`]) with the settings
+//!   [`GpuCuller::check_method`] accepts: `hiz` at instance granularity,
+//!   `roc.mode=exact`, `ioc` with its frustum test and without
+//!   `ioc.auto` (its levels clamped to the BVH's depth).
 //! - `roc`'s box test has a render pass of its own between your two
 //!   passes (three passes a frame; `hiz` has two), `ioc` one per level of
 //!   its walk.
@@ -238,6 +238,7 @@
 //! ```no_run
 //! use occlude_wgpu::embed::{Attachments, FrameTarget, GpuCuller, IndirectDraw};
 //! use glam::{Mat4, Vec3};
+//! use occlude_core::methods::{hiz::HizParams, Method};
 //! use occlude_core::{Aabb, Camera};
 //!
 //! # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, color: &wgpu::TextureView,
@@ -255,7 +256,8 @@
 //!     Aabb::new(at, at + Vec3::ONE)
 //! }).collect();
 //! let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-//! let mut culler = GpuCuller::new(device, queue, attachments, &bounds, "hiz", draw)?
+//! let method = Method::Hiz(HizParams { texels: 4, ..Default::default() });
+//! let mut culler = GpuCuller::new(device, queue, attachments, &bounds, &method, draw)?
 //!     .with_list_pipeline(pipeline, 1, 0)?;
 //!
 //! // Each frame: your camera, your views, your other bind groups and buffers;
@@ -296,6 +298,12 @@ pub enum EmbedError {
         gpu = GPU_METHODS.join(", ")
     )]
     Unsupported(String),
+    /// A parameter value the method does not run with here
+    /// ([`GpuCuller::check_method`]).
+    #[error(
+        "{0} does not run in a GpuCuller: it runs hiz at instance granularity, roc.mode=exact, ioc without ioc.auto"
+    )]
+    UnsupportedSetting(String),
     /// The method's name or parameters are wrong.
     #[error(transparent)]
     Method(#[from] MethodError),

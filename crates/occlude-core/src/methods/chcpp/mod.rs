@@ -16,8 +16,8 @@ pub mod tight;
 
 use super::tracked::Tracked;
 use super::{
-    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, OptionError,
-    OptionReader,
+    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, MethodParams,
+    OptionError, ParamVisitor,
 };
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
@@ -50,21 +50,37 @@ pub struct ChcppParams {
     pub tight: bool,
 }
 
-impl ChcppParams {
-    /// Reads `b`, `nav`, `dmax`, `smax`, `vleaf` and the component switches.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self {
-            batch: r.get("b", 50, "an integer from 1 to 100000", |v| (1..=100_000).contains(&v))?,
-            nav: r.get("nav", 10, "an integer from 0 to 1000", |v| v <= 1000)?,
-            dmax: r.get("dmax", 3, "an integer from 0 to 16", |v| v <= 16)?,
-            smax: r.get("smax", 1.4, "a number from 1 to 100", |v: f32| (1.0..=100.0).contains(&v))?,
-            virtual_leaf_triangles: r.get("vleaf", 0, "an integer >= 0 (triangles)", |_| true)?,
-            multiquery: r.flag("multiquery", true)?,
-            vqueue: r.flag("vqueue", true)?,
-            sort: r.flag("sort", true)?,
-            random: r.flag("random", true)?,
-            tight: r.flag("tight", true)?,
-        })
+/// The paper's values (section 8) with every component on.
+impl Default for ChcppParams {
+    fn default() -> Self {
+        Self {
+            batch: 50,
+            nav: 10,
+            dmax: 3,
+            smax: 1.4,
+            virtual_leaf_triangles: 0,
+            multiquery: true,
+            vqueue: true,
+            sort: true,
+            random: true,
+            tight: true,
+        }
+    }
+}
+
+impl MethodParams for ChcppParams {
+    const METHOD: &'static str = "chcpp";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("b", &mut self.batch, "an integer from 1 to 100000", |b| (1..=100_000).contains(b))?;
+        v.value("nav", &mut self.nav, "an integer from 0 to 1000", |&n| n <= 1000)?;
+        v.value("dmax", &mut self.dmax, "an integer from 0 to 16", |&d| d <= 16)?;
+        v.value("smax", &mut self.smax, "a number from 1 to 100", |s| (1.0..=100.0).contains(s))?;
+        v.value("vleaf", &mut self.virtual_leaf_triangles, "an integer >= 0 (triangles)", |_| true)?;
+        v.flag("multiquery", &mut self.multiquery)?;
+        v.flag("vqueue", &mut self.vqueue)?;
+        v.flag("sort", &mut self.sort)?;
+        v.flag("random", &mut self.random)?;
+        v.flag("tight", &mut self.tight)
     }
 }
 

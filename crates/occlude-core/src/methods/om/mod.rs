@@ -58,7 +58,9 @@
 
 pub mod occupancy;
 
-use super::{CullingMethod, DebugView, FrameContext, FrontToBack, NdcRect, NodeClass, OptionError, OptionReader};
+use super::{
+    CullingMethod, DebugView, FrameContext, FrontToBack, MethodParams, NdcRect, NodeClass, OptionError, ParamVisitor,
+};
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
 use crate::hierarchy::NodeId;
@@ -91,17 +93,21 @@ pub struct OmParams {
     pub decay: f32,
 }
 
-impl OmParams {
-    /// Reads `map`, `grouping`, `rounds` and `decay`, each checked against
-    /// its range.
-    pub fn read(r: &mut OptionReader) -> Result<Self, OptionError> {
-        Ok(Self {
-            map_columns: r
-                .get("map", 64, "an integer from 1 to 1024 (columns of cells)", |v| (1..=MAX_MAP_CELLS).contains(&v))?,
-            grouping: r.flag("grouping", true)?,
-            first_rounds: r.get("rounds", 5, "an integer from 0 to 10000 (rounds)", |v| v <= 10_000)?,
-            decay: r.get("decay", 0.7, "a number from 0 to 1", |v: f32| (0.0..=1.0).contains(&v))?,
-        })
+/// The paper's values.
+impl Default for OmParams {
+    fn default() -> Self {
+        Self { map_columns: 64, grouping: true, first_rounds: 5, decay: 0.7 }
+    }
+}
+
+impl MethodParams for OmParams {
+    const METHOD: &'static str = "om";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        let columns = "an integer from 1 to 1024 (columns of cells)";
+        v.value("map", &mut self.map_columns, columns, |c| (1..=MAX_MAP_CELLS).contains(c))?;
+        v.flag("grouping", &mut self.grouping)?;
+        v.value("rounds", &mut self.first_rounds, "an integer from 0 to 10000 (rounds)", |&r| r <= 10_000)?;
+        v.value("decay", &mut self.decay, "a number from 0 to 1", |d| (0.0..=1.0).contains(d))
     }
 }
 
@@ -285,7 +291,7 @@ mod tests {
 
     fn read(opts: &[&str]) -> Result<OmParams, OptionError> {
         let opts = MethodOptions::parse(opts).unwrap();
-        OmParams::read(&mut opts.for_method("om"))
+        OmParams::from_options(&opts)
     }
 
     #[test]
