@@ -32,7 +32,9 @@ pub fn render_frame(
     method.prepare(&mut ctx, backend);
     backend.begin_frame(camera);
     method.render(&mut ctx, backend);
-    backend.end_frame()
+    let stats = backend.end_frame();
+    method.finish_frame(&stats);
+    stats
 }
 
 /// Pixels whose depth bits differ between two depth images of the same

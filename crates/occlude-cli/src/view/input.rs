@@ -9,8 +9,9 @@ use winit::keyboard::KeyCode;
 /// A one-shot command bound to a key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    /// 1 to 9, then 0 (one digit per method of `METHOD_NAMES`): the method at this
-    /// index.
+    /// 1 to 9, then 0 (one digit for each of the first ten methods of
+    /// `METHOD_NAMES`), and ` (the key left of 1) for `auto`: the method at
+    /// this index.
     Method(usize),
     /// M: the next method.
     NextMethod,
@@ -50,6 +51,7 @@ pub fn action(key: KeyCode) -> Option<Action> {
         return Some(Action::Method(i));
     }
     Some(match key {
+        KeyCode::Backquote => Action::Method(METHOD_NAMES.iter().position(|&m| m == "auto")?),
         KeyCode::KeyM => Action::NextMethod,
         KeyCode::KeyH => Action::ToggleHierarchy,
         KeyCode::KeyV => Action::ToggleBoxes,
@@ -109,6 +111,10 @@ mod tests {
         assert_eq!(action(KeyCode::Digit8), Some(Action::Method(7)));
         assert_eq!(action(KeyCode::Digit9), Some(Action::Method(8)));
         assert_eq!(action(KeyCode::Digit0), Some(Action::Method(9)));
+        assert_eq!(
+            action(KeyCode::Backquote).map(|a| matches!(a, Action::Method(i) if METHOD_NAMES[i] == "auto")),
+            Some(true)
+        );
         assert_eq!(action(KeyCode::KeyV), Some(Action::ToggleBoxes));
         assert_eq!(action(KeyCode::KeyL), Some(Action::NextBoxTest));
         assert_eq!(action(KeyCode::KeyZ), Some(Action::TogglePyramidLevels));

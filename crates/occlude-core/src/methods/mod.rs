@@ -6,6 +6,7 @@
 //! `Backend::begin_frame`, [`CullingMethod::render`] and
 //! `Backend::end_frame`.
 
+pub mod auto;
 pub mod chc;
 pub mod chcpp;
 pub mod debug;
@@ -37,13 +38,12 @@ use crate::camera::{Camera, Frustum};
 use crate::gpu_culling::GpuCullingUnsupported;
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
+use crate::stats::FrameStats;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-/// `nohc` and `nohc-opt` come last, so that the viewer's digit keys 1 to 0
-/// keep the ten methods before them (`M` reaches every method).
-pub const METHOD_NAMES: [&str; 12] =
-    ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt", "nohc", "nohc-opt"];
+pub const METHOD_NAMES: [&str; 13] =
+    ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt", "nohc", "nohc-opt", "auto"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
@@ -137,6 +137,10 @@ pub trait CullingMethod {
     /// off. Recording must change neither the method's decisions nor its
     /// statistics; methods without a view ignore it.
     fn set_debug(&mut self, _on: bool) {}
+
+    /// The statistics of the frame just rendered, as the backend ended it:
+    /// for a method that learns from what its frames cost (`auto`).
+    fn finish_frame(&mut self, _stats: &FrameStats) {}
 
     /// Method-specific figures of the last frame it rendered, by name (for
     /// example `om`'s nodes decided in stage 1 without a query and its

@@ -15,7 +15,7 @@ use occlude_core::{
 /// The GPU-driven methods do not run here: `hiz`, `roc` and `ioc` run in
 /// a [`GpuCuller`](super::GpuCuller); nor do
 /// `opt` (an oracle pass) and `moc` (the meshes' triangles).
-pub const QUERY_METHODS: [&str; 5] = ["vfc", "sw", "chc", "chcpp", "om"];
+pub const QUERY_METHODS: [&str; 6] = ["vfc", "sw", "chc", "chcpp", "om", "auto"];
 
 /// A query-driven culling method running in a renderer's own passes: give
 /// it the renderer's device, attachments and per-instance boxes once, then

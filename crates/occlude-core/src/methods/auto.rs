@@ -1,0 +1,395 @@
+//! `auto`: occlusion culling that pays for itself, choosing per frame among
+//! two-phase Hi-Z (`hiz`, where the backend has GPU-resident culling with
+//! depth pyramids), CHC++ (`chcpp`) and view-frustum culling (`vfc`) by
+//! what each has been measured to cost.
+//!
+//! **What it decides.** Which one method renders the frame. Each is
+//! conservative, so every frame's image is `vfc`'s whichever runs; the
+//! choice changes only the time.
+//!
+//! **On what evidence.** The frame time the backend reports after each
+//! frame ([`CullingMethod::finish_frame`]): measured on a GPU, simulated on
+//! the soft backend. A backend that reports none (a renderer's own) is
+//! charged by [`CostModel`] from the frame's draw and query counts, as
+//! NOHC decides per node from a cost model (CHC++ paper, section 3.2, after
+//! Guthe et al. 2006); `auto` says so once.
+//!
+//! **How.** The method in use is the current one; its frames keep a
+//! running mean. Another method is tried now and then for a probe: one
+//! frame to warm up its temporal state, then two measured frames (a
+//! method's first frame after another ran is never measured, the current
+//! one's included); `vfc`, which carries no state, is probed by one
+//! measured frame. If their mean beats the current mean by `auto.margin`
+//! (5 %), the probed method becomes current. The next probe of a method
+//! waits long enough for probes to cost at most `auto.budget` (1 %) of the
+//! frame time: a method measured at three times the current one's time
+//! waits far longer than one within a few percent. The wait also doubles
+//! with each lost probe, from `auto.probe` frames (32). A method is tried
+//! at once, whatever its wait, when the current method's mean grows past
+//! that method's last measured time by the margin: a change of view that
+//! makes the current method stop paying is found without waiting. Every
+//! method keeps its own state while another runs, as CHC++ keeps its
+//! classification from frame to frame (section 5.2): coming back, it
+//! starts from what it knew.
+//!
+//! **What it costs.** The first frames try every method once (the GPU-driven
+//! one first, the cheapest to try on a current GPU); after that, probes
+//! cost about `auto.budget` of the time. The choice assumes that
+//! neighbouring frames cost about the same (a camera that moves smoothly).
+
+use super::chcpp::ChcppParams;
+use super::options::{MethodParams, OptionError, ParamVisitor};
+use super::{CullingMethod, FrameContext, Method};
+use crate::backend::Backend;
+use crate::cost_model::CostModel;
+use crate::stats::FrameStats;
+
+/// Parameters of `auto`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AutoParams {
+    /// `auto.probe`: the shortest wait, in frames, before a method other
+    /// than the current one is tried again; doubled after each probe it
+    /// loses.
+    pub probe: u32,
+    /// `auto.margin`: how much faster than the current method a probed one
+    /// must be to take over (0.05: 5 %), so that noise does not flip the
+    /// choice back and forth.
+    pub margin: f32,
+    /// `auto.budget`: the share of the frame time probes may cost on
+    /// average (0.01: 1 %).
+    pub budget: f32,
+    /// `auto.gpu`: whether `hiz` is among the choices where the backend
+    /// runs it.
+    pub gpu: bool,
+}
+
+impl Default for AutoParams {
+    fn default() -> Self {
+        Self { probe: 32, margin: 0.05, budget: 0.01, gpu: true }
+    }
+}
+
+impl MethodParams for AutoParams {
+    const METHOD: &'static str = "auto";
+    fn visit(&mut self, v: &mut ParamVisitor) -> Result<(), OptionError> {
+        v.value("probe", &mut self.probe, "an integer from 4 to 100000 (frames)", |p| (4..=100_000).contains(p))?;
+        v.value("margin", &mut self.margin, "a number from 0 to 0.5", |m| (0.0..=0.5).contains(m))?;
+        v.value("budget", &mut self.budget, "a number from 0.001 to 1", |b| (0.001..=1.0).contains(b))?;
+        v.flag("gpu", &mut self.gpu)
+    }
+}
+
+/// Measured frames of a probe, after its warm-up frame.
+const PROBE_FRAMES: u32 = 2;
+
+/// Weight of the newest frame in the current method's running mean.
+const MEAN_WEIGHT: f64 = 0.25;
+
+/// One method `auto` may run, with its probe schedule.
+struct Choice {
+    method: Box<dyn CullingMethod + Send>,
+    /// Whether it carries nothing from frame to frame (`vfc`): its first
+    /// frame needs no warm-up, and one measured frame is its probe.
+    stateless: bool,
+    /// The shortest wait before its next probe, frames.
+    wait: u64,
+    /// First frame at which it may be probed.
+    next_probe: u64,
+    /// Its mean frame time when last measured (a probe, or its frames as
+    /// the current method), ms.
+    last_time: Option<f64>,
+}
+
+/// A probe under way.
+#[derive(Clone, Debug)]
+struct Probe {
+    choice: usize,
+    /// Measured frame times, warm-up excluded.
+    times: Vec<f64>,
+    /// Its frames' time beyond the current method's mean, warm-up
+    /// included, ms.
+    excess: f64,
+}
+
+/// `auto`: the method that pays for itself (module documentation).
+pub struct Auto {
+    params: AutoParams,
+    /// Empty until the first frame, when the backend is known.
+    choices: Vec<Choice>,
+    current: usize,
+    /// The current method's running mean frame time, ms.
+    mean: Option<f64>,
+    probe: Option<Probe>,
+    /// The method rendering this frame, and the one that rendered the last.
+    running: usize,
+    last_ran: Option<usize>,
+    frame: u64,
+    /// Whether this frame runs a probe.
+    probing: bool,
+    /// How the frame time is found when the backend reports none.
+    fallback: CostModel,
+    /// Whether the fallback was announced.
+    warned: bool,
+    warnings: Vec<String>,
+}
+
+impl Auto {
+    /// `auto` with `params`, no frame seen yet.
+    pub fn new(params: AutoParams) -> Self {
+        Self {
+            params,
+            choices: Vec::new(),
+            current: 0,
+            mean: None,
+            probe: None,
+            running: 0,
+            last_ran: None,
+            frame: 0,
+            probing: false,
+            fallback: CostModel::default(),
+            warned: false,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The names of the methods `auto` chooses among, the first tried first
+    /// (empty before the first frame).
+    pub fn choices(&self) -> Vec<&'static str> {
+        self.choices.iter().map(|c| c.method.name()).collect()
+    }
+
+    /// Makes the choices for `backend`: `hiz` only where it runs there.
+    fn choose_among(&mut self, backend: &mut dyn Backend) {
+        let pyramids = backend.gpu_culling().is_ok_and(|gpu| gpu.pyramid_support().is_ok());
+        let gpu = (self.params.gpu && pyramids).then(|| Method::Hiz(Default::default()));
+        let methods = gpu.into_iter().chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]);
+        self.choices = methods
+            .map(|m| Choice {
+                method: m.build().expect("default parameters are valid"),
+                stateless: m == Method::Vfc,
+                wait: u64::from(self.params.probe),
+                next_probe: 0,
+                last_time: None,
+            })
+            .collect();
+        self.fallback = backend.cost_model().unwrap_or_default();
+    }
+
+    /// The frame's time in ms: the backend's, or modelled from its counts.
+    fn frame_time(&mut self, stats: &FrameStats) -> f64 {
+        if stats.frame_ms > 0.0 {
+            return stats.frame_ms;
+        }
+        if !std::mem::replace(&mut self.warned, true) {
+            self.warnings.push(
+                "auto: the backend reports no frame time; frames are charged by its cost model \
+                 (Backend::cost_model, else CostModel::default)"
+                    .to_string(),
+            );
+        }
+        let m = self.fallback;
+        let render = m.render_us(stats.draw_calls, stats.triangles, stats.fragments as f64);
+        let queries = stats.queries as f64 * m.cpu_query_us + stats.query_boxes as f64 * m.gpu_query_box_us;
+        (render + queries) * 1e-3
+    }
+
+    /// Sets when `choice`, last measured at `time` ms, is next tried: after
+    /// its wait, and late enough that a probe costing `excess` ms beyond
+    /// the current mean stays within the budget. Its wait doubles.
+    fn schedule(&mut self, choice: usize, time: f64, excess: f64) {
+        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time);
+        let budget_wait = if per_frame > 0.0 { (excess.max(0.0) / per_frame).ceil() as u64 } else { 0 };
+        let c = &mut self.choices[choice];
+        c.last_time = Some(time);
+        c.next_probe = self.frame + c.wait.max(budget_wait);
+        c.wait = c.wait.saturating_mul(2);
+    }
+
+    /// Ends a probe: the probed method takes over if it beat the current
+    /// one by the margin; the one left waits for its next probe.
+    fn end_probe(&mut self, probe: Probe) {
+        let probed = probe.times.iter().sum::<f64>() / probe.times.len() as f64;
+        let mean = self.mean.unwrap_or(probed);
+        if probed < mean * (1.0 - f64::from(self.params.margin)) {
+            let previous = std::mem::replace(&mut self.current, probe.choice);
+            self.mean = Some(probed);
+            let frames = if self.choices[previous].stateless { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
+            self.schedule(previous, mean, frames * (mean - probed));
+        } else {
+            self.schedule(probe.choice, probed, probe.excess);
+        }
+    }
+
+    /// The method due for a probe now, if any (the earliest due first):
+    /// one whose wait is over, or one last measured faster than the
+    /// current method is now (the current one has stopped paying).
+    fn due(&self) -> Option<usize> {
+        let mean = self.mean?;
+        // A lost probe left the mean at most `1 / (1 - margin)` of the
+        // probe's time: only a mean grown past that by the margin again
+        // calls for a new probe, not one that stood still.
+        let margin = f64::from(self.params.margin);
+        let slack = (1.0 + margin) / (1.0 - margin);
+        let overtaken = |c: &Choice| c.last_time.is_some_and(|t| mean > t * slack);
+        (0..self.choices.len())
+            .filter(|&c| c != self.current)
+            .filter(|&c| self.choices[c].next_probe <= self.frame || overtaken(&self.choices[c]))
+            .min_by_key(|&c| self.choices[c].next_probe)
+    }
+}
+
+impl CullingMethod for Auto {
+    fn name(&self) -> &'static str {
+        "auto"
+    }
+
+    fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        if self.choices.is_empty() {
+            self.choose_among(backend);
+        }
+        if self.probe.is_none() {
+            self.probe = self.due().map(|choice| Probe { choice, times: Vec::new(), excess: 0.0 });
+        }
+        self.probing = self.probe.is_some();
+        self.running = self.probe.as_ref().map_or(self.current, |p| p.choice);
+        self.choices[self.running].method.prepare(ctx, backend);
+    }
+
+    fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        self.choices[self.running].method.render(ctx, backend);
+    }
+
+    fn finish_frame(&mut self, stats: &FrameStats) {
+        let time = self.frame_time(stats);
+        let warm_up = self.last_ran != Some(self.running) && !self.choices[self.running].stateless;
+        self.last_ran = Some(self.running);
+        self.choices[self.running].method.finish_frame(stats);
+        let mean = self.mean;
+        match self.probe.as_mut() {
+            Some(probe) => {
+                probe.excess += mean.map_or(0.0, |m| time - m);
+                if !warm_up {
+                    probe.times.push(time);
+                }
+            }
+            None if !warm_up => self.mean = Some(mean.map_or(time, |m| m + MEAN_WEIGHT * (time - m))),
+            None => {}
+        }
+        let needed = if self.choices[self.running].stateless { 1 } else { PROBE_FRAMES };
+        if let Some(probe) = self.probe.take_if(|p| p.times.len() as u32 >= needed) {
+            self.end_probe(probe);
+        }
+        self.frame += 1;
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        let mut warnings = std::mem::take(&mut self.warnings);
+        self.choices.iter_mut().for_each(|c| warnings.extend(c.method.take_warnings()));
+        warnings
+    }
+
+    /// 1 for the method that rendered the frame (by its name), and
+    /// `probe` 1 on a probe's frames.
+    fn counters(&self) -> Vec<(&'static str, f64)> {
+        let on = |yes: bool| f64::from(u8::from(yes));
+        let mut counters: Vec<_> =
+            self.choices.iter().zip(0..).map(|(c, i)| (c.method.name(), on(i == self.running))).collect();
+        counters.push(("probe", on(self.probing)));
+        counters
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_rig::Rig;
+    use super::*;
+    use crate::frame::render_frame;
+    use crate::DrawnSet;
+
+    /// Runs `auto` for `frames` frames on the wall rig (GPU culling on),
+    /// each frame reported as costing `cost(frame, method)` ms; returns the
+    /// method that rendered each frame.
+    fn run(frames: u64, cost: impl Fn(u64, &str) -> f64) -> Vec<&'static str> {
+        let rig = Rig::wall();
+        let mut backend = rig.mock().with_gpu_culling();
+        let mut auto = Auto::new(AutoParams::default());
+        let mut drawn = DrawnSet::default();
+        let mut ran = Vec::new();
+        for frame in 0..frames {
+            let mut ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn);
+            auto.prepare(&mut ctx, &mut backend);
+            backend.begin_frame(&rig.camera);
+            auto.render(&mut ctx, &mut backend);
+            backend.end_frame();
+            let name = auto.counters().into_iter().find(|&(n, on)| on == 1.0 && n != "probe").unwrap().0;
+            auto.finish_frame(&FrameStats { frame_ms: cost(frame, name), ..FrameStats::default() });
+            ran.push(name);
+        }
+        assert_eq!(auto.choices(), ["hiz", "chcpp", "vfc"]);
+        ran
+    }
+
+    fn share(ran: &[&str], name: &str) -> f64 {
+        ran.iter().filter(|&&n| n == name).count() as f64 / ran.len() as f64
+    }
+
+    #[test]
+    fn the_fastest_method_takes_over_and_losing_probes_grow_rare() {
+        let cost = |_, name: &str| match name {
+            "vfc" => 1.0,
+            "chcpp" => 0.5,
+            _ => 2.0,
+        };
+        let ran = run(600, cost);
+        // hiz first (a warm-up frame and a measured one), then a probe of
+        // chcpp, which takes over, then one of vfc, which loses.
+        assert_eq!(ran[..7], ["hiz", "hiz", "chcpp", "chcpp", "chcpp", "vfc", "chcpp"]);
+        assert!(share(&ran[8..], "chcpp") > 0.97, "{}", share(&ran[8..], "chcpp"));
+        // Each probe of vfc costs 0.5 ms beyond chcpp's 0.5 ms: 1 % of the
+        // time allows one in 100 frames.
+        assert!(ran.iter().filter(|&&n| n == "vfc").count() <= 7);
+        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 2);
+    }
+
+    #[test]
+    fn a_method_that_stops_paying_is_left_for_one_that_does() {
+        // chcpp is fastest until frame 300, then twice vfc's time.
+        let cost = |frame, name: &str| match (name, frame < 300) {
+            ("vfc", _) => 1.0,
+            ("chcpp", true) => 0.6,
+            ("chcpp", false) => 2.0,
+            _ => 3.0,
+        };
+        let ran = run(600, cost);
+        assert!(share(&ran[100..300], "chcpp") > 0.9);
+        assert!(share(&ran[400..], "vfc") > 0.9, "{}", share(&ran[400..], "vfc"));
+    }
+
+    #[test]
+    fn a_method_just_inside_the_margin_is_not_probed_frame_after_frame() {
+        let ran = run(600, |_, name: &str| match name {
+            "vfc" => 1.0,
+            "chcpp" => 0.951,
+            _ => 3.0,
+        });
+        // chcpp takes over from hiz; vfc, 5 % slower, is probed at most
+        // once in 300 frames.
+        assert!(share(&ran, "chcpp") > 0.97, "{}", share(&ran, "chcpp"));
+    }
+
+    #[test]
+    fn a_backend_without_frame_times_is_charged_by_the_cost_model_said_once() {
+        let rig = Rig::wall();
+        let mut backend = rig.mock();
+        let mut auto = Auto::new(AutoParams::default());
+        let mut drawn = DrawnSet::default();
+        for _ in 0..5 {
+            render_frame(&mut auto, &mut backend, &rig.scene, &rig.hierarchy, &rig.camera, &mut drawn);
+        }
+        let warnings = auto.take_warnings();
+        assert_eq!(warnings.iter().filter(|w| w.contains("no frame time")).count(), 1, "{warnings:?}");
+        // Without GPU-resident culling hiz is not among the choices.
+        assert_eq!(auto.choices(), ["chcpp", "vfc"]);
+        assert!(auto.mean.is_some_and(|m| m > 0.0));
+    }
+}
