@@ -18,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod building;
 mod city;
 pub mod export;
@@ -34,7 +35,8 @@ mod swarm;
 mod teapots;
 mod walk;
 
-pub use import::{load, AutoPath, ImportOptions, LoadError};
+pub use animation::SceneAnimation;
+pub use import::{load, load_animated, AutoPath, ImportOptions, LoadError};
 pub use motion::SceneMotion;
 use occlude_core::{Scene, SceneError};
 use std::fmt;
