@@ -37,7 +37,7 @@ mod walk;
 
 pub use animation::SceneAnimation;
 pub use import::{load, load_animated, AutoPath, ImportOptions, LoadError};
-pub use motion::SceneMotion;
+pub use motion::{Motion, SceneMotion};
 use occlude_core::{Scene, SceneError};
 use std::fmt;
 use std::str::FromStr;
