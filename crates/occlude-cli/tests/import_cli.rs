@@ -1,5 +1,6 @@
 //! `occlude bench` on imported model files: a small glTF room runs with every
-//! method exact, and a broken model is a usage error (exit code 2) naming it.
+//! method exact, still and animated, and a broken model is a usage error
+//! (exit code 2) naming it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -36,6 +37,46 @@ fn room_gltf() -> String {
         roots.join(","),
         nodes.join(",")
     )
+}
+
+/// The room of [`room_gltf`] animated (animation 0, `move`): its middle
+/// crate (node 6) rises and falls (LINEAR), and a cart (node 8, no mesh)
+/// carries a crate (node 9) across the room (CUBICSPLINE, flat tangents),
+/// over 2 s. The keys are in the external buffer `anim.bin`, returned
+/// beside the JSON.
+fn animated_room_gltf() -> (String, Vec<u8>) {
+    let times = [0.0f32, 1.0, 2.0];
+    let rise = [5.0f32, 0.5, 5.0, 5.0, 2.5, 5.0, 5.0, 0.5, 5.0];
+    let (a, b) = ([2.0f32, 0.0, 2.0], [8.0f32, 0.0, 8.0]);
+    let zero = [0.0f32; 3];
+    let carry: Vec<f32> = [a, b, a].iter().flat_map(|v| [zero, *v, zero]).flatten().collect();
+    let bin: Vec<u8> = times.iter().chain(&rise).chain(&carry).flat_map(|f| f.to_le_bytes()).collect();
+    let json = room_gltf()
+        .replacen(r#""scenes":[{"nodes":["#, r#""scenes":[{"nodes":[8,"#, 1)
+        .replace(
+            r#"{"mesh":0,"translation":[8.0, 0.5, 5.0],"scale":[1.0, 1.0, 1.0]}]"#,
+            r#"{"mesh":0,"translation":[8.0, 0.5, 5.0],"scale":[1.0, 1.0, 1.0]},
+{"name":"cart","translation":[2.0, 0.0, 2.0],"children":[9]},{"mesh":0,"translation":[0.0, 0.5, 0.0]}]"#,
+        )
+        .replace(
+            r#"{"bufferView":1,"componentType":5123,"count":36,"type":"SCALAR"}]"#,
+            r#"{"bufferView":1,"componentType":5123,"count":36,"type":"SCALAR"},
+{"bufferView":2,"componentType":5126,"count":3,"type":"SCALAR","min":[0],"max":[2]},
+{"bufferView":3,"componentType":5126,"count":3,"type":"VEC3"},
+{"bufferView":4,"componentType":5126,"count":9,"type":"VEC3"}]"#,
+        )
+        .replace(
+            r#"{"buffer":0,"byteOffset":96,"byteLength":72}]"#,
+            r#"{"buffer":0,"byteOffset":96,"byteLength":72},{"buffer":1,"byteOffset":0,"byteLength":12},
+{"buffer":1,"byteOffset":12,"byteLength":36},{"buffer":1,"byteOffset":48,"byteLength":108}]"#,
+        )
+        .replace(
+            r#""}]}"#,
+            r#""},{"byteLength":156,"uri":"anim.bin"}],
+"animations":[{"name":"move","samplers":[{"input":2,"output":3},{"input":2,"output":4,"interpolation":"CUBICSPLINE"}],
+"channels":[{"sampler":0,"target":{"node":6,"path":"translation"}},{"sampler":1,"target":{"node":8,"path":"translation"}}]}]}"#,
+        );
+    (json, bin)
 }
 
 fn occlude(args: &[&str]) -> std::process::Output {
@@ -78,6 +119,31 @@ fn bench_runs_an_imported_gltf_room_exactly() {
             assert_eq!(m["per_frame"].as_array().map(Vec::len), Some(5));
         }
     }
+}
+
+#[test]
+fn bench_plays_an_animated_gltf_exactly_and_broken_animations_exit_with_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let (json, bin) = animated_room_gltf();
+    std::fs::write(dir.path().join("anim.bin"), bin).unwrap();
+    let room = write(dir.path(), "animated.gltf", &json);
+    let out_json = dir.path().join("out.json");
+    let args = ["--frames", "12", "--resolution", "160x120", "--json", out_json.to_str().unwrap()];
+    let out = occlude(&[&["bench", "--scene", room.to_str().unwrap()][..], &args].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&out_json).unwrap()).unwrap();
+    for m in report["methods"].as_array().expect("methods") {
+        assert_eq!(m["missing_pixels"], 0, "{m}");
+        // Two crates move: the rising one and the carried one.
+        assert_eq!(m["instances_moved_per_frame"].as_f64(), Some(2.0), "{m}");
+    }
+    let broken =
+        write(dir.path(), "broken.gltf", &json.replace(r#""count":9,"type":"VEC3""#, r#""count":6,"type":"VEC3""#));
+    let out = occlude(&["bench", "--scene", broken.to_str().unwrap(), "--frames", "2", "--resolution", "64x48"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("broken.gltf: animation 0 'move': channel 1: 3 key times but 6 values"), "{stderr}");
 }
 
 #[test]

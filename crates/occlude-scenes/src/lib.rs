@@ -18,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod building;
 mod city;
 pub mod export;
@@ -34,8 +35,9 @@ mod swarm;
 mod teapots;
 mod walk;
 
-pub use import::{load, AutoPath, ImportOptions, LoadError};
-pub use motion::SceneMotion;
+pub use animation::SceneAnimation;
+pub use import::{load, load_animated, AutoPath, ImportOptions, LoadError};
+pub use motion::{Motion, SceneMotion};
 use occlude_core::{Scene, SceneError};
 use std::fmt;
 use std::str::FromStr;

@@ -10,7 +10,11 @@
 //! larger: small objects cross streets, large ones (buildings, blocks) are
 //! moving occluders that reveal what they hid. One in eight chosen
 //! instances also hides for a third of each period (doors, spawns).
+//!
+//! [`Motion`] plays it together with a model's own animation: the
+//! animation moves its instances, the scripted motion a share of the others.
 
+use crate::SceneAnimation;
 use glam::{Mat4, Vec3};
 use occlude_core::rng::Rng;
 use occlude_core::{InstanceChange, Scene};
@@ -96,6 +100,37 @@ impl SceneMotion {
     }
 }
 
+/// Everything that moves a scene along its walkthrough: a model's own
+/// animation, which moves the instances it animates, and [`SceneMotion`]
+/// of a share of the instances it does not.
+#[derive(Clone, Debug)]
+pub struct Motion {
+    animation: Option<SceneAnimation>,
+    scripted: SceneMotion,
+}
+
+impl Motion {
+    /// `scene`'s `animation` (if any) with scripted motion of `fraction` of
+    /// its instances (from `seed`; the animated instances are left to the
+    /// animation). None when nothing moves.
+    pub fn new(scene: &Scene, animation: Option<SceneAnimation>, fraction: f64, seed: u64) -> Option<Self> {
+        let mut scripted = SceneMotion::new(scene, fraction, seed);
+        if let Some(animation) = &animation {
+            let animated: Vec<u32> = animation.moved().collect();
+            scripted.movers.retain(|m| animated.binary_search(&m.instance).is_err());
+        }
+        (animation.is_some() || scripted.moving() > 0).then_some(Self { animation, scripted })
+    }
+
+    /// The changes that put every moving instance where it is at time `t`
+    /// (seconds of the walkthrough).
+    pub fn changes_at(&self, t: f32) -> Vec<InstanceChange> {
+        let mut changes = self.animation.as_ref().map(|a| a.changes_at(t)).unwrap_or_default();
+        changes.extend(self.scripted.changes_at(t));
+        changes
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,5 +154,8 @@ mod tests {
         let hidden =
             (0..40).any(|k| a.changes_at(k as f32 * 0.25).iter().any(|c| matches!(c, InstanceChange::Hide(_))));
         assert!(hidden);
+        // Without an animation, Motion plays the scripted motion alone.
+        assert!(Motion::new(&scene, None, 0.0, 7).is_none());
+        assert_eq!(Motion::new(&scene, None, 0.1, 7).unwrap().changes_at(1.5), a.changes_at(1.5));
     }
 }

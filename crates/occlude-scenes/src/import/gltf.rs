@@ -2,7 +2,9 @@
 //! GLB chunks, buffers and accessors are read here, with every byte range
 //! checked against the bytes really present.
 
+use super::gltf_animation::{self, Visit};
 use super::{referenced, Builder, LoadError};
+use crate::SceneAnimation;
 use base64::Engine;
 use glam::{Mat4, Vec3};
 use gltf::accessor::sparse::IndexType;
@@ -24,12 +26,15 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// several nodes is read once and instanced. Material ids are glTF material
 /// indices; primitives without a material share the id after the last.
 /// Triangle strips and fans become triangle lists; points and lines are
-/// skipped with a warning.
-pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Result<(), LoadError> {
+/// skipped with a warning. Returns the file's animations, if any moves an
+/// instance (see [`gltf_animation`]).
+pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Result<Option<SceneAnimation>, LoadError> {
     let (json, blob) = if binary { glb_chunks(builder, bytes)? } else { (bytes, None) };
     let format = if binary { "GLB" } else { "glTF" };
     let root = gltf::json::Root::from_slice(json).map_err(|e| builder.malformed(format, e.to_string()))?;
     check_position_accessors(&root).map_err(|e| builder.malformed(format, e))?;
+    gltf_animation::check_references(&root).map_err(|e| builder.invalid(e))?;
+    gltf_animation::warn_unplayed(builder, &root);
     let document = Document::from_json(root).map_err(|e| builder.malformed(format, e.to_string()))?;
     let buffers = load_buffers(builder, &document, blob)?;
     let default_material = document.materials().len() as u32;
@@ -45,13 +50,19 @@ pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Resul
     };
     let mut visited = vec![false; document.nodes().len()];
     let mut meshes: HashMap<usize, Vec<(Vec<u32>, u32)>> = HashMap::new();
-    let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
+    // Every node reached, and every instance placed with its node, for the
+    // animations.
+    let mut visits = Vec::new();
+    let mut instances = Vec::new();
+    let mut stack: Vec<(gltf::Node, Option<usize>, Mat4)> =
+        roots.into_iter().rev().map(|n| (n, None, Mat4::IDENTITY)).collect();
+    while let Some((node, parent_node, parent)) = stack.pop() {
         if std::mem::replace(&mut visited[node.index()], true) {
             return Err(
                 builder.invalid(format!("node {} is reached twice: the node hierarchy is not a tree", node.index()))
             );
         }
+        visits.push(Visit { node: node.index(), parent: parent_node, parent_world: parent });
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if !world.is_finite() {
             return Err(builder.invalid(format!("node {} has a non-finite transform", node.index())));
@@ -61,11 +72,13 @@ pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Resul
                 Entry::Occupied(entry) => entry.into_mut(),
                 Entry::Vacant(entry) => entry.insert(read_mesh(builder, &mesh, &buffers, default_material)?),
             };
+            let first = builder.scene.instances.len() as u32;
             for (parts, material) in parts.iter() {
                 builder.place(&format!("node {}", node.index()), parts, world, *material)?;
             }
+            instances.extend((first..builder.scene.instances.len() as u32).map(|i| (i, node.index())));
         }
-        stack.extend(node.children().collect::<Vec<_>>().into_iter().rev().map(|c| (c, world)));
+        stack.extend(node.children().collect::<Vec<_>>().into_iter().rev().map(|c| (c, Some(node.index()), world)));
     }
     // Without a scene every node is a root or below one, unless some nodes
     // are each other's children: a cycle, which no root reaches.
@@ -74,7 +87,7 @@ pub(super) fn import(builder: &mut Builder, bytes: &[u8], binary: bool) -> Resul
             "node {node} is in a cycle of children (no root reaches it): the node hierarchy is not a tree"
         )));
     }
-    Ok(())
+    gltf_animation::read(builder, &document, &buffers, &visits, &instances)
 }
 
 /// Checks that the POSITION accessor of every primitive exists. The `gltf`
@@ -146,7 +159,7 @@ fn glb_chunks<'b>(builder: &Builder, bytes: &'b [u8]) -> Result<(&'b [u8], Optio
 
 /// The bytes of a file's buffers, and how many more elements accessors
 /// without a buffer view may fill with zeros (see [`MAX_ZERO_ELEMENTS`]).
-struct Buffers<'b> {
+pub(super) struct Buffers<'b> {
     /// Per glTF buffer, its bytes.
     bytes: Vec<Cow<'b, [u8]>>,
     /// What is left of [`MAX_ZERO_ELEMENTS`].
@@ -285,7 +298,7 @@ const MAX_ZERO_ELEMENTS: usize = 1 << 22;
 /// `accessor.size()` bytes: read from its buffer view, or `zero` for each
 /// where it has none, then overridden by its sparse substitutions (glTF 2.0,
 /// section 3.6.2.3). Every byte range and sparse index is checked.
-fn read_accessor<T: Copy>(
+pub(super) fn read_accessor<T: Copy>(
     accessor: &Accessor,
     buffers: &Buffers,
     zero: T,

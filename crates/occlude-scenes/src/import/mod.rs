@@ -23,11 +23,12 @@
 
 mod autopath;
 mod gltf;
+mod gltf_animation;
 mod obj;
 mod obj_indices;
 mod referenced;
 mod split;
-use crate::{generate, GenerateError, Size, SCENE_NAMES};
+use crate::{generate, GenerateError, SceneAnimation, Size, SCENE_NAMES};
 use glam::{Mat4, Vec3};
 use occlude_core::{Mesh, Scene, SceneError};
 use std::io;
@@ -234,21 +235,35 @@ pub struct Imported {
     /// Things skipped or assumed (non-triangle primitives, a missing `.mtl`,
     /// a walk that fell back to an orbit), one sentence each naming the file.
     pub warnings: Vec<String>,
+    /// The file's node animations, when they move any instance (glTF only).
+    pub animation: Option<SceneAnimation>,
 }
 
 /// Loads `name_or_path`: the procedural scene of that name (from `size` and
 /// `seed`), or else the model file it names (`size` and `seed` are then
 /// unused). Import warnings are printed to stderr; use [`import`] to get them
-/// as values instead.
+/// as values instead. A model's animation is left out; [`load_animated`]
+/// keeps it.
 pub fn load(name_or_path: &str, size: Size, seed: u64, options: &ImportOptions) -> Result<Scene, LoadError> {
+    Ok(load_animated(name_or_path, size, seed, options)?.0)
+}
+
+/// [`load`], with the model's node animations when it has any that move
+/// an instance (procedural scenes and OBJ files have none).
+pub fn load_animated(
+    name_or_path: &str,
+    size: Size,
+    seed: u64,
+    options: &ImportOptions,
+) -> Result<(Scene, Option<SceneAnimation>), LoadError> {
     match SceneSource::resolve(name_or_path)? {
-        SceneSource::Procedural(name) => Ok(generate(&name, size, seed)?),
+        SceneSource::Procedural(name) => Ok((generate(&name, size, seed)?, None)),
         SceneSource::File { path, format } => {
             let imported = import(&path, format, options)?;
             for warning in &imported.warnings {
                 eprintln!("warning: {warning}");
             }
-            Ok(imported.scene)
+            Ok((imported.scene, imported.animation))
         }
     }
 }
@@ -275,11 +290,14 @@ pub fn import_bytes(
     let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let mut builder =
         Builder { path: path.to_path_buf(), scene: Scene::new(name.as_str()), options: *options, warnings: vec![] };
-    match format {
+    let animation = match format {
         ModelFormat::Gltf | ModelFormat::Glb => gltf::import(&mut builder, bytes, format == ModelFormat::Glb)?,
-        ModelFormat::Obj => obj::import(&mut builder, bytes)?,
-    }
-    builder.finish()
+        ModelFormat::Obj => {
+            obj::import(&mut builder, bytes)?;
+            None
+        }
+    };
+    builder.finish(animation)
 }
 
 /// Collects meshes and instances while a file is read, and finishes the scene.
@@ -359,8 +377,9 @@ impl Builder {
         Ok(())
     }
 
-    /// Validates the scene and gives it its walkthrough.
-    fn finish(mut self) -> Result<Imported, LoadError> {
+    /// Validates the scene and gives it its walkthrough; `animation` is the
+    /// file's.
+    fn finish(mut self, animation: Option<SceneAnimation>) -> Result<Imported, LoadError> {
         match self.scene.validate() {
             Ok(()) => {}
             Err(SceneError::Empty(_)) => return Err(LoadError::Empty { path: self.path }),
@@ -376,6 +395,6 @@ impl Builder {
                 }
             },
         };
-        Ok(Imported { scene: self.scene, warnings: self.warnings })
+        Ok(Imported { scene: self.scene, warnings: self.warnings, animation })
     }
 }
