@@ -9,7 +9,7 @@ use super::overlay::{Overlay, ShownStats, StatsAverage, REFRESH_SECONDS};
 use super::path_recorder::{self, PathRecorder};
 use super::present::{Blit, Presenter};
 use super::{ViewConfig, ViewError};
-use crate::bench::config::NEAR_PLANE;
+use crate::bench::config::{DEFAULT_FPS, NEAR_PLANE};
 use crate::bench::runner::{cameras, far_plane, load_scene};
 use crate::bench::BenchConfig;
 use crate::limits::MAX_FRAMES;
@@ -386,8 +386,11 @@ impl<'s> Viewer<'s> {
         self.move_camera(dt);
         let Some(gpu) = self.gpu.as_mut() else { return Ok(()) };
         if let Some(motion) = &self.motion {
-            // The scene moves while you fly: its boxes (key V) follow.
-            self.motion_time += dt;
+            // The scene moves while you fly: its boxes (key V) follow. A
+            // screenshot run steps it as `bench` does, one frame at its
+            // default frame rate, so that the picture does not depend on
+            // how fast the machine draws.
+            self.motion_time += if self.config.screenshot.is_some() { 1.0 / DEFAULT_FPS } else { dt };
             let changed = self.scene.apply(&motion.changes_at(self.motion_time))?;
             self.hierarchy.update(&self.scene, &changed, UpdatePolicy::default());
             gpu.backend.update_instances(&self.scene, &changed);
