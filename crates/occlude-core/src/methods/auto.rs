@@ -1,7 +1,8 @@
 //! `auto`: occlusion culling that pays for itself, choosing per frame among
-//! two-phase Hi-Z (`hiz`, where the backend has GPU-resident culling with
-//! depth pyramids), CHC++ (`chcpp`) and view-frustum culling (`vfc`) by
-//! what each has been measured to cost.
+//! raster occlusion culling (`roc`, where the backend has GPU-resident
+//! culling), two-phase Hi-Z (`hiz`, where it also has depth pyramids),
+//! CHC++ (`chcpp`) and view-frustum culling (`vfc`) by what each has been
+//! measured to cost.
 //!
 //! **What it decides.** Which one method renders the frame. Each is
 //! conservative, so every frame's image is `vfc`'s whichever runs; the
@@ -16,10 +17,11 @@
 //!
 //! **How.** The method in use is the current one; its frames keep a
 //! running mean. Another method is tried now and then for a probe: one
-//! frame to warm up its temporal state, then two measured frames (a
-//! method's first frame after another ran is never measured, the current
-//! one's included); `vfc`, which carries no state, is probed by one
-//! measured frame. If their mean beats the current mean by `auto.margin`
+//! frame to warm up its temporal state (two the first time, when it starts
+//! from nothing: `hiz`'s and `roc`'s second frame still draws no early
+//! list), then two measured frames (a method's first frame after another
+//! ran is never measured, the current one's included); `vfc`, which
+//! carries no state, is probed by one measured frame. If their mean beats the current mean by `auto.margin`
 //! (5 %), the probed method becomes current. The next probe of a method
 //! waits long enough for probes to cost at most `auto.budget` (1 %) of the
 //! frame time: a method measured at three times the current one's time
@@ -33,7 +35,7 @@
 //! starts from what it knew.
 //!
 //! **What it costs.** The first frames try every method once (the GPU-driven
-//! one first, the cheapest to try on a current GPU); after that, probes
+//! ones first, the cheapest to try on a current GPU); after that, probes
 //! cost about `auto.budget` of the time. The choice assumes that
 //! neighbouring frames cost about the same (a camera that moves smoothly).
 
@@ -58,8 +60,8 @@ pub struct AutoParams {
     /// `auto.budget`: the share of the frame time probes may cost on
     /// average (0.01: 1 %).
     pub budget: f32,
-    /// `auto.gpu`: whether `hiz` is among the choices where the backend
-    /// runs it.
+    /// `auto.gpu`: whether `roc` and `hiz` are among the choices where the
+    /// backend runs them.
     pub gpu: bool,
 }
 
@@ -82,6 +84,9 @@ impl MethodParams for AutoParams {
 /// Measured frames of a probe, after its warm-up frame.
 const PROBE_FRAMES: u32 = 2;
 
+/// Frames a method runs from nothing before one is measured.
+const COLD_FRAMES: u64 = 2;
+
 /// Weight of the newest frame in the current method's running mean.
 const MEAN_WEIGHT: f64 = 0.25;
 
@@ -98,6 +103,8 @@ struct Choice {
     /// Its mean frame time when last measured (a probe, or its frames as
     /// the current method), ms.
     last_time: Option<f64>,
+    /// Frames it has rendered.
+    frames: u64,
 }
 
 /// A probe under way.
@@ -158,11 +165,17 @@ impl Auto {
         self.choices.iter().map(|c| c.method.name()).collect()
     }
 
-    /// Makes the choices for `backend`: `hiz` only where it runs there.
+    /// Makes the choices for `backend`: `roc` and `hiz` only where they run
+    /// there.
     fn choose_among(&mut self, backend: &mut dyn Backend) {
-        let pyramids = backend.gpu_culling().is_ok_and(|gpu| gpu.pyramid_support().is_ok());
-        let gpu = (self.params.gpu && pyramids).then(|| Method::Hiz(Default::default()));
-        let methods = gpu.into_iter().chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]);
+        let (culling, pyramids) = match backend.gpu_culling() {
+            Ok(gpu) => (true, gpu.pyramid_support().is_ok()),
+            Err(_) => (false, false),
+        };
+        let gpu = self.params.gpu;
+        let roc = (gpu && culling).then(|| Method::Roc(Default::default()));
+        let hiz = (gpu && pyramids).then(|| Method::Hiz(Default::default()));
+        let methods = roc.into_iter().chain(hiz).chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]);
         self.choices = methods
             .map(|m| Choice {
                 method: m.build().expect("default parameters are valid"),
@@ -170,6 +183,7 @@ impl Auto {
                 wait: u64::from(self.params.probe),
                 next_probe: 0,
                 last_time: None,
+                frames: 0,
             })
             .collect();
         self.fallback = backend.cost_model().unwrap_or_default();
@@ -261,7 +275,9 @@ impl CullingMethod for Auto {
 
     fn finish_frame(&mut self, stats: &FrameStats) {
         let time = self.frame_time(stats);
-        let warm_up = self.last_ran != Some(self.running) && !self.choices[self.running].stateless;
+        let choice = &mut self.choices[self.running];
+        let warm_up = !choice.stateless && (choice.frames < COLD_FRAMES || self.last_ran != Some(self.running));
+        choice.frames += 1;
         self.last_ran = Some(self.running);
         self.choices[self.running].method.finish_frame(stats);
         let mean = self.mean;
@@ -325,7 +341,7 @@ mod tests {
             auto.finish_frame(&FrameStats { frame_ms: cost(frame, name), ..FrameStats::default() });
             ran.push(name);
         }
-        assert_eq!(auto.choices(), ["hiz", "chcpp", "vfc"]);
+        assert_eq!(auto.choices(), ["roc", "hiz", "chcpp", "vfc"]);
         ran
     }
 
@@ -341,14 +357,20 @@ mod tests {
             _ => 2.0,
         };
         let ran = run(600, cost);
-        // hiz first (a warm-up frame and a measured one), then a probe of
-        // chcpp, which takes over, then one of vfc, which loses.
-        assert_eq!(ran[..7], ["hiz", "hiz", "chcpp", "chcpp", "chcpp", "vfc", "chcpp"]);
-        assert!(share(&ran[8..], "chcpp") > 0.97, "{}", share(&ran[8..], "chcpp"));
+        // roc first (two frames from nothing, one measured), then probes of
+        // hiz, which loses, of chcpp, which takes over, and of vfc (one
+        // frame, no state), which loses.
+        let start = ["roc", "roc", "roc", "hiz", "hiz", "hiz", "hiz", "chcpp", "chcpp", "chcpp", "chcpp", "vfc"];
+        assert_eq!(ran[..12], start);
+        assert!(share(&ran[12..], "chcpp") > 0.97, "{}", share(&ran[12..], "chcpp"));
         // Each probe of vfc costs 0.5 ms beyond chcpp's 0.5 ms: 1 % of the
         // time allows one in 100 frames.
         assert!(ran.iter().filter(|&&n| n == "vfc").count() <= 7);
-        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 2);
+        // roc and hiz, four times chcpp's time, wait past the 600 frames
+        // once measured against chcpp (hiz, first measured against roc,
+        // equally slow, is probed once more).
+        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 7);
+        assert_eq!(ran.iter().filter(|&&n| n == "roc").count(), 3);
     }
 
     #[test]
