@@ -119,6 +119,26 @@ struct Probe {
 }
 
 /// `auto`: the method that pays for itself (module documentation).
+///
+/// **Use it** when you do not know whether occlusion culling pays on your
+/// scenes: on a scene with little occlusion, or geometry your GPU draws in
+/// a fraction of a millisecond, it settles on frustum culling.
+///
+/// **Cost.** Its first frames try each method once (about fifteen frames,
+/// some of them slower than frustum culling: a method starting from nothing
+/// tests everything). After that, probes cost about `auto.budget` (1 %) of
+/// the frame time. Memory: the state of every method it may choose.
+///
+/// **Requirements.** Frame times from the backend
+/// ([`FrameStats::frame_ms`]); without them the backend's cost model, or
+/// [`CostModel::default`], charges the frames from their counts, less
+/// faithfully. `roc` and `hiz` are among the choices only where the
+/// backend has GPU-resident culling (and depth pyramids, for `hiz`).
+///
+/// **Limits.** It chooses among four methods (not `om`, `ioc`, `chc`); it
+/// assumes that neighbouring frames cost about the same, so after a cut
+/// to another view it may run the wrong method until the next probe; in
+/// the embedding's `Culler` its choices are `chcpp` and `vfc`.
 pub struct Auto {
     params: AutoParams,
     /// Empty until the first frame, when the backend is known.

@@ -49,7 +49,8 @@ pub enum Method {
     Nohc,
     /// `nohc-opt`: NOHC with the oracle's exact visibility.
     NohcOpt,
-    /// `auto`: `vfc`, `chcpp` or `hiz` per frame, by their measured cost.
+    /// `auto`: `roc`, `hiz`, `chcpp` or `vfc` per frame, whichever its
+    /// frames measure fastest ([`Auto`]); the method to start with.
     Auto(AutoParams),
 }
 

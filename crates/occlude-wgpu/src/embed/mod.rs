@@ -4,7 +4,9 @@
 //! instance's world-space box. Two shapes:
 //!
 //! - [`Culler`], the query-driven methods (`chc`, `chcpp`, `om`, `sw`;
-//!   `vfc` as the baseline): occlude calls your draw code with lists of
+//!   `vfc` as the baseline; `auto`, the one to start with, runs `chcpp` or
+//!   `vfc`, whichever its frames' times measure faster, so culling never
+//!   costs you much): occlude calls your draw code with lists of
 //!   instances decided on the CPU from occlusion queries (below).
 //! - [`GpuCuller`], the GPU-driven methods `hiz`, `roc` and `ioc`: occlude writes
 //!   lists of visible instance ids into buffers on the GPU and you draw
