@@ -321,10 +321,13 @@ fn run_failure(e: anyhow::Error) -> Failure {
         c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)
             || no_adapter(c)
             || c.is::<occlude_core::GpuCullingUnsupported>()
+            || c.is::<occlude_core::methods::Unsupported>()
             || c.is::<occlude_cli::view::ViewError>()
             || c.is::<occlude_cli::camera_path::UnusableWalkthrough>()
     };
-    if e.chain().any(input) {
+    if e.chain().any(no_adapter) {
+        Failure::Usage(e.context("no GPU to run on: `occlude bench --backend soft` (the default) needs none"))
+    } else if e.chain().any(input) {
         Failure::Usage(e)
     } else {
         Failure::Run(e)

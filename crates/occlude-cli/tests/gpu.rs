@@ -121,7 +121,7 @@ fn methods_match_vfc_on_the_gpu_with_cameras_from_matrices() {
     }
 }
 
-/// `hiz` on the GPU at issue 18's six sizes and 67x45 (pyramids with odd
+/// `hiz` on the GPU at the six target sizes and 67x45 (pyramids with odd
 /// levels, and a one-texel pyramid at 1x1), reading the field's 2x2 texels
 /// a box and 8x8, and walking the hierarchy's nodes top-down
 /// (`hiz.granularity=node`): 0 missing pixels on every frame.
@@ -161,7 +161,7 @@ fn assert_hiz_exact_on_the_gpu(scene: &Scene, name: &str, resolution: (u32, u32)
 }
 
 /// `hiz` at its defaults on the GPU on every other `small` scene of the
-/// papers at issue 18's six sizes: 0 missing pixels on every frame (the
+/// papers at the six target sizes: 0 missing pixels on every frame (the
 /// city, with the default's 8 texels among its options: the test above).
 #[test]
 fn hiz_matches_vfc_on_the_gpu_on_every_scene_at_every_target_size() {

@@ -101,7 +101,7 @@ fn hiz_matches_vfc_at_odd_and_tiny_resolutions() {
 }
 
 /// `hiz` at its defaults on every other `small` scene of the papers at
-/// issue 18's six sizes: 0 missing pixels on every frame (the city, with
+/// the six target sizes: 0 missing pixels on every frame (the city, with
 /// the default's 8 texels among its options: the test above).
 #[test]
 fn hiz_matches_vfc_on_every_scene_at_every_target_size() {

@@ -1,4 +1,4 @@
-//! Granular visibility queries with summed area tables (issue 19, item 1)
+//! Granular visibility queries with summed area tables
 //! on the soft backend, on frames of the `small` scenes' walkthroughs:
 //! the counts keep the paper's guarantees against the exact counts, and
 //! the exact counts are the oracle's; and on the wgpu backend (lavapipe

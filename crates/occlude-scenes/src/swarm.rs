@@ -1,5 +1,5 @@
 //! `swarm`: a million small objects between large blocks, the scale of
-//! GPU-driven culling (issue 18, item 4: "a scene of 1,000,000 instances").
+//! GPU-driven culling (a scene of 1,000,000 instances).
 //!
 //! Square blocks of a regular grid (20 m across, 8 to 40 m tall, 10 m
 //! streets between them) stand on a ground plate; the small objects (boxes,

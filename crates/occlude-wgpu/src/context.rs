@@ -10,8 +10,8 @@ pub enum GpuError {
     /// No adapter at all (no driver, no GPU, no software Vulkan).
     #[error(
         "no GPU adapter found ({0}). Install a Vulkan driver (on Debian, `apt-get install \
-         mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan), or benchmark without a GPU: \
-         `occlude bench --backend soft` (the default)"
+         mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan), or use occlude's software backend \
+         (`occlude-soft`), which needs no GPU"
     )]
     NoAdapter(String),
     /// The adapter exists but refused to open a device.
@@ -27,8 +27,8 @@ pub enum GpuError {
     #[error(
         "no GPU adapter can run the wgpu backend: {0}. Install a Vulkan driver (on Debian, \
          `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan) or pick another \
-         adapter with WGPU_BACKEND / WGPU_ADAPTER_NAME, or benchmark without a GPU: \
-         `occlude bench --backend soft` (the default)"
+         adapter with WGPU_BACKEND / WGPU_ADAPTER_NAME, or use occlude's software backend \
+         (`occlude-soft`), which needs no GPU"
     )]
     Unsuitable(String),
     /// The scene does not fit the adapter's limits.
@@ -381,7 +381,7 @@ mod tests {
             Err(e @ GpuError::Unsuitable(_)) => {
                 let message = e.to_string();
                 assert!(message.contains("llvmpipe (Gl) lacks copies of depth textures to buffers"), "{message}");
-                assert!(message.contains("--backend soft"), "{message}");
+                assert!(message.contains("software backend"), "{message}");
             }
             other => panic!("expected Unsuitable, got {other:?}"),
         }

@@ -79,7 +79,18 @@
 #![warn(missing_docs)]
 
 pub use glam;
-pub use occlude_core::*;
+// The core's modules a user meets, and its main types at the root. Its test
+// and tool support (`mock`, `recording`, `rng`, `host_culling`,
+// `input_file`) stays in `occlude-core`.
+pub use occlude_core::{
+    backend, camera, cost_model, depth_pyramid, frame, geometry, gpu_culling, gvq, hierarchy, item_buffer, methods,
+    motion, path, query_box, scene, stats,
+};
+pub use occlude_core::{
+    differing_pixels, render_frame, Aabb, Backend, Camera, CameraError, CostModel, CullingMethod, DrawnSet,
+    FrameContext, FrameStats, GpuCulling, GpuCullingUnsupported, Hierarchy, HierarchyKind, Instance, InstanceChange,
+    Instruments, Keyframe, Mesh, MotionError, NodeId, QueryHandle, Scene, SceneError, UpdatePolicy, Upkeep,
+};
 pub use occlude_moc as moc;
 #[cfg(feature = "scenes")]
 pub use occlude_scenes as scenes;

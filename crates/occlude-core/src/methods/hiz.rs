@@ -1,7 +1,7 @@
 //! Two-phase Hi-Z occlusion culling (`hiz`), as GPU-driven renderers ship
 //! it: zeux's niagara (early and late passes against a depth pyramid),
 //! nvpro's `gl_occlusion_culling` in its HiZ mode and Bevy's
-//! `OcclusionCulling` (issue 18, item 1). Where `roc` rasterizes every
+//! `OcclusionCulling`. Where `roc` rasterizes every
 //! object's box against the depth buffer, `hiz` reads a few texels of a
 //! depth pyramid per box in a compute pass, with no draw of the boxes.
 //!

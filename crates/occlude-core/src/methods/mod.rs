@@ -66,13 +66,25 @@ pub struct BuiltMethod {
     pub params: Vec<(String, String)>,
 }
 
+/// What a backend lacks to run a method ([`check_support`]).
+#[derive(Clone, Debug, Error, PartialEq, Eq)]
+pub enum Unsupported {
+    /// The method reads the oracle pass ([`Backend::instruments`]), which
+    /// the backend does not have.
+    #[error("this backend has no oracle pass (Backend::instruments)")]
+    NoOracle,
+    /// GPU-resident culling, or its depth pyramids, are missing.
+    #[error(transparent)]
+    GpuCulling(#[from] GpuCullingUnsupported),
+}
+
 /// Whether `backend` can run `method`: the oracle, GPU-resident culling
 /// and depth pyramids it needs, or what the backend lacks. The bench runner
 /// and the viewer ask before the first frame, so that a method never runs
 /// on its fallback unseen.
-pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> Result<(), GpuCullingUnsupported> {
+pub fn check_support(method: &dyn CullingMethod, backend: &mut dyn Backend) -> Result<(), Unsupported> {
     if method.needs_oracle() && backend.instruments().is_none() {
-        return Err(GpuCullingUnsupported("this backend has no oracle pass (Backend::instruments)".into()));
+        return Err(Unsupported::NoOracle);
     }
     if !method.needs_gpu_culling() {
         return Ok(());

@@ -1,10 +1,11 @@
 //! A small scene of boxes, a camera and a [`MockBackend`] for the methods'
 //! unit tests: each method's file checks its own behaviour on it.
 
-use super::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
+use super::{check_support, create, BuiltMethod, DrawnSet, MethodOptions, Unsupported};
 use crate::camera::Camera;
 use crate::frame::render_frame;
 use crate::geometry::Aabb;
+use crate::gpu_culling::GpuCullingUnsupported;
 use crate::hierarchy::{BuildOptions, Hierarchy, HierarchyKind, NodeId};
 use crate::mock::{Call, MockBackend, NO_GPU_CULLING};
 use crate::scene::{Mesh, Scene};
@@ -192,7 +193,7 @@ pub(crate) fn assert_refused_without_gpu_culling_and_falls_back_to_frustum_culli
     let mut mock = rig.mock();
     let mut m = method(name, &[]);
     let refused = check_support(m.method.as_ref(), &mut mock).unwrap_err();
-    assert_eq!(refused.0, NO_GPU_CULLING);
+    assert_eq!(refused, Unsupported::GpuCulling(GpuCullingUnsupported(NO_GPU_CULLING.into())));
     for calls in rig.run(&mut m, &mut mock, 2) {
         assert_draws_exactly(&calls, &rig.in_view());
         assert!(queries(&calls).is_empty());
