@@ -365,11 +365,7 @@ impl Culling {
 
     /// Rewrites the `changed` slots of `boxes` (one queue write each).
     pub fn update_boxes(&mut self, boxes: BoxSet, changed: &[(u32, Aabb)]) {
-        let buffer = &self.boxes[boxes.0 as usize];
-        for (slot, b) in changed {
-            let words = box_words(b, *slot);
-            self.gpu.ctx.queue.write_buffer(buffer, u64::from(*slot) * BOX_SLOT_BYTES, bytemuck::cast_slice(&words));
-        }
+        write_boxes(&self.gpu.ctx.queue, &self.boxes[boxes.0 as usize], changed);
     }
 
     /// Drops every box set, flag buffer, list, table and pyramid, and the
@@ -787,6 +783,15 @@ pub(crate) fn param_buffer(device: &wgpu::Device, value: u32) -> wgpu::Buffer {
 pub(crate) fn box_set_buffer(ctx: &GpuContext, boxes: &[Aabb]) -> wgpu::Buffer {
     let data: Vec<[u32; 8]> = boxes.iter().zip(0u32..).map(|(b, slot)| box_words(b, slot)).collect();
     storage_init(ctx, "box set", bytemuck::cast_slice(&data), wgpu::BufferUsages::COPY_DST)
+}
+
+/// Writes each `(slot, box)` of `changed` into the box set `buffer` (made
+/// by [`box_set_buffer`]), one queue write per box.
+pub(crate) fn write_boxes(queue: &wgpu::Queue, buffer: &wgpu::Buffer, changed: &[(u32, Aabb)]) {
+    for (slot, b) in changed {
+        let words = box_words(b, *slot);
+        queue.write_buffer(buffer, u64::from(*slot) * BOX_SLOT_BYTES, bytemuck::cast_slice(&words));
+    }
 }
 
 /// Bytes of one box of a box set.

@@ -15,7 +15,7 @@ use occlude::methods::Method;
 use occlude::wgpu::embed::{
     Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
-use occlude::{Aabb, Camera, Scene};
+use occlude::{Aabb, Camera, InstanceChange, Scene};
 use own_renderer::{open_device, Options, Renderer};
 
 /// Frames along the camera's walk.
@@ -319,6 +319,38 @@ fn the_gpu_driven_embedding_draws_its_lists(
         assert_eq!(culler.read_counts().unwrap(), expected);
     }
     assert_eq!(setups, 6);
+}
+
+/// Every GPU-driven method follows an instance that moves out of view and
+/// back, hides and shows: from the next frame its lists hold the instance
+/// only where its new box is visible. A change naming no instance is an
+/// error.
+#[test]
+fn the_gpu_driven_embedding_follows_moving_instances() {
+    let Some((device, queue)) = device("the_gpu_driven_embedding_follows_moving_instances") else { return };
+    let (attachments, bounds) = one_box();
+    let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+    let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let depth = texture_view(&device, attachments.depth, 8, sampled);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    let behind = Aabb::new(bounds[0].min + Vec3::Z * 10.0, bounds[0].max + Vec3::Z * 10.0);
+    for method in GPU_METHODS {
+        let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
+        let steps = [
+            (vec![], [0, 1]),
+            (vec![InstanceChange::to_box(0, &behind)], [0, 0]),
+            (vec![InstanceChange::to_box(0, &bounds[0])], [0, 1]),
+            (vec![InstanceChange::Hide(0)], [0, 0]),
+            (vec![InstanceChange::Show(0)], [0, 1]),
+        ];
+        for (k, (changes, counts)) in steps.iter().enumerate() {
+            culler.update(changes).unwrap();
+            culler.render(&forward, target, |_, _| {}).unwrap();
+            assert_eq!(culler.read_counts().unwrap(), *counts, "{method}, step {k}");
+        }
+        assert!(matches!(culler.update(&[InstanceChange::Hide(7)]), Err(EmbedError::Motion(_))), "{method}");
+    }
 }
 
 /// `roc` and `ioc` on a device opened without `SHADER_EARLY_DEPTH_TEST`

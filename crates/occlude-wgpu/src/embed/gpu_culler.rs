@@ -20,7 +20,7 @@ use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
 use crate::culling::{
     bind_group, box_set_buffer, cull_camera_buffer, cull_module, dispatch_reductions, param_buffer, storage_init,
-    workgroups, write_cull_camera, PyramidBuffers,
+    workgroups, write_boxes, write_cull_camera, PyramidBuffers,
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
@@ -29,7 +29,9 @@ use occlude_core::methods::hiz::Granularity;
 use occlude_core::methods::ioc::IocWalk;
 use occlude_core::methods::roc::RocMode;
 use occlude_core::methods::{Method, MethodError};
-use occlude_core::{Aabb, Camera, Hierarchy, HierarchyKind, Scene};
+use occlude_core::{
+    Aabb, Camera, Hierarchy, HierarchyKind, InstanceChange, NodeId, Scene, Since, UpdatePolicy, Upkeep,
+};
 
 /// The methods [`GpuCuller`] runs: `hiz`, whose every step is a compute
 /// pass over the renderer's depth, and `roc` and `ioc` (`roc` over a BVH
@@ -190,7 +192,7 @@ enum LateTest {
     Every(BoxTests, [BoxTest; 2]),
     /// `ioc`: the BVH's node boxes rasterized level by level, then the
     /// instances marked visible outside the frustum dropped.
-    Nodes(BoxTests, NodeLevels),
+    Nodes(BoxTests, NodeLevels, Hierarchy),
 }
 
 /// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
@@ -200,6 +202,8 @@ enum LateTest {
 pub struct GpuCuller {
     ctx: GpuContext,
     attachments: Attachments,
+    /// The instances' boxes as they stand ([`GpuCuller::update`]).
+    scene: Scene,
     instances: u32,
     camera: wgpu::Buffer,
     boxes: wgpu::Buffer,
@@ -311,7 +315,7 @@ impl GpuCuller {
             let walk = IocWalk::new(params, &hierarchy);
             let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
             let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
-            LateTest::Nodes(tests, levels)
+            LateTest::Nodes(tests, levels, hierarchy)
         } else if raster {
             let tests = BoxTests::new(&ctx, &attachments, &module, n);
             let every = [0, 1].map(|p| {
@@ -335,6 +339,7 @@ impl GpuCuller {
         }
         Ok(Self {
             attachments,
+            scene,
             instances: n,
             stats,
             drop_outside: (drop_outside, drop_groups),
@@ -356,6 +361,37 @@ impl GpuCuller {
             }),
             ctx,
         })
+    }
+
+    /// Moves, hides and shows instances before the next frame
+    /// ([`occlude_core::motion`]; for boxes, [`InstanceChange::to_box`]):
+    /// their boxes are rewritten on the device, one queue write each. For
+    /// `ioc` the BVH is refitted and its changed node boxes rewritten; its
+    /// shape is kept (never rebuilt here, as its levels are made for it),
+    /// so a tree loosened by motion tests more boxes, never misses a pixel.
+    /// A change naming an unknown instance or a non-finite transform is an
+    /// error, and nothing changes.
+    pub fn update(&mut self, changes: &[InstanceChange]) -> Result<Upkeep, EmbedError> {
+        let changed = self.scene.apply(changes)?;
+        let boxes: Vec<(u32, Aabb)> =
+            changed.iter().map(|&i| (i, self.scene.instances[i as usize].culling_bounds())).collect();
+        write_boxes(&self.ctx.queue, &self.boxes, &boxes);
+        let LateTest::Nodes(_, levels, hierarchy) = &mut self.late else {
+            return Ok(Upkeep { instances: changed.len(), ..Upkeep::default() });
+        };
+        let before = hierarchy.version();
+        let keep_shape = UpdatePolicy { max_cost_ratio: f32::INFINITY };
+        let upkeep = hierarchy.update(&self.scene, &changed, keep_shape);
+        let all: Vec<NodeId>;
+        let nodes = match hierarchy.since(Some(before)) {
+            Since::Refit(Some(changes)) => &changes.nodes,
+            _ => {
+                all = (0..hierarchy.node_count() as NodeId).collect();
+                &all
+            }
+        };
+        levels.update_boxes(&self.ctx.queue, hierarchy, nodes);
+        Ok(upkeep)
     }
 
     /// The culler drawing its lists with the renderer's `pipeline`, whose
@@ -453,7 +489,7 @@ impl GpuCuller {
                 tests.set_camera(&self.ctx.queue, camera, &self.attachments);
                 tests.encode(&mut encoder, &target, &self.attachments, &every[now]);
             }
-            LateTest::Nodes(tests, levels) => {
+            LateTest::Nodes(tests, levels, _) => {
                 tests.set_camera(&self.ctx.queue, camera, &self.attachments);
                 levels.encode(&mut encoder, tests, &target, &self.attachments, now);
             }

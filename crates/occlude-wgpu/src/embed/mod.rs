@@ -43,8 +43,8 @@
 //!
 //! - Every draw of instance `i` stays inside `bounds[i]`; an instance that
 //!   moves gets its new box before the frame ([`Culler::update`] with
-//!   [`InstanceChange::to_box`](occlude_core::InstanceChange::to_box); a
-//!   [`GpuCuller`] needs a new one). A mesh's local box and
+//!   [`InstanceChange::to_box`](occlude_core::InstanceChange::to_box), or
+//!   [`GpuCuller::update`]). A mesh's local box and
 //!   its instance's transform give the world box with
 //!   [`Aabb::transformed`](occlude_core::Aabb::transformed).
 //! - The camera is [`occlude_core::Camera::from_matrices`] of the view and

@@ -11,10 +11,10 @@
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
 use super::{Attachments, FrameTarget};
 use crate::context::GpuContext;
-use crate::culling::{bind_group, box_set_buffer, storage_init, workgroups, TableBuffers};
+use crate::culling::{bind_group, box_set_buffer, storage_init, workgroups, write_boxes, TableBuffers};
 use crate::pipelines::compute_pipeline;
 use occlude_core::methods::ioc::IocWalk;
-use occlude_core::{Aabb, Hierarchy};
+use occlude_core::{Aabb, Hierarchy, NodeId};
 
 /// One level of the walk: its box test and, above the bottom, its
 /// expansions.
@@ -32,6 +32,8 @@ pub(super) struct NodeLevels {
     expand_list: wgpu::ComputePipeline,
     /// Per node, whether its box passed this frame's test.
     node_flags: wgpu::Buffer,
+    /// Per node, its box (a box set): rewritten after a refit.
+    node_boxes: wgpu::Buffer,
     /// Nodes: the threads of each expansion.
     nodes: u32,
     levels: Vec<Level>,
@@ -66,7 +68,7 @@ impl NodeLevels {
         let expand_list = compute_pipeline(device, cull, "cs_expand_list");
         let nodes = h.node_count() as u32;
         let boxes: Vec<Aabb> = h.nodes.iter().map(|n| n.bounds).collect();
-        let boxes = box_set_buffer(ctx, &boxes);
+        let node_boxes = box_set_buffer(ctx, &boxes);
         let node_flags =
             storage_init(ctx, "node visibility", &vec![0; 4 * nodes as usize], wgpu::BufferUsages::COPY_DST);
         let list = |ids: &[u32]| {
@@ -103,7 +105,7 @@ impl NodeLevels {
         for i in 0..count {
             let test_inputs = TestInputs {
                 cull_camera: inputs.cull_camera,
-                boxes: &boxes,
+                boxes: &node_boxes,
                 ids: (src, nodes),
                 flags: &node_flags,
                 stats: inputs.stats,
@@ -121,7 +123,14 @@ impl NodeLevels {
             }
         }
         let bottom = mark(src, &subtrees);
-        Self { expand_flags, expand_list, node_flags, nodes, levels, bottom }
+        Self { expand_flags, expand_list, node_flags, node_boxes, nodes, levels, bottom }
+    }
+
+    /// Rewrites the boxes of `nodes` from `h`, refitted since the walk was
+    /// made (same tree, new boxes).
+    pub fn update_boxes(&self, queue: &wgpu::Queue, h: &Hierarchy, nodes: &[NodeId]) {
+        let boxes: Vec<(u32, Aabb)> = nodes.iter().map(|&n| (n, *h.bounds(n))).collect();
+        write_boxes(queue, &self.node_boxes, &boxes);
     }
 
     /// Records the walk against the depth of `target` as everything
