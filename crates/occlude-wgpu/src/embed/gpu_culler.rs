@@ -192,7 +192,7 @@ enum LateTest {
     Every(BoxTests, [BoxTest; 2]),
     /// `ioc`: the BVH's node boxes rasterized level by level, then the
     /// instances marked visible outside the frustum dropped.
-    Nodes(BoxTests, NodeLevels, Hierarchy),
+    Nodes(BoxTests, NodeLevels, Box<Hierarchy>),
 }
 
 /// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
@@ -315,7 +315,7 @@ impl GpuCuller {
             let walk = IocWalk::new(params, &hierarchy);
             let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
             let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
-            LateTest::Nodes(tests, levels, hierarchy)
+            LateTest::Nodes(tests, levels, Box::new(hierarchy))
         } else if raster {
             let tests = BoxTests::new(&ctx, &attachments, &module, n);
             let every = [0, 1].map(|p| {
