@@ -353,6 +353,44 @@ fn the_gpu_driven_embedding_follows_moving_instances() {
     }
 }
 
+/// The frame's two phases recorded into the renderer's own encoder, with
+/// its own (here empty) passes between them, give the lists `render` gives;
+/// the late phase without the early one is refused.
+#[test]
+fn the_gpu_driven_phases_record_into_the_renderers_encoder() {
+    let Some((device, queue)) = device("the_gpu_driven_phases_record_into_the_renderers_encoder") else { return };
+    let (attachments, bounds) = one_box();
+    let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+    let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let depth = texture_view(&device, attachments.depth, 8, sampled);
+    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    for method in GPU_METHODS {
+        let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let refused = culler.encode_late(&mut encoder, &target);
+        assert!(matches!(refused, Err(EmbedError::Sequence(_))), "{method}: {refused:?}");
+        for expected in [[0, 1], [1, 0]] {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            culler.encode_early(&mut encoder, &forward, &target).unwrap();
+            // The renderer's own pass over the early list would go here; a
+            // pass clearing the depth stands for it.
+            let clear = wgpu::RenderPassDepthStencilAttachment {
+                view: &depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            };
+            drop(encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                depth_stencil_attachment: Some(clear),
+                ..Default::default()
+            }));
+            culler.encode_late(&mut encoder, &target).unwrap();
+            queue.submit([encoder.finish()]);
+            assert_eq!(culler.read_counts().unwrap(), expected, "{method}");
+        }
+    }
+}
+
 /// `roc` and `ioc` on a device opened without `SHADER_EARLY_DEPTH_TEST`
 /// (as wgpu opens one by default) are refused, naming the feature; `hiz`,
 /// which needs no feature, runs there.

@@ -224,6 +224,9 @@ pub struct GpuCuller {
     compact_late: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     late: LateTest,
     counts_staging: wgpu::Buffer,
+    /// The camera of a frame whose early phase is recorded and late phase
+    /// not yet.
+    frame_camera: Option<Camera>,
 }
 
 impl GpuCuller {
@@ -360,6 +363,7 @@ impl GpuCuller {
                 mapped_at_creation: false,
             }),
             ctx,
+            frame_camera: None,
         })
     }
 
@@ -438,21 +442,41 @@ impl GpuCuller {
     /// Renders a frame seen by `camera` (made with
     /// [`Camera::from_matrices`] from the renderer's own view and
     /// projection, `reverse_z` as its depth test says) into `target`, in
-    /// one submission: the early list is written and `draw(pass, list)`
-    /// draws it in a pass that clears the views; every instance's box is
-    /// tested against that depth (`hiz`: a depth pyramid built from the
-    /// depth texture; `roc`: the boxes rasterized in a pass of their own;
-    /// `ioc`: the BVH's node boxes so, level by level, then the instances
-    /// outside the frustum dropped);
-    /// the late list is written and `draw` draws it in a pass that loads
-    /// them. Nothing comes back to the CPU. Views that are not what the
-    /// attachments say, for `hiz` a depth texture without
-    /// `TEXTURE_BINDING` usage, or a camera whose depth order is not the
-    /// depth test's are an error, and nothing is drawn.
+    /// one submission of occlude's own: [`GpuCuller::encode_early`], then
+    /// `draw(pass, list)` draws the early list in a pass that clears the
+    /// views, [`GpuCuller::encode_late`], then `draw` draws the late list
+    /// in a pass that loads them. Nothing comes back to the CPU. Errors as
+    /// the two phases say; nothing is drawn then.
     pub fn render<F>(&mut self, camera: &Camera, target: FrameTarget<'_>, mut draw: F) -> Result<(), EmbedError>
     where
         F: FnMut(&mut wgpu::RenderPass<'_>, &VisibleList),
     {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.encode_early(&mut encoder, camera, &target)?;
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Clear, None), &self.lists[0]);
+        self.encode_late(&mut encoder, &target)?;
+        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Load, None), &self.lists[1]);
+        self.ctx.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// The frame's first phase, recorded into the renderer's `encoder`:
+    /// the early list ([`GpuCuller::lists`]`[0]`) is written with last
+    /// frame's visible instances still in view of `camera` (made with
+    /// [`Camera::from_matrices`] from the renderer's view and projection,
+    /// `reverse_z` as its depth test says). Record the early list's draws
+    /// into `target`'s views after it (and any pass of your own that
+    /// should use the list, a shadow pass say), then
+    /// [`GpuCuller::encode_late`]. Views that are not what the attachments
+    /// say, for `hiz` a depth texture without `TEXTURE_BINDING` usage, or a
+    /// camera whose depth order is not the depth test's are an error, and
+    /// nothing is recorded.
+    pub fn encode_early(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        target: &FrameTarget<'_>,
+    ) -> Result<(), EmbedError> {
         target.check(&self.attachments)?;
         let depth = target.depth.texture();
         if matches!(self.late, LateTest::Pyramid(_)) && !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
@@ -469,9 +493,7 @@ impl GpuCuller {
             )));
         }
         write_cull_camera(&self.ctx.queue, &self.camera, camera);
-        let (now, before) = (self.parity, 1 - self.parity);
-        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        // Early list: last frame's visible instances still in view.
+        let now = self.parity;
         encoder.clear_buffer(&self.lists[0].ids, 0, Some(4));
         encoder.clear_buffer(&self.lists[1].ids, 0, Some(4));
         encoder.clear_buffer(&self.flags[now], 0, None);
@@ -480,21 +502,40 @@ impl GpuCuller {
             dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instances);
             dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instances);
         }
-        self.copy_count(&mut encoder, 0);
-        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Clear, None), &self.lists[0]);
-        // Every box tested against that depth, this frame's flags set.
+        self.copy_count(encoder, 0);
+        self.frame_camera = Some(*camera);
+        Ok(())
+    }
+
+    /// The frame's second phase, recorded into the renderer's `encoder`
+    /// after the early list's draws: every instance's box is tested against
+    /// the depth those draws left in `target` (`hiz`: a depth pyramid built
+    /// from the depth texture; `roc`: the boxes rasterized in a pass of
+    /// their own; `ioc`: the BVH's node boxes so, level by level, then the
+    /// instances outside the frustum dropped), and the late list
+    /// ([`GpuCuller::lists`]`[1]`) is written with those found visible and
+    /// not drawn early. Record its draws after it, in passes that load the
+    /// views. Without [`GpuCuller::encode_early`] first in this frame it is
+    /// an error ([`EmbedError::Sequence`]), and nothing is recorded.
+    pub fn encode_late(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &FrameTarget<'_>,
+    ) -> Result<(), EmbedError> {
+        let camera = self.frame_camera.take().ok_or(EmbedError::Sequence("encode_late without encode_early first"))?;
+        target.check(&self.attachments)?;
+        let (now, before) = (self.parity, 1 - self.parity);
         match &self.late {
-            LateTest::Pyramid(_) => self.encode_pyramid_test(&mut encoder, target.depth, now),
+            LateTest::Pyramid(_) => self.encode_pyramid_test(encoder, target.depth, now),
             LateTest::Every(tests, every) => {
-                tests.set_camera(&self.ctx.queue, camera, &self.attachments);
-                tests.encode(&mut encoder, &target, &self.attachments, &every[now]);
+                tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
+                tests.encode(encoder, target, &self.attachments, &every[now]);
             }
             LateTest::Nodes(tests, levels, _) => {
-                tests.set_camera(&self.ctx.queue, camera, &self.attachments);
-                levels.encode(&mut encoder, tests, &target, &self.attachments, now);
+                tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
+                levels.encode(encoder, tests, target, &self.attachments, now);
             }
         }
-        // The late list: visible now, not drawn early.
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             if matches!(self.late, LateTest::Nodes(..)) {
@@ -505,9 +546,7 @@ impl GpuCuller {
             }
             dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instances);
         }
-        self.copy_count(&mut encoder, 1);
-        draw(&mut begin_pass(&mut encoder, &target, &self.attachments, PassStart::Load, None), &self.lists[1]);
-        self.ctx.queue.submit([encoder.finish()]);
+        self.copy_count(encoder, 1);
         self.parity = before;
         Ok(())
     }

@@ -36,8 +36,10 @@
 //!   queue. The frame's end waits for read-backs still in flight (not for
 //!   your draws).
 //! - **Your passes are ours.** Occlude begins the frame's render passes on
-//!   your views; draws you need outside them (sky, UI, post-processing) go
-//!   in passes of your own before or after.
+//!   your views, and submits them itself (a query's result comes back only
+//!   after its pass is submitted), so it cannot record into your encoder;
+//!   draws you need outside them (sky, UI, post-processing) go in passes
+//!   of your own before or after.
 //!
 //! ## Requirements
 //!
@@ -148,6 +150,15 @@
 //! callback has set your other bind groups and buffers, the list's group
 //! and its indirect draw (or bind the list in a group of yours and draw it
 //! yourself in [`GpuCuller::render`]'s callback).
+//!
+//! **In your own frame.** [`GpuCuller::render`] records and submits the
+//! frame in an encoder of occlude's. To place the frame in yours (a render
+//! graph), record its phases: [`GpuCuller::encode_early`] (step 1), your
+//! passes drawing the early list (step 2), [`GpuCuller::encode_late`] (step 3),
+//! your passes drawing the late list. Between them the lists are yours to
+//! reuse: draw the same visible instances into a shadow or motion-vector
+//! pass. A [`Culler`] cannot do this: each wait for a query result must
+//! submit the work before it, so it submits its own encoders.
 //!
 //! The image is the image without culling: an instance with a pixel in the
 //! final image is at that pixel no farther than the early pass's depth,
@@ -328,6 +339,10 @@ pub enum EmbedError {
     /// ([`GpuCuller::with_list_pipeline`]).
     #[error("cannot bind the visible lists: {0}")]
     Binding(String),
+    /// The frame's phases were recorded out of order
+    /// ([`GpuCuller::encode_late`] before [`GpuCuller::encode_early`]).
+    #[error("{0}")]
+    Sequence(&'static str),
     /// Occlude's work on the device failed, or the camera's depth order is
     /// not the depth test's ([`occlude_core::Backend::failure`]).
     #[error("culling failed: {0}")]
