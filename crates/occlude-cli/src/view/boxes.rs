@@ -7,7 +7,7 @@
 //! ancestors are visible too, and their nested faces would tint the whole
 //! image.) The GPU-driven methods' batched box tests are drawn the same
 //! way, green or red: all of them, or one batch at a time (key L), which for
-//! `ioc` is one level of the hierarchy (the IOC poster's Figure 4).
+//! `ioc` is one level of the hierarchy (the IOC poster's Figure 2).
 //!
 //! Coloured by pyramid level (key Z), the boxes of tests against a depth
 //! pyramid (`hiz`'s late pass) take the colour of the level each was tested
