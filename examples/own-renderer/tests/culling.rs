@@ -180,6 +180,17 @@ fn one_box() -> (Attachments, [Aabb; 1]) {
     (attachments, [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))])
 }
 
+/// An 8 x 8 depth texture of `format` that `hiz` can read, as a view.
+fn sampled_depth(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::TextureView {
+    texture_view(device, format, 8, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING)
+}
+
+/// A camera at the origin looking down -z, forward depth: [`one_box`]'s
+/// box in view.
+fn forward_camera() -> Camera {
+    Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap()
+}
+
 /// A view of a new `size` x `size` texture of `format` and `usage`.
 fn texture_view(
     device: &wgpu::Device,
@@ -330,10 +341,9 @@ fn the_gpu_driven_embedding_follows_moving_instances() {
     let Some((device, queue)) = device("the_gpu_driven_embedding_follows_moving_instances") else { return };
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-    let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-    let depth = texture_view(&device, attachments.depth, 8, sampled);
+    let depth = sampled_depth(&device, attachments.depth);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
-    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    let forward = forward_camera();
     let behind = Aabb::new(bounds[0].min + Vec3::Z * 10.0, bounds[0].max + Vec3::Z * 10.0);
     for method in GPU_METHODS {
         let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
@@ -361,10 +371,9 @@ fn the_gpu_driven_phases_record_into_the_renderers_encoder() {
     let Some((device, queue)) = device("the_gpu_driven_phases_record_into_the_renderers_encoder") else { return };
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
-    let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-    let depth = texture_view(&device, attachments.depth, 8, sampled);
+    let depth = sampled_depth(&device, attachments.depth);
     let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
-    let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
+    let forward = forward_camera();
     for method in GPU_METHODS {
         let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
         let mut encoder = device.create_command_encoder(&Default::default());
