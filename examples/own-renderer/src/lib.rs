@@ -13,7 +13,7 @@
 
 use glam::{Mat4, Vec3};
 use occlude::methods::Method;
-use occlude::wgpu::embed::{Attachments, Culler, FrameTarget, GpuCuller, IndirectDraw, RASTER_FEATURES};
+use occlude::wgpu::embed::{AnyCuller, Attachments, FrameTarget, IndirectDraw, VisibleList, RASTER_FEATURES};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -51,15 +51,6 @@ struct InstanceData {
     color: [f32; 3],
 }
 
-/// occlude: the culling method, query-driven (`chcpp` and the others) or
-/// GPU-driven (`hiz`, `roc`, `ioc`). One per renderer, so the variants' sizes do not
-/// matter.
-#[allow(clippy::large_enum_variant)]
-enum Culling {
-    Queries(Culler),
-    Gpu(GpuCuller),
-}
-
 /// The renderer: device, pipelines, buffers and its off-screen image.
 pub struct Renderer {
     device: wgpu::Device,
@@ -81,7 +72,7 @@ pub struct Renderer {
     color: wgpu::Texture,
     depth: wgpu::Texture,
     /// occlude: the culling method, when culling is on.
-    culling: Option<Culling>,
+    culling: Option<AnyCuller>,
 }
 
 /// A device and queue on the first adapter wgpu finds (`WGPU_BACKEND` and
@@ -180,15 +171,12 @@ impl Renderer {
         // occlude: the attachments, the instance boxes and the method, once.
         let attachments =
             Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
+        let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
         self.culling = match method {
-            Some(method) if method.is_gpu_driven() => {
-                let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
-                let culler = GpuCuller::new(&self.device, &self.queue, attachments, &self.bounds, &method, draw)?;
-                Some(Culling::Gpu(culler.with_list_pipeline(&self.listed, 1, 0)?))
-            }
-            Some(method) => {
-                Some(Culling::Queries(Culler::new(&self.device, &self.queue, attachments, &self.bounds, method)?))
-            }
+            Some(method) => Some(
+                AnyCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draw)?
+                    .with_list_pipeline(&self.listed, 1, 0)?,
+            ),
             None => None,
         };
         // occlude: end.
@@ -234,26 +222,27 @@ impl Renderer {
         let camera = Camera::from_matrices(view, projection, self.options.reverse_z)?;
         let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
         let mut drawn = 0u64;
-        match culling {
-            Culling::Queries(culler) => {
-                culler.render(&camera, target, |pass, instances| {
-                    bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
-                    for &i in instances {
-                        pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
-                    }
-                    drawn += instances.len() as u64;
-                })?;
+        // A query-driven method draws lists of instances, a GPU-driven one
+        // lists on the GPU with one indirect draw each.
+        let draw_instances = |pass: &mut wgpu::RenderPass<'_>, instances: &[u32]| {
+            bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
+            for &i in instances {
+                pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
             }
-            Culling::Gpu(culler) => {
-                culler.render_lists(&camera, target, |pass| {
-                    pass.set_bind_group(0, &self.listed_group, &[]);
-                    pass.set_vertex_buffer(0, self.cube_vertices.slice(..));
-                    pass.set_index_buffer(self.cube_indices.slice(..), wgpu::IndexFormat::Uint16);
-                })?;
-                // The lists' lengths, read back for the printout and the
-                // test (the frame itself reads nothing back).
-                drawn = culler.read_counts()?.iter().map(|&n| u64::from(n)).sum();
-            }
+            drawn += instances.len() as u64;
+        };
+        let draw_list = |pass: &mut wgpu::RenderPass<'_>, list: &VisibleList| {
+            pass.set_pipeline(&self.listed);
+            pass.set_bind_group(0, &self.listed_group, &[]);
+            pass.set_vertex_buffer(0, self.cube_vertices.slice(..));
+            pass.set_index_buffer(self.cube_indices.slice(..), wgpu::IndexFormat::Uint16);
+            list.draw(pass);
+        };
+        culling.render(&camera, target, draw_instances, draw_list)?;
+        if let AnyCuller::Gpu(culler) = culling {
+            // The lists' lengths, read back for the printout and the test
+            // (the frame itself reads nothing back).
+            drawn = culler.read_counts()?.iter().map(|&n| u64::from(n)).sum();
         }
         // occlude: end.
         Ok(drawn)

@@ -12,6 +12,9 @@
 //!   lists of visible instance ids into buffers on the GPU and you draw
 //!   each with one indirect draw (section "GPU-driven culling" below).
 //!
+//! [`AnyCuller`] is either, as the [`Method`](occlude_core::methods::Method)
+//! says: give it both ways of drawing and switch methods freely.
+//!
 //! # Query-driven culling
 //!
 //! Each frame the method walks a BVH over the boxes front to back; where it
@@ -287,12 +290,14 @@
 //! [`FrameStats`]: occlude_core::FrameStats
 //! [`FrameStats::wait_ms`]: occlude_core::FrameStats::wait_ms
 
+mod any_culler;
 mod backend;
 mod box_tests;
 mod culler;
 mod gpu_culler;
 mod node_levels;
 
+pub use any_culler::AnyCuller;
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
 pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS, RASTER_FEATURES};
