@@ -21,7 +21,8 @@
 //! from nothing: `hiz`'s and `roc`'s second frame still draws no early
 //! list), then two measured frames (a method's first frame after another
 //! ran is never measured, the current one's included); `vfc`, which
-//! carries no state, is probed by one measured frame. If their mean beats the current mean by `auto.margin`
+//! carries no state, is probed by one measured frame, and a probe whose
+//! first measured frame takes twice the current mean ends there. If their mean beats the current mean by `auto.margin`
 //! (5 %), the probed method becomes current. The next probe of a method
 //! waits long enough for probes to cost at most `auto.budget` (1 %) of the
 //! frame time: a method measured at three times the current one's time
@@ -83,6 +84,9 @@ impl MethodParams for AutoParams {
 
 /// Measured frames of a probe, after its warm-up frame.
 const PROBE_FRAMES: u32 = 2;
+
+/// A probe's measured frame this many times the current mean ends it.
+const CLEARLY_SLOWER: f64 = 2.0;
 
 /// Frames a method runs from nothing before one is measured.
 const COLD_FRAMES: u64 = 2;
@@ -312,7 +316,10 @@ impl CullingMethod for Auto {
             None => {}
         }
         let needed = if self.choices[self.running].stateless { 1 } else { PROBE_FRAMES };
-        if let Some(probe) = self.probe.take_if(|p| p.times.len() as u32 >= needed) {
+        // A measured frame at twice the current mean cannot be made up by
+        // the next: the probe ends at once.
+        let lost = |p: &Probe| p.times.last().zip(mean).is_some_and(|(&t, m)| t > CLEARLY_SLOWER * m);
+        if let Some(probe) = self.probe.take_if(|p| p.times.len() as u32 >= needed || lost(p)) {
             self.end_probe(probe);
         }
         self.frame += 1;
@@ -388,8 +395,9 @@ mod tests {
         assert!(ran.iter().filter(|&&n| n == "vfc").count() <= 7);
         // roc and hiz, four times chcpp's time, wait past the 600 frames
         // once measured against chcpp (hiz, first measured against roc,
-        // equally slow, is probed once more).
-        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 7);
+        // equally slow, is probed once more: a warm-up frame and one
+        // measured frame, clearly slower, end that probe).
+        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 6);
         assert_eq!(ran.iter().filter(|&&n| n == "roc").count(), 3);
     }
 
