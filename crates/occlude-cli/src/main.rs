@@ -97,9 +97,10 @@ struct SceneArgs {
     method_opt: Vec<String>,
     /// Share of the scene's instances that move, 0 to 1: each chosen one
     /// slides back and forth, one in eight also leaves and comes back
-    /// (deterministic from --seed). A glTF model's own node animations
-    /// always play (looped); this then moves a share of the instances they
-    /// do not.
+    /// (deterministic from --seed). A scene's own motion always plays (a
+    /// glTF model's node animations, looped; the vehicles, people and doors
+    /// of traffic and crowd); this then moves a share of the instances it
+    /// does not.
     #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
     motion: f64,
 }

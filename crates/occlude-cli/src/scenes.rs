@@ -1,8 +1,9 @@
-//! `occlude scenes`: the procedural scenes with their sizes.
+//! `occlude scenes`: the procedural scenes with their sizes, and whether
+//! they move by themselves.
 
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::{Hierarchy, HierarchyKind};
-use occlude_scenes::{generate, Size, SCENE_NAMES};
+use occlude_scenes::{generate_moving, Size, SCENE_NAMES};
 use std::fmt::Write;
 use std::time::Instant;
 
@@ -23,8 +24,10 @@ pub struct SceneRow {
     pub bvh_nodes: usize,
     /// kD-tree nodes with the default leaf size.
     pub kdtree_nodes: usize,
-    /// Real time to generate the scene.
+    /// Real time to generate the scene (and its motion).
     pub generate_ms: f64,
+    /// Whether the scene moves by itself (vehicles, people, doors).
+    pub moves: bool,
 }
 
 /// Generates every scene at `size` (with `seed`) and measures it.
@@ -33,7 +36,7 @@ pub fn rows(size: Size, seed: u64) -> Vec<SceneRow> {
         .iter()
         .map(|&name| {
             let start = Instant::now();
-            let scene = generate(name, size, seed).expect("built-in scene names are valid");
+            let (scene, motion) = generate_moving(name, size, seed).expect("built-in scene names are valid");
             let generate_ms = start.elapsed().as_secs_f64() * 1e3;
             let nodes = |kind| Hierarchy::build(&scene, kind, BuildOptions::default()).node_count();
             SceneRow {
@@ -45,6 +48,7 @@ pub fn rows(size: Size, seed: u64) -> Vec<SceneRow> {
                 bvh_nodes: nodes(HierarchyKind::Bvh),
                 kdtree_nodes: nodes(HierarchyKind::KdTree),
                 generate_ms,
+                moves: motion.is_some(),
             }
         })
         .collect()
@@ -53,13 +57,13 @@ pub fn rows(size: Size, seed: u64) -> Vec<SceneRow> {
 /// The rows as an aligned table.
 pub fn render(rows: &[SceneRow]) -> String {
     let mut out = format!(
-        "{:<8} {:<6} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9}\n",
-        "scene", "size", "triangles", "unique tri", "instances", "bvh nodes", "kd nodes", "gen ms"
+        "{:<8} {:<6} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:<5}\n",
+        "scene", "size", "triangles", "unique tri", "instances", "bvh nodes", "kd nodes", "gen ms", "moves"
     );
     for r in rows {
         let _ = writeln!(
             out,
-            "{:<8} {:<6} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9.0}",
+            "{:<8} {:<6} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9.0} {:<5}",
             r.name,
             r.size.to_string(),
             r.triangles,
@@ -67,7 +71,8 @@ pub fn render(rows: &[SceneRow]) -> String {
             r.instances,
             r.bvh_nodes,
             r.kdtree_nodes,
-            r.generate_ms
+            r.generate_ms,
+            if r.moves { "yes" } else { "no" }
         );
     }
     out

@@ -8,12 +8,12 @@ mod common;
 
 use indicatif::ProgressBar;
 use occlude_cli::bench::ideal::IDEALS;
-use occlude_cli::bench::runner::{cameras, run_scene, run_scene_with_variants, Variant};
+use occlude_cli::bench::runner::{cameras, load_scene, run_moving_scene, run_scene, run_scene_with_variants, Variant};
 use occlude_cli::bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene, UpdatePolicy};
 use occlude_scenes::import::{import, Imported, ModelFormat};
-use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, PAPER_SCENES};
+use occlude_scenes::{building, export, generate, AutoPath, ImportOptions, Size, MOVING_SCENES, PAPER_SCENES};
 use occlude_soft::GpuModel;
 use occlude_soft::SoftBackend;
 use std::collections::HashSet;
@@ -528,5 +528,28 @@ fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
         let still = run_scene(&scene, &still, &ProgressBar::hidden()).unwrap();
         let tris = |r: &occlude_cli::bench::BenchRun| r.reference.iter().map(|f| f.triangles).collect::<Vec<_>>();
         assert_ne!(tris(&run), tris(&still), "{name}: motion changed nothing vfc draws");
+    }
+}
+
+/// Every method on a few frames of the scenes that move by themselves,
+/// loaded with their motion as `occlude bench` loads them: view-frustum
+/// culling's image, and things move.
+#[test]
+fn every_method_matches_vfc_on_the_scenes_that_move_by_themselves() {
+    for name in MOVING_SCENES {
+        let mut cfg = config(name, HierarchyKind::Bvh);
+        cfg.methods = METHOD_NAMES.map(String::from).to_vec();
+        cfg.frames = 8;
+        cfg.resolution = (160, 120);
+        cfg.size = Size::Small;
+        let (scene, own) = load_scene(&cfg).unwrap();
+        assert!(own.is_some(), "{name} does not move");
+        let run = run_moving_scene(&scene, own.as_ref(), &cfg, &[], &ProgressBar::hidden()).unwrap();
+        for m in &run.methods {
+            for (f, stats) in m.frames.iter().enumerate() {
+                assert_eq!(stats.missing_pixels, 0, "{name}/{}: frame {f} differs from vfc", m.name);
+                assert!(stats.instances_moved > 0, "{name}: nothing moved before frame {f}");
+            }
+        }
     }
 }

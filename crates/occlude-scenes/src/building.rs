@@ -30,8 +30,8 @@ const DOOR: (f32, f32) = (1.2, 2.1);
 // Materials.
 const WALLS: u32 = 0;
 const FLOORS: u32 = 1;
-const WOOD: u32 = 2;
-const FABRIC: u32 = 3;
+pub(crate) const WOOD: u32 = 2;
+pub(crate) const FABRIC: u32 = 3;
 const METAL: u32 = 4;
 const LEAVES: u32 = 5;
 const BOOKS: u32 = 6;
@@ -170,6 +170,15 @@ impl Doors {
         Vec3::new(line as f32 * ROOM, 0.0, self.along_z[(line * self.rooms + j) as usize])
     }
 
+    /// Every door of the ground floor: its centre at floor height, and the
+    /// normal of its wall (`+x` or `+z`).
+    pub(crate) fn all(&self) -> impl Iterator<Item = (Vec3, Vec3)> + '_ {
+        let line = |k: usize| (k as u32 / self.rooms) as f32 * ROOM;
+        let along_x = self.along_x.iter().enumerate().map(move |(k, &x)| (Vec3::new(x, 0.0, line(k)), Vec3::Z));
+        let along_z = self.along_z.iter().enumerate().map(move |(k, &z)| (Vec3::new(line(k), 0.0, z), Vec3::X));
+        along_x.chain(along_z).filter(|(centre, _)| !centre.is_nan())
+    }
+
     /// The centre of the door between rooms `(i, j)` and `(i, j + 1)`.
     pub(crate) fn towards_z(&self, i: u32, j: u32) -> Vec3 {
         let line = j + 1;
@@ -183,6 +192,9 @@ pub(crate) const ROOM_SIDE: f32 = ROOM;
 
 /// The lowest height above a floor at which a door's lintel starts.
 pub(crate) const DOOR_HEIGHT: f32 = DOOR.1;
+
+/// The width of a door's opening.
+pub(crate) const DOOR_WIDTH: f32 = DOOR.0;
 
 /// [`generate`], and where the ground floor's doors are.
 pub(crate) fn with_doors(floors: u32, rooms: u32, seed: u64) -> (Scene, Doors) {

@@ -18,9 +18,9 @@ use glam::{Mat4, Vec2, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
 
 /// Distance between street centre lines, in metres.
-const PITCH: f32 = 64.0;
+pub(crate) const PITCH: f32 = 64.0;
 /// Street width (kerb to kerb); a block is `PITCH - STREET` wide.
-const STREET: f32 = 14.0;
+pub(crate) const STREET: f32 = 14.0;
 /// Sidewalk width inside a block's edge.
 const SIDEWALK: f32 = 2.5;
 /// Height of the sidewalk (the block's slab) above the road.
@@ -35,10 +35,10 @@ const STOREY: f32 = 3.5;
 // Materials: the road, the sidewalks, lamps, trees, then building facades.
 const ROAD: u32 = 0;
 const PAVEMENT: u32 = 1;
-const LAMP: u32 = 2;
+pub(crate) const LAMP: u32 = 2;
 const TREE: u32 = 3;
-const FACADE_FIRST: u32 = 4;
-const FACADES: u32 = 8;
+pub(crate) const FACADE_FIRST: u32 = 4;
+pub(crate) const FACADES: u32 = 8;
 
 /// Blocks per side and number of distinct building meshes of a size.
 pub(crate) fn layout(size: Size) -> (u32, u32) {

@@ -9,6 +9,9 @@
 //! buildings, a dense industrial plant, a volume of scattered figures, and
 //! the IOC poster's furnished rooms and wide downtown, and a swarm of a
 //! million small objects between large blocks (GPU-driven culling's scale).
+//! Two scenes move by themselves ([`MOVING_SCENES`], [`generate_moving`]):
+//! `traffic`, the city with vehicles driving its streets, and `crowd`, the
+//! rooms with people walking and doors opening and closing.
 //! Objects are instances of shared meshes (one draw call each), so even the
 //! `paper` sizes with millions of triangles stay small in memory.
 //!
@@ -21,6 +24,7 @@
 pub mod animation;
 pub mod building;
 mod city;
+mod crowd;
 pub mod export;
 mod figures;
 pub mod import;
@@ -33,11 +37,12 @@ pub use occlude_core::rng;
 pub mod shapes;
 mod swarm;
 mod teapots;
+mod traffic;
 mod walk;
 
 pub use animation::SceneAnimation;
-pub use import::{load, load_animated, AutoPath, ImportOptions, LoadError};
-pub use motion::{Motion, SceneMotion};
+pub use import::{load, load_moving, AutoPath, ImportOptions, LoadError};
+pub use motion::{Motion, OwnMotion, SceneMotion};
 use occlude_core::{Scene, SceneError};
 use std::fmt;
 use std::str::FromStr;
@@ -95,8 +100,10 @@ impl FromStr for Size {
     }
 }
 
-/// The scenes [`generate`] knows, by name: [`PAPER_SCENES`], then `swarm`.
-pub const SCENE_NAMES: [&str; 7] = ["teapots", "city", "plant", "figures", "rooms", "downtown", "swarm"];
+/// The scenes [`generate`] knows, by name: [`PAPER_SCENES`], then `swarm`,
+/// then [`MOVING_SCENES`].
+pub const SCENE_NAMES: [&str; 9] =
+    ["teapots", "city", "plant", "figures", "rooms", "downtown", "swarm", "traffic", "crowd"];
 
 /// The scenes standing in for the papers' (every one but `swarm`): the
 /// tests that run every method on every scene iterate these. `swarm`, the
@@ -104,11 +111,15 @@ pub const SCENE_NAMES: [&str; 7] = ["teapots", "city", "plant", "figures", "room
 /// which every query method is slow; its tests are its own.
 pub const PAPER_SCENES: [&str; 6] = ["teapots", "city", "plant", "figures", "rooms", "downtown"];
 
+/// The scenes that move by themselves: [`generate_moving`] returns their
+/// motion. Their tests are their own, as `swarm`'s.
+pub const MOVING_SCENES: [&str; 2] = ["traffic", "crowd"];
+
 /// Why a scene could not be generated.
 #[derive(Debug, Error)]
 pub enum GenerateError {
     /// The name is not one of [`SCENE_NAMES`].
-    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures, rooms, downtown, swarm")]
+    #[error("unknown scene '{0}'; the procedural scenes are: teapots, city, plant, figures, rooms, downtown, swarm, traffic, crowd")]
     UnknownScene(String),
     /// The size is not one of `small`, `medium`, `paper`.
     #[error("unknown scene size '{0}'; the sizes are: small, medium, paper")]
@@ -120,20 +131,33 @@ pub enum GenerateError {
 
 /// Builds the scene `name` at `size` from `seed`, with its default
 /// walkthrough in `scene.path`. Deterministic: the same arguments always give
-/// the same meshes, instances, materials and path.
+/// the same meshes, instances, materials and path. A scene that moves by
+/// itself is returned as it is at time 0; [`generate_moving`] also returns
+/// its motion.
 pub fn generate(name: &str, size: Size, seed: u64) -> Result<Scene, GenerateError> {
-    let scene = match name {
-        "teapots" => teapots::generate(size, seed),
-        "city" => city::generate(size, seed),
-        "plant" => plant::generate(size, seed),
-        "figures" => figures::generate(size, seed),
-        "rooms" => rooms::generate(size, seed),
-        "downtown" => city::downtown(size, seed),
-        "swarm" => swarm::generate(size, seed),
+    Ok(generate_moving(name, size, seed)?.0)
+}
+
+/// [`generate`], and the scene's own motion for the scenes that move by
+/// themselves ([`MOVING_SCENES`]; none for the others), as deterministic as
+/// the scene.
+pub fn generate_moving(name: &str, size: Size, seed: u64) -> Result<(Scene, Option<SceneMotion>), GenerateError> {
+    let still = |scene: Scene| (scene, None);
+    let moving = |(scene, motion): (Scene, SceneMotion)| (scene, Some(motion));
+    let (scene, motion) = match name {
+        "teapots" => still(teapots::generate(size, seed)),
+        "city" => still(city::generate(size, seed)),
+        "plant" => still(plant::generate(size, seed)),
+        "figures" => still(figures::generate(size, seed)),
+        "rooms" => still(rooms::generate(size, seed)),
+        "downtown" => still(city::downtown(size, seed)),
+        "swarm" => still(swarm::generate(size, seed)),
+        "traffic" => moving(traffic::generate(size, seed)),
+        "crowd" => moving(crowd::generate(size, seed)),
         _ => return Err(GenerateError::UnknownScene(name.to_string())),
     };
     scene.validate()?;
-    Ok(scene)
+    Ok((scene, motion))
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ use glam::Vec3;
 use occlude_core::{CameraPath, Scene};
 
 /// Storeys and rooms along each side of a size.
-fn layout(size: Size) -> (u32, u32) {
+pub(crate) fn layout(size: Size) -> (u32, u32) {
     size.pick((1, 5), (2, 8), (2, 10))
 }
 
@@ -30,13 +30,18 @@ const DOOR_RUN: f32 = 0.9;
 
 /// Builds the rooms.
 pub(crate) fn generate(size: Size, seed: u64) -> Scene {
+    with_doors(size, seed).0
+}
+
+/// Builds the rooms, and where the ground floor's doors are.
+pub(crate) fn with_doors(size: Size, seed: u64) -> (Scene, Doors) {
     let (floors, rooms) = layout(size);
     let (mut scene, doors) = building::with_doors(floors, rooms, seed);
     scene.name = "rooms".into();
     scene.path = walkthrough(&doors, rooms);
     let clearance = PathClearance::new(&scene.path);
     scene.instances.retain(|i| !building::is_furniture(i.material) || clearance.is_clear(&i.bounds));
-    scene
+    (scene, doors)
 }
 
 /// The snake through the ground floor's `rooms` x `rooms` rooms: from the

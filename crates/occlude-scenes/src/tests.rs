@@ -1,5 +1,6 @@
 //! Tests over all scenes: generation, budgets, determinism, walkthrough
-//! clearance and errors.
+//! clearance and errors; and the motion of the scenes that move by
+//! themselves.
 
 use super::*;
 use glam::Vec3;
@@ -76,7 +77,7 @@ fn assert_eyes_clear(s: &Scene, eyes: &[Vec3]) {
 
 #[test]
 fn walkthroughs_keep_clear_of_every_object() {
-    for name in SCENE_NAMES {
+    for name in SCENE_NAMES.into_iter().filter(|name| !MOVING_SCENES.contains(name)) {
         assert_walkthrough_clear(&small(name, 3));
     }
 }
@@ -248,9 +249,14 @@ fn frustum_shares_of_the_walkthroughs() {
 }
 
 #[test]
-fn the_paper_scenes_are_every_scene_but_swarm() {
+fn the_paper_scenes_come_first_then_swarm_then_the_moving_scenes() {
     assert_eq!(SCENE_NAMES[..PAPER_SCENES.len()], PAPER_SCENES);
-    assert_eq!(SCENE_NAMES[PAPER_SCENES.len()..], ["swarm"]);
+    assert_eq!(SCENE_NAMES[PAPER_SCENES.len()], "swarm");
+    assert_eq!(SCENE_NAMES[PAPER_SCENES.len() + 1..], MOVING_SCENES);
+    for name in SCENE_NAMES {
+        let moves = generate_moving(name, Size::Small, 1).unwrap().1.is_some();
+        assert_eq!(moves, MOVING_SCENES.contains(&name), "{name}");
+    }
 }
 
 #[test]
@@ -324,7 +330,137 @@ fn counts_of_every_scene_and_size() {
             if size != Size::Small {
                 assert!(s.triangle_count() >= 400_000, "{name} {size}: {} triangles", s.triangle_count());
             }
-            assert_walkthrough_clear(&s);
+            if MOVING_SCENES.contains(&name) {
+                let (s, motion) = generate_moving(name, size, 1).unwrap();
+                assert_walkthrough_clear_in_motion(&s, &motion.unwrap());
+            } else {
+                assert_walkthrough_clear(&s);
+            }
         }
+    }
+}
+
+fn small_moving(name: &str, seed: u64) -> (Scene, SceneMotion) {
+    let (scene, motion) = generate_moving(name, Size::Small, seed).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (scene, motion.unwrap_or_else(|| panic!("{name} does not move")))
+}
+
+/// Panics unless, at every frame of `occlude bench` at 30 frames per
+/// second, the eye is at least 0.5 m from every shown instance's box as
+/// the scene is then.
+fn assert_walkthrough_clear_in_motion(s: &Scene, motion: &SceneMotion) {
+    let mut moving = s.clone();
+    for t in s.path.frame_times(Sampling::Rate { fps: 30.0, limit: None }) {
+        moving.apply(&motion.changes_at(t)).unwrap();
+        let eye = s.path.at(t).unwrap().position;
+        for (i, inst) in moving.instances.iter().enumerate().filter(|(_, inst)| inst.enabled) {
+            let d = inst.bounds.distance_squared(eye).sqrt();
+            assert!(d >= 0.5, "{}: eye at {t} s at {eye} is {d:.2} m from instance {i} {:?}", s.name, inst.bounds);
+        }
+    }
+}
+
+/// The moved instances' boxes and whether they are shown, every half
+/// second of the first minute.
+fn moved_boxes(s: &Scene, motion: &SceneMotion) -> Vec<(u32, Aabb, bool)> {
+    let mut moving = s.clone();
+    let moved: Vec<u32> = motion.moved().collect();
+    (0..120)
+        .flat_map(|k| {
+            moving.apply(&motion.changes_at(k as f32 * 0.5)).unwrap();
+            moved
+                .iter()
+                .map(|&i| (i, moving.instances[i as usize].bounds, moving.instances[i as usize].enabled))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn moving_scenes_move_deterministically_and_start_as_generated() {
+    for name in MOVING_SCENES {
+        let ((a, ma), (b, mb), (_, mc)) = (small_moving(name, 7), small_moving(name, 7), small_moving(name, 8));
+        for t in [0.0, 1.5, 17.25] {
+            assert_eq!(ma.changes_at(t), mb.changes_at(t), "{name}: same seed, different motion at {t} s");
+            assert_ne!(ma.changes_at(t), mc.changes_at(t), "{name}: the seed changes no motion at {t} s");
+        }
+        // The scene as generated is the scene at time 0.
+        let mut at_zero = a.clone();
+        at_zero.apply(&ma.changes_at(0.0)).unwrap();
+        let state = |s: &Scene| s.instances.iter().map(|i| (i.transform, i.enabled)).collect::<Vec<_>>();
+        assert_eq!(state(&at_zero), state(&a), "{name}");
+        assert_eq!(state(&a), state(&b), "{name}");
+        assert_eq!(generate(name, Size::Small, 7).unwrap().instances.len(), a.instances.len());
+    }
+}
+
+#[test]
+fn moving_walkthroughs_keep_clear_of_every_shown_instance_at_every_frame() {
+    for name in MOVING_SCENES {
+        let (s, motion) = small_moving(name, 3);
+        assert_walkthrough_clear_in_motion(&s, &motion);
+    }
+}
+
+#[test]
+fn traffic_is_the_city_with_cars_and_buses_driving_on_its_streets() {
+    let (s, motion) = small_moving("traffic", 1);
+    let city = small("city", 1);
+    assert_eq!(s.path, city.path);
+    assert_eq!(
+        s.instances[..city.instances.len()].iter().map(|i| i.transform).collect::<Vec<_>>(),
+        city.instances.iter().map(|i| i.transform).collect::<Vec<_>>()
+    );
+    let moved: Vec<u32> = motion.moved().collect();
+    assert!(moved.iter().all(|&i| i as usize >= city.instances.len()), "a building moves");
+    let tall = moved.iter().filter(|&&i| s.instances[i as usize].bounds.extent().y > 3.0).count();
+    assert!(tall >= 20 && moved.len() - tall >= 150, "{tall} buses and trucks, {} cars", moved.len() - tall);
+    // Every vehicle lies on the road, across a street's width; the roads
+    // are the city's ground.
+    let ground = city.instances[0].bounds;
+    let on_road = |lo: f32, hi: f32| {
+        let line = (0.5 * (lo + hi) / city::PITCH).round() * city::PITCH;
+        lo >= line - 0.5 * city::STREET && hi <= line + 0.5 * city::STREET
+    };
+    for (i, b, shown) in moved_boxes(&s, &motion) {
+        assert!(shown);
+        assert!(
+            b.min.x >= ground.min.x && b.max.x <= ground.max.x && b.min.z >= ground.min.z && b.max.z <= ground.max.z,
+            "{i}: {b:?}"
+        );
+        assert!(on_road(b.min.x, b.max.x) || on_road(b.min.z, b.max.z), "vehicle {i} off the streets: {b:?}");
+        assert!(b.min.y >= 0.0, "{i}: {b:?}");
+    }
+    // Cars drive 8-14 m/s, buses 6-10.
+    let at = |t: f32| {
+        let mut m = s.clone();
+        m.apply(&motion.changes_at(t)).unwrap();
+        m
+    };
+    let (before, after) = (at(1.0), at(1.5));
+    for &i in &moved {
+        let d = before.instances[i as usize].bounds.center().distance(after.instances[i as usize].bounds.center());
+        assert!((3.0..=7.0).contains(&d) || d > 100.0, "vehicle {i} drove {d} m in 0.5 s");
+    }
+}
+
+#[test]
+fn crowd_is_the_rooms_with_people_inside_and_doors_that_open_and_close() {
+    let (s, motion) = small_moving("crowd", 1);
+    let rooms = small("rooms", 1);
+    assert_eq!(s.path, rooms.path);
+    let building = rooms.bounds();
+    let moved: Vec<u32> = motion.moved().collect();
+    let boxes = moved_boxes(&s, &motion);
+    let doors: BTreeSet<u32> = boxes.iter().filter(|(_, _, shown)| !shown).map(|&(i, _, _)| i).collect();
+    let people = moved.len() - doors.len();
+    assert!(people >= 20 && doors.len() >= 3, "{people} people, {} doors", doors.len());
+    for &door in &doors {
+        let shown: BTreeSet<bool> = boxes.iter().filter(|(i, _, _)| *i == door).map(|&(_, _, shown)| shown).collect();
+        assert_eq!(shown.len(), 2, "door {door} never closes");
+    }
+    for (i, b, _) in boxes {
+        assert!(building.contains_point(b.min) && building.contains_point(b.max), "{i}: {b:?} outside {building:?}");
+        assert!(b.min.y >= 0.0 && b.max.y <= 2.1, "{i}: {b:?} not on the ground floor");
     }
 }

@@ -1,6 +1,7 @@
 //! Helpers shared by the scene generators: building walkthroughs and keeping
 //! scattered objects clear of them.
 
+use crate::motion::Track;
 use glam::Vec3;
 use occlude_core::{Aabb, CameraPath, Keyframe};
 
@@ -70,5 +71,54 @@ impl PathClearance {
             .iter()
             .filter(|(g, _)| g.overlaps(b))
             .all(|(_, points)| points.iter().all(|&p| b.distance_squared(p) >= limit))
+    }
+}
+
+/// Eye positions per second that [`EyeTimeline`] checks: four per frame at
+/// `occlude bench`'s default 30 frames per second, whose frames are among
+/// them.
+const TIMELINE_RATE: f64 = 120.0;
+
+/// The walkthrough's eye at evenly spaced times, grouped under boxes, to
+/// keep moving instances clear of where the camera is when they are there.
+pub(crate) struct EyeTimeline {
+    /// The path's first key time.
+    start: f32,
+    /// Eye positions, one per `1 / TIMELINE_RATE` seconds from `start`.
+    eyes: Vec<Vec3>,
+    /// Per group of 64 eyes, their box grown by [`CLEARANCE`].
+    groups: Vec<Aabb>,
+}
+
+impl EyeTimeline {
+    /// Samples `path` at [`TIMELINE_RATE`] from its first key to its last.
+    pub(crate) fn new(path: &CameraPath) -> Self {
+        let start = path.keyframes.first().map_or(0.0, |k| k.time);
+        let count = (f64::from(path.duration()) * TIMELINE_RATE).floor() as usize + 1;
+        let eyes: Vec<Vec3> =
+            (0..count).filter_map(|k| path.at(Self::time(start, k))).map(|key| key.position).collect();
+        let groups = eyes.chunks(64).map(|c| Aabb::from_points(c).expanded(0.0, CLEARANCE)).collect();
+        Self { start, eyes, groups }
+    }
+
+    /// The time of the `k`th eye, as the path's frame times are computed.
+    fn time(start: f32, k: usize) -> f32 {
+        start + (k as f64 / TIMELINE_RATE) as f32
+    }
+
+    /// True when the instance `track` moves, whose box is `bounds` at its
+    /// base, keeps [`CLEARANCE`] from the eye at every sampled time at which
+    /// it is shown.
+    pub(crate) fn keeps_clear(&self, track: &Track, bounds: &Aabb) -> bool {
+        let swept = track.swept(bounds);
+        let limit = CLEARANCE * CLEARANCE;
+        self.groups.iter().enumerate().filter(|(_, g)| g.overlaps(&swept)).all(|(g, _)| {
+            let first = g * 64;
+            self.eyes[first..(first + 64).min(self.eyes.len())].iter().zip(first..).all(|(&eye, k)| {
+                let t = Self::time(self.start, k);
+                let d = track.displacement(t);
+                track.is_hidden(t) || Aabb::new(bounds.min + d, bounds.max + d).distance_squared(eye) >= limit
+            })
+        })
     }
 }

@@ -17,7 +17,7 @@ use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, Method
 use occlude_core::{
     differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, UpdatePolicy, Upkeep,
 };
-use occlude_scenes::{Motion, SceneAnimation};
+use occlude_scenes::{Motion, OwnMotion};
 use occlude_soft::{DrawReplay, SharedSetup, SoftBackend};
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};
 use rayon::prelude::*;
@@ -344,27 +344,28 @@ pub fn cameras(scene: &Scene, config: &BenchConfig) -> Result<Vec<Camera>> {
 /// [`occlude_scenes::LoadError`] inside the returned error, so that the
 /// command line can tell it from a failure of the run), replaces its
 /// walkthrough with the configured camera path if any, builds the hierarchy
-/// and runs every method over the walkthrough, playing the model's animation
-/// if it has one; `progress` names the loading and building stages and then
+/// and runs every method over the walkthrough, playing the scene's own
+/// motion if it has one (a model's animation, a generated scene's script);
+/// `progress` names the loading and building stages and then
 /// advances once per frame.
 pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
     config.validate()?;
-    let (scene, animation) = stage(progress, &format!("loading {}", config.scene), || load_scene(config))?;
-    run_animated_scene(&scene, animation.as_ref(), config, &[], progress)
+    let (scene, own) = stage(progress, &format!("loading {}", config.scene), || load_scene(config))?;
+    run_moving_scene(&scene, own.as_ref(), config, &[], progress)
 }
 
 /// The configured scene, generated or imported, with the configured camera
 /// path in place of its own walkthrough if one is given, validated, and
-/// the model's animation if it has one. An import error stays an
+/// its own motion if it has one (a model's animation, a generated scene's
+/// script). An import error stays an
 /// [`occlude_scenes::LoadError`] inside the returned error.
-pub fn load_scene(config: &BenchConfig) -> Result<(Scene, Option<SceneAnimation>)> {
-    let (mut scene, animation) =
-        occlude_scenes::load_animated(&config.scene, config.size, config.seed, &config.import)?;
+pub fn load_scene(config: &BenchConfig) -> Result<(Scene, Option<OwnMotion>)> {
+    let (mut scene, own) = occlude_scenes::load_moving(&config.scene, config.size, config.seed, &config.import)?;
     if let Some(path) = &config.camera_path {
         scene.path = path.clone();
     }
     scene.validate().with_context(|| format!("scene '{}' is not usable", config.scene))?;
-    Ok((scene, animation))
+    Ok((scene, own))
 }
 
 /// Runs every method of `config` on an existing scene.
@@ -387,30 +388,30 @@ pub fn run_scene_with_variants(
     variants: &[Variant],
     progress: &ProgressBar,
 ) -> Result<BenchRun> {
-    run_animated_scene(scene, None, config, variants, progress)
+    run_moving_scene(scene, None, config, variants, progress)
 }
 
-/// [`run_scene_with_variants`] playing `animation`, the scene's own, along
+/// [`run_scene_with_variants`] playing `own`, the scene's own motion, along
 /// the walkthrough (with `--motion`'s scripted motion of the instances it
 /// does not move, see [`Motion`]).
-pub fn run_animated_scene(
+pub fn run_moving_scene(
     scene: &Scene,
-    animation: Option<&SceneAnimation>,
+    own: Option<&OwnMotion>,
     config: &BenchConfig,
     variants: &[Variant],
     progress: &ProgressBar,
 ) -> Result<BenchRun> {
     if rayon::current_thread_index().is_some() {
-        return run_scene_here(scene, animation, config, variants, progress);
+        return run_scene_here(scene, own, config, variants, progress);
     }
     let pool = rayon::ThreadPoolBuilder::new().build().context("cannot start the thread pool")?;
-    pool.install(|| run_scene_here(scene, animation, config, variants, progress))
+    pool.install(|| run_scene_here(scene, own, config, variants, progress))
 }
 
-/// [`run_animated_scene`] on the calling thread.
+/// [`run_moving_scene`] on the calling thread.
 fn run_scene_here(
     scene: &Scene,
-    animation: Option<&SceneAnimation>,
+    own: Option<&OwnMotion>,
     config: &BenchConfig,
     variants: &[Variant],
     progress: &ProgressBar,
@@ -423,7 +424,7 @@ fn run_scene_here(
     let cameras = cameras(scene, config)?;
     anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
     let times = scene.path.frame_times(config.sampling());
-    let motion = Motion::new(scene, animation.cloned(), config.motion, config.seed);
+    let motion = Motion::new(scene, own.cloned(), config.motion, config.seed);
     // The scene as it moves, frame by frame; the caller's stays as built.
     let mut moving = scene.clone();
 

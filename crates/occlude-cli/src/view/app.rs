@@ -19,7 +19,7 @@ use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, METHOD
 use occlude_core::recording::{RecordedBoxTest, RecordingBackend};
 use occlude_core::{render_frame, UpdatePolicy};
 use occlude_core::{Backend, Camera, Hierarchy, HierarchyKind, Keyframe, Scene};
-use occlude_scenes::{Motion, SceneAnimation};
+use occlude_scenes::{Motion, OwnMotion};
 use occlude_wgpu::{best_adapter, GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
 use std::sync::Arc;
 use std::time::Instant;
@@ -40,7 +40,7 @@ const MAX_STEP: f32 = 0.25;
 /// Opens the window system, loads the scene and runs the viewer until its
 /// window closes.
 pub(super) fn run(config: &ViewConfig) -> Result<()> {
-    let (scene, animation) = load_scene(&config.scene)?;
+    let (scene, own) = load_scene(&config.scene)?;
     // The walkthrough as `--play` shows it, checked as bench checks its
     // frames: a path through its target is refused, naming the frame.
     if !scene.path.keyframes.is_empty() {
@@ -48,7 +48,7 @@ pub(super) fn run(config: &ViewConfig) -> Result<()> {
         cameras(&scene, &played)?;
     }
     let event_loop = open_event_loop()?;
-    let mut viewer = Viewer::new(&scene, animation, config)?;
+    let mut viewer = Viewer::new(&scene, own, config)?;
     event_loop.run_app(&mut viewer).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
     viewer.finish()
 }
@@ -200,7 +200,7 @@ impl Gpu {
 
 /// Everything the viewer keeps between frames.
 struct Viewer<'s> {
-    /// The scene as it moves (its animation, `--motion`), or as loaded.
+    /// The scene as it moves (its own motion, `--motion`), or as loaded.
     scene: Scene,
     /// How it moves, and since when (seconds of viewing).
     motion: Option<Motion>,
@@ -238,12 +238,12 @@ struct Viewer<'s> {
 }
 
 impl<'s> Viewer<'s> {
-    fn new(scene: &'s Scene, animation: Option<SceneAnimation>, config: &'s ViewConfig) -> Result<Self> {
+    fn new(scene: &'s Scene, own: Option<OwnMotion>, config: &'s ViewConfig) -> Result<Self> {
         let method_index = METHOD_NAMES.iter().position(|&m| m == config.method).context("unknown method")?;
         let start = Playback::default().keyframe(&scene.path).unwrap_or_else(|| overview(scene));
         Ok(Self {
             scene: scene.clone(),
-            motion: Motion::new(scene, animation, config.scene.motion, config.scene.seed),
+            motion: Motion::new(scene, own, config.scene.motion, config.scene.seed),
             motion_time: 0.0,
             config,
             far: far_plane(scene),

@@ -28,7 +28,7 @@ mod obj;
 mod obj_indices;
 mod referenced;
 mod split;
-use crate::{generate, GenerateError, SceneAnimation, Size, SCENE_NAMES};
+use crate::{generate_moving, GenerateError, OwnMotion, SceneAnimation, Size, SCENE_NAMES};
 use glam::{Mat4, Vec3};
 use occlude_core::{Mesh, Scene, SceneError};
 use std::io;
@@ -242,28 +242,32 @@ pub struct Imported {
 /// Loads `name_or_path`: the procedural scene of that name (from `size` and
 /// `seed`), or else the model file it names (`size` and `seed` are then
 /// unused). Import warnings are printed to stderr; use [`import`] to get them
-/// as values instead. A model's animation is left out; [`load_animated`]
+/// as values instead. The scene's own motion is left out; [`load_moving`]
 /// keeps it.
 pub fn load(name_or_path: &str, size: Size, seed: u64, options: &ImportOptions) -> Result<Scene, LoadError> {
-    Ok(load_animated(name_or_path, size, seed, options)?.0)
+    Ok(load_moving(name_or_path, size, seed, options)?.0)
 }
 
-/// [`load`], with the model's node animations when it has any that move
-/// an instance (procedural scenes and OBJ files have none).
-pub fn load_animated(
+/// [`load`], with the scene's own motion: a generated scene's script
+/// ([`generate_moving`]) or a model's node animations when it has any that
+/// move an instance (OBJ files have none).
+pub fn load_moving(
     name_or_path: &str,
     size: Size,
     seed: u64,
     options: &ImportOptions,
-) -> Result<(Scene, Option<SceneAnimation>), LoadError> {
+) -> Result<(Scene, Option<OwnMotion>), LoadError> {
     match SceneSource::resolve(name_or_path)? {
-        SceneSource::Procedural(name) => Ok((generate(&name, size, seed)?, None)),
+        SceneSource::Procedural(name) => {
+            let (scene, motion) = generate_moving(&name, size, seed)?;
+            Ok((scene, motion.map(OwnMotion::Scripted)))
+        }
         SceneSource::File { path, format } => {
             let imported = import(&path, format, options)?;
             for warning in &imported.warnings {
                 eprintln!("warning: {warning}");
             }
-            Ok((imported.scene, imported.animation))
+            Ok((imported.scene, imported.animation.map(OwnMotion::Animation)))
         }
     }
 }
