@@ -418,16 +418,27 @@ fn unsigned<const N: usize>(bytes: &[u8]) -> u32 {
 
 /// Positions: an accessor of float VEC3.
 fn read_positions(accessor: &Accessor, buffers: &Buffers) -> Result<Vec<Vec3>, String> {
-    if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec3 {
-        return Err(format!(
-            "position accessor {} holds {:?} {:?}, not F32 Vec3",
-            accessor.index(),
-            accessor.dimensions(),
-            accessor.data_type()
-        ));
-    }
-    let float = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    expect_f32(accessor, Dimensions::Vec3, "position accessor")?;
     read_accessor(accessor, buffers, Vec3::ZERO, |e| Vec3::new(float(e), float(&e[4..]), float(&e[8..])))
+}
+
+/// Fails unless `accessor` holds `F32` elements of `dimensions`; `what`
+/// names the accessor's use in the message.
+pub(super) fn expect_f32(accessor: &Accessor, dimensions: Dimensions, what: &str) -> Result<(), String> {
+    if accessor.data_type() == DataType::F32 && accessor.dimensions() == dimensions {
+        return Ok(());
+    }
+    Err(format!(
+        "{what} {} holds {:?} {:?}, not F32 {dimensions:?}",
+        accessor.index(),
+        accessor.dimensions(),
+        accessor.data_type()
+    ))
+}
+
+/// A little-endian float from the first four of `bytes`.
+pub(super) fn float(bytes: &[u8]) -> f32 {
+    f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
 }
 
 /// Indices: an accessor of unsigned 8-, 16- or 32-bit scalars.

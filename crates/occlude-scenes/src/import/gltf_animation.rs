@@ -5,7 +5,7 @@
 //! through the importer's checked accessor reading. `weights` channels,
 //! skins and morph targets are not played (warnings say so).
 
-use super::gltf::{read_accessor, Buffers};
+use super::gltf::{expect_f32, float, read_accessor, Buffers};
 use super::{Builder, LoadError, MAX_COORDINATE};
 use crate::animation::{Channel, Interpolation, Node, Parent, Pose, Property, SceneAnimation};
 use glam::{Mat4, Quat, Vec4};
@@ -170,14 +170,7 @@ fn read_channel(channel: &gltf::animation::Channel, property: Property, buffers:
         GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
     };
     let (input, output) = (sampler.input(), sampler.output());
-    if input.dimensions() != Dimensions::Scalar || input.data_type() != DataType::F32 {
-        return Err(format!(
-            "its key times (accessor {}) are {:?} {:?}, not F32 Scalar",
-            input.index(),
-            input.dimensions(),
-            input.data_type()
-        ));
-    }
+    expect_f32(&input, Dimensions::Scalar, "its key time accessor")?;
     let keys = input.count();
     let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
     if keys == 0 {
@@ -254,11 +247,6 @@ fn read_values(output: &gltf::Accessor, property: Property, buffers: &Buffers) -
             ))
         }
     }
-}
-
-/// A little-endian float from the first four of `bytes`.
-fn float(bytes: &[u8]) -> f32 {
-    f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
 }
 
 /// A decoder of quaternions of four `N`-byte components, each by
