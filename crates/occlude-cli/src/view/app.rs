@@ -42,9 +42,10 @@ const MAX_STEP: f32 = 0.25;
 pub(super) fn run(config: &ViewConfig) -> Result<()> {
     let (scene, own) = load_scene(&config.scene)?;
     // The walkthrough as `--play` shows it, checked as bench checks its
-    // frames: a path through its target is refused, naming the frame.
+    // frames at its default rate (playback itself follows the clock): a
+    // path through its target is refused, naming the frame.
     if !scene.path.keyframes.is_empty() {
-        let played = BenchConfig { fps: Some(PLAYBACK_CHECK_FPS), frames: MAX_FRAMES, ..config.scene.clone() };
+        let played = BenchConfig { fps: Some(DEFAULT_FPS), frames: MAX_FRAMES, ..config.scene.clone() };
         cameras(&scene, &played)?;
     }
     let event_loop = open_event_loop()?;
@@ -52,10 +53,6 @@ pub(super) fn run(config: &ViewConfig) -> Result<()> {
     event_loop.run_app(&mut viewer).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
     viewer.finish()
 }
-
-/// The frame rate at which the walkthrough's cameras are checked before
-/// it plays (playback itself follows the clock).
-const PLAYBACK_CHECK_FPS: f32 = 30.0;
 
 /// The event loop, or [`ViewError::NoDisplay`]. winit reports a missing
 /// display as an error but panics on some broken ones (an X server without
