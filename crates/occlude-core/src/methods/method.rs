@@ -11,7 +11,7 @@ use super::moc::{MaskedOcclusion, MocParams};
 use super::nohc::{Estimate, Nohc};
 use super::om::{OccupancyMap, OmParams};
 use super::opt::{OptParams, Optimal};
-use super::options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
+use super::options::{list_params, read_params, MethodOptions, MethodParams, OptionError, ParamVisitor};
 use super::roc::{RasterOcclusion, RocParams};
 use super::sw::StopAndWait;
 use super::vfc::ViewFrustumCulling;
@@ -98,19 +98,14 @@ impl Method {
     /// line's `--method-opt`) over its defaults.
     pub fn parse(name: &str, options: &MethodOptions) -> Result<Self, MethodError> {
         let mut method = Self::named(name)?;
-        let mut v = options.for_method(name);
-        method.visit(&mut v)?;
-        v.finish()?;
+        read_params(name, options, |v| method.visit(v))?;
         Ok(method)
     }
 
     /// `(parameter, value)` pairs as the command line writes them, in the
     /// method's order; an error for a value out of its range.
     pub fn params(&self) -> Result<Vec<(String, String)>, OptionError> {
-        let mut checked = self.clone();
-        let mut v = ParamVisitor::checking(self.name());
-        checked.visit(&mut v)?;
-        v.finish()
+        list_params(self.name(), |v| self.clone().visit(v))
     }
 
     /// Whether the method runs on the backend's GPU-resident culling (its

@@ -103,9 +103,7 @@ pub trait MethodParams: Clone + Default {
     /// the method does not have, or a value out of range, is an error.
     fn from_options(options: &MethodOptions) -> Result<Self, OptionError> {
         let mut params = Self::default();
-        let mut v = options.for_method(Self::METHOD);
-        params.visit(&mut v)?;
-        v.finish()?;
+        read_params(Self::METHOD, options, |v| params.visit(v))?;
         Ok(params)
     }
 
@@ -118,10 +116,31 @@ pub trait MethodParams: Clone + Default {
     /// `(key, value)` pairs in visiting order, each value as the command
     /// line writes it; an error for a value out of its range.
     fn values(&self) -> Result<Vec<(String, String)>, OptionError> {
-        let mut v = ParamVisitor::checking(Self::METHOD);
-        self.clone().visit(&mut v)?;
-        v.finish()
+        list_params(Self::METHOD, |v| self.clone().visit(v))
     }
+}
+
+/// Reads `method`'s values of `options` into the fields `visit` visits; a
+/// key it does not visit, or a value out of range, is an error.
+pub(crate) fn read_params(
+    method: &str,
+    options: &MethodOptions,
+    visit: impl FnOnce(&mut ParamVisitor) -> Result<(), OptionError>,
+) -> Result<(), OptionError> {
+    let mut v = options.for_method(method);
+    visit(&mut v)?;
+    v.finish().map(drop)
+}
+
+/// The `(key, value)` pairs of the fields `visit` visits for `method`,
+/// each checked against its range.
+pub(crate) fn list_params(
+    method: &str,
+    visit: impl FnOnce(&mut ParamVisitor) -> Result<(), OptionError>,
+) -> Result<Vec<(String, String)>, OptionError> {
+    let mut v = ParamVisitor::checking(method);
+    visit(&mut v)?;
+    v.finish()
 }
 
 /// Walks one method's parameters ([`MethodParams::visit`]): reading the
@@ -138,7 +157,7 @@ pub struct ParamVisitor {
 
 impl ParamVisitor {
     /// A visitor that checks the fields as they stand.
-    pub(crate) fn checking(method: &str) -> Self {
+    fn checking(method: &str) -> Self {
         Self { method: method.to_string(), given: None, known: Vec::new(), seen: Vec::new() }
     }
 
