@@ -204,7 +204,6 @@ pub struct GpuCuller {
     attachments: Attachments,
     /// The instances' boxes as they stand ([`GpuCuller::update`]).
     scene: Scene,
-    instances: u32,
     camera: wgpu::Buffer,
     boxes: wgpu::Buffer,
     all: wgpu::Buffer,
@@ -343,7 +342,6 @@ impl GpuCuller {
         Ok(Self {
             attachments,
             scene,
-            instances: n,
             stats,
             drop_outside: (drop_outside, drop_groups),
             compact_early: (compact_early, early_groups),
@@ -386,15 +384,16 @@ impl GpuCuller {
         let before = hierarchy.version();
         let keep_shape = UpdatePolicy { max_cost_ratio: f32::INFINITY };
         let upkeep = hierarchy.update(&self.scene, &changed, keep_shape);
-        let all: Vec<NodeId>;
-        let nodes = match hierarchy.since(Some(before)) {
-            Since::Refit(Some(changes)) => &changes.nodes,
-            _ => {
-                all = (0..hierarchy.node_count() as NodeId).collect();
-                &all
+        match hierarchy.since(Some(before)) {
+            Since::Unchanged => {}
+            Since::Refit(Some(changes)) => levels.update_boxes(&self.ctx.queue, hierarchy, &changes.nodes),
+            // Not after one refit of a tree that is never rebuilt; were it
+            // to happen, every box is rewritten.
+            Since::Refit(None) | Since::New => {
+                let all: Vec<NodeId> = (0..hierarchy.node_count() as NodeId).collect();
+                levels.update_boxes(&self.ctx.queue, hierarchy, &all);
             }
-        };
-        levels.update_boxes(&self.ctx.queue, hierarchy, nodes);
+        }
         Ok(upkeep)
     }
 
@@ -499,8 +498,8 @@ impl GpuCuller {
         encoder.clear_buffer(&self.flags[now], 0, None);
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instances);
-            dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instances);
+            dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instance_count());
+            dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instance_count());
         }
         self.copy_count(encoder, 0);
         self.frame_camera = Some(*camera);
@@ -542,9 +541,9 @@ impl GpuCuller {
                 // `ioc.frustum`: the instances below a visible node that lie
                 // outside the frustum (the drop's groups of parity `before`
                 // clear this frame's flags).
-                dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instances);
+                dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instance_count());
             }
-            dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instances);
+            dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instance_count());
         }
         self.copy_count(encoder, 1);
         self.parity = before;
@@ -588,6 +587,11 @@ impl GpuCuller {
         Ok([word(0), word(1)])
     }
 
+    /// Instances culled: one per box given.
+    fn instance_count(&self) -> u32 {
+        self.scene.instances.len() as u32
+    }
+
     /// Copies list `k`'s length into its draw's instance count.
     fn copy_count(&self, encoder: &mut wgpu::CommandEncoder, k: usize) {
         encoder.copy_buffer_to_buffer(&self.lists[k].ids, 0, &self.lists[k].indirect, 4, 4);
@@ -598,6 +602,7 @@ impl GpuCuller {
     /// texture's size unless it is of that size already), every box tested
     /// against it, setting flag buffer `now`.
     fn encode_pyramid_test(&mut self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, now: usize) {
+        let n = self.instance_count();
         let LateTest::Pyramid(p) = &mut self.late else { return };
         let (ctx, device) = (&self.ctx, &self.ctx.device);
         let depth = depth.texture();
@@ -644,7 +649,7 @@ impl GpuCuller {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         dispatch(&mut pass, &p.base, &base, pyramid.buffers.counts[0]);
         dispatch_reductions(&mut pass, &p.reduce, &pyramid.reductions, &pyramid.buffers.counts);
-        dispatch(&mut pass, &p.test, &pyramid.tests[now], self.instances);
+        dispatch(&mut pass, &p.test, &pyramid.tests[now], n);
     }
 }
 
