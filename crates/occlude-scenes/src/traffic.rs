@@ -40,9 +40,7 @@ fn car() -> Mesh {
 
 /// A bus 12 m long, 2.5 m wide and 3.2 m high facing `+x`.
 fn bus() -> Mesh {
-    let mut b = MeshBuilder::new();
-    b.add(&cuboid(Vec3::new(-6.0, 0.3, -1.25), Vec3::new(6.0, 3.2, 1.25)), Mat4::IDENTITY);
-    b.build()
+    cuboid(Vec3::new(-6.0, 0.3, -1.25), Vec3::new(6.0, 3.2, 1.25))
 }
 
 /// A truck 8 m long, 2.5 m wide and 3.6 m high facing `+x`: a cab and a
