@@ -47,30 +47,52 @@ pub(crate) fn eye_positions(path: &CameraPath, per_second: f32) -> Vec<Vec3> {
     path.sample(count, 1.0, 0.1, 1.0).into_iter().map(|c| c.position).collect()
 }
 
+/// Eye positions under boxes of 64 consecutive ones, each grown by
+/// [`CLEARANCE`], so that the eyes near a box are found without testing
+/// every one.
+struct EyeGroups {
+    eyes: Vec<Vec3>,
+    boxes: Vec<Aabb>,
+}
+
+/// Eyes a group holds.
+const GROUP: usize = 64;
+
+impl EyeGroups {
+    fn new(eyes: Vec<Vec3>) -> Self {
+        let boxes = eyes.chunks(GROUP).map(|c| Aabb::from_points(c).expanded(0.0, CLEARANCE)).collect();
+        Self { eyes, boxes }
+    }
+
+    /// Every eye that may come within [`CLEARANCE`] of `b`, with its index.
+    fn near(&self, b: Aabb) -> impl Iterator<Item = (usize, Vec3)> + '_ {
+        let groups = self.boxes.iter().enumerate().filter(move |(_, g)| g.overlaps(&b));
+        groups.flat_map(move |(g, _)| {
+            let first = g * GROUP;
+            self.eyes[first..(first + GROUP).min(self.eyes.len())]
+                .iter()
+                .copied()
+                .enumerate()
+                .map(move |(i, e)| (first + i, e))
+        })
+    }
+}
+
 /// Answers "does this box keep [`CLEARANCE`] from the walkthrough?" quickly,
 /// by grouping dense samples of the path under boxes.
-pub(crate) struct PathClearance {
-    groups: Vec<(Aabb, Vec<Vec3>)>,
-}
+pub(crate) struct PathClearance(EyeGroups);
 
 impl PathClearance {
     /// Samples `path` densely (a few centimetres apart at walking and flying
     /// speeds).
     pub(crate) fn new(path: &CameraPath) -> Self {
-        let groups = eye_positions(path, 400.0)
-            .chunks(64)
-            .map(|c| (Aabb::from_points(c).expanded(0.0, CLEARANCE), c.to_vec()))
-            .collect();
-        Self { groups }
+        Self(EyeGroups::new(eye_positions(path, 400.0)))
     }
 
     /// True when every sampled eye position is at least [`CLEARANCE`] from `b`.
     pub(crate) fn is_clear(&self, b: &Aabb) -> bool {
         let limit = CLEARANCE * CLEARANCE;
-        self.groups
-            .iter()
-            .filter(|(g, _)| g.overlaps(b))
-            .all(|(_, points)| points.iter().all(|&p| b.distance_squared(p) >= limit))
+        self.0.near(*b).all(|(_, p)| b.distance_squared(p) >= limit)
     }
 }
 
@@ -85,9 +107,7 @@ pub(crate) struct EyeTimeline {
     /// The path's first key time.
     start: f32,
     /// Eye positions, one per `1 / TIMELINE_RATE` seconds from `start`.
-    eyes: Vec<Vec3>,
-    /// Per group of 64 eyes, their box grown by [`CLEARANCE`].
-    groups: Vec<Aabb>,
+    eyes: EyeGroups,
 }
 
 impl EyeTimeline {
@@ -95,10 +115,8 @@ impl EyeTimeline {
     pub(crate) fn new(path: &CameraPath) -> Self {
         let start = path.keyframes.first().map_or(0.0, |k| k.time);
         let count = (f64::from(path.duration()) * TIMELINE_RATE).floor() as usize + 1;
-        let eyes: Vec<Vec3> =
-            (0..count).filter_map(|k| path.at(Self::time(start, k))).map(|key| key.position).collect();
-        let groups = eyes.chunks(64).map(|c| Aabb::from_points(c).expanded(0.0, CLEARANCE)).collect();
-        Self { start, eyes, groups }
+        let eyes = (0..count).filter_map(|k| path.at(Self::time(start, k))).map(|key| key.position).collect();
+        Self { start, eyes: EyeGroups::new(eyes) }
     }
 
     /// The time of the `k`th eye, as the path's frame times are computed.
@@ -112,13 +130,10 @@ impl EyeTimeline {
     pub(crate) fn keeps_clear(&self, track: &Track, bounds: &Aabb) -> bool {
         let swept = track.swept(bounds);
         let limit = CLEARANCE * CLEARANCE;
-        self.groups.iter().enumerate().filter(|(_, g)| g.overlaps(&swept)).all(|(g, _)| {
-            let first = g * 64;
-            self.eyes[first..(first + 64).min(self.eyes.len())].iter().zip(first..).all(|(&eye, k)| {
-                let t = Self::time(self.start, k);
-                let d = track.displacement(t);
-                track.is_hidden(t) || Aabb::new(bounds.min + d, bounds.max + d).distance_squared(eye) >= limit
-            })
+        self.eyes.near(swept).all(|(k, eye)| {
+            let t = Self::time(self.start, k);
+            let d = track.displacement(t);
+            track.is_hidden(t) || Aabb::new(bounds.min + d, bounds.max + d).distance_squared(eye) >= limit
         })
     }
 }
