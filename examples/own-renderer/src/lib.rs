@@ -1,19 +1,24 @@
-//! A small wgpu renderer of its own, off-screen: its own WGSL shader, cube
-//! vertex and index buffers and a per-instance buffer (offset, scale,
-//! colour), drawing a grid of boxes behind three walls with two gaps. With
-//! culling off it draws every box in one instanced draw; with culling on,
+//! A small wgpu renderer of its own, off-screen: its own WGSL shader, one
+//! vertex and index buffer holding several meshes (cubes and wedges), a
+//! per-instance buffer (offset, scale, colour) and two pipelines (two
+//! shadings), drawing a grid of shapes behind three walls with two gaps.
+//! With culling off it draws every instance with its mesh and pipeline;
+//! with culling on,
 //! occlude's `chcpp` (`occlude::wgpu::embed::Culler`) decides which boxes
 //! to draw and calls this renderer's draw code for them, inside its own
 //! passes on this renderer's device and attachments; or occlude's `hiz`,
-//! `roc` or `ioc` (`occlude::wgpu::embed::GpuCuller`) writes the visible boxes' ids into
-//! lists on the GPU, which this renderer draws with one indirect draw each.
+//! `roc` or `ioc` (`occlude::wgpu::embed::GpuCuller`) writes the visible
+//! instances' ids into lists on the GPU with one draw command per mesh and
+//! pipeline, which this renderer draws with one multi-draw per pipeline.
 //!
 //! The lines that integrate occlude are marked `occlude:` (counted in
 //! the README).
 
 use glam::{Mat4, Vec3};
 use occlude::methods::Method;
-use occlude::wgpu::embed::{AnyCuller, Attachments, FrameTarget, IndirectDraw, VisibleList, RASTER_FEATURES};
+use occlude::wgpu::embed::{
+    AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, VisibleList, DRAW_FEATURES, RASTER_FEATURES,
+};
 use occlude::{Aabb, Camera};
 use std::error::Error;
 use wgpu::util::DeviceExt;
@@ -22,8 +27,6 @@ use wgpu::util::DeviceExt;
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Background colour.
 const CLEAR_COLOR: wgpu::Color = wgpu::Color { r: 0.55, g: 0.7, b: 0.85, a: 1.0 };
-/// Indices of one cube: 6 faces of 2 triangles.
-const CUBE_INDICES: u32 = 36;
 /// Metres between neighbouring boxes of the grid.
 const SPACING: f32 = 2.0;
 
@@ -40,6 +43,22 @@ pub struct Options {
     /// Depth format: `Depth32Float` (whose image can be read back) or
     /// `Depth24Plus`.
     pub depth_format: wgpu::TextureFormat,
+    /// Distinct meshes (cubes and wedges, alternating), each at its own
+    /// place in the vertex and index buffers; instances take them in turn.
+    pub meshes: u32,
+}
+
+/// Draw groups: pipelines of two shadings.
+const GROUPS: usize = 2;
+/// Each group's fragment entry point.
+const SHADINGS: [&str; GROUPS] = ["fs_main", "fs_tinted"];
+
+/// Where a mesh lies in the vertex and index buffers.
+#[derive(Clone, Copy, Debug)]
+struct MeshRange {
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
 }
 
 /// One instance as the vertex shader reads it (`@location(2..4)`).
@@ -56,17 +75,8 @@ pub struct Renderer {
     device: wgpu::Device,
     queue: wgpu::Queue,
     options: Options,
-    pipeline: wgpu::RenderPipeline,
-    /// Draws listed instances: ids from a list (group 1), instances from
-    /// storage.
-    listed: wgpu::RenderPipeline,
     uniforms: wgpu::Buffer,
-    group: wgpu::BindGroup,
-    /// The listed pipeline's group 0: the uniforms and the instances.
-    listed_group: wgpu::BindGroup,
-    cube_vertices: wgpu::Buffer,
-    cube_indices: wgpu::Buffer,
-    instances: wgpu::Buffer,
+    draw: DrawState,
     /// World box of each instance (what occlude culls).
     bounds: Vec<Aabb>,
     color: wgpu::Texture,
@@ -75,15 +85,71 @@ pub struct Renderer {
     culling: Option<AnyCuller>,
 }
 
+/// What the renderer draws with: pipelines, bind groups, buffers, and each
+/// instance's mesh and pipeline.
+struct DrawState {
+    /// Per draw group: draws instances from the instance vertex buffer.
+    pipelines: [wgpu::RenderPipeline; GROUPS],
+    /// Per draw group: draws listed instances, ids from a list (group 1),
+    /// instances from storage; one layout for both.
+    listed: [wgpu::RenderPipeline; GROUPS],
+    group: wgpu::BindGroup,
+    /// The listed pipelines' group 0: the uniforms and the instances.
+    listed_group: wgpu::BindGroup,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    meshes: Vec<MeshRange>,
+    instances: wgpu::Buffer,
+    /// Each instance's mesh and draw group.
+    draws: Vec<InstanceDraw>,
+}
+
+impl DrawState {
+    /// Draws `instances`, each with its mesh and its group's pipeline.
+    fn instances(&self, pass: &mut wgpu::RenderPass<'_>, instances: &[u32]) {
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_vertex_buffer(1, self.instances.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
+        let mut bound = None;
+        for &i in instances {
+            let InstanceDraw { mesh, group } = self.draws[i as usize];
+            if bound != Some(group) {
+                pass.set_pipeline(&self.pipelines[group as usize]);
+                bound = Some(group);
+            }
+            let m = self.meshes[mesh as usize];
+            pass.draw_indexed(m.first_index..m.first_index + m.index_count, m.base_vertex, i..i + 1);
+        }
+    }
+
+    /// Draws a list of occlude's GPU-driven culling: one multi-draw per
+    /// group, with the group's pipeline.
+    fn list(&self, pass: &mut wgpu::RenderPass<'_>, list: &VisibleList) {
+        for (group, pipeline) in (0..).zip(&self.listed) {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &self.listed_group, &[]);
+            pass.set_vertex_buffer(0, self.vertices.slice(..));
+            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
+            list.draw_group(pass, group);
+        }
+    }
+}
+
 /// A device and queue on the first adapter wgpu finds (`WGPU_BACKEND` and
-/// `WGPU_ADAPTER_NAME` narrow the choice).
+/// `WGPU_ADAPTER_NAME` narrow the choice), with the features occlude uses
+/// where the adapter has them.
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
+    // occlude: the features `roc` and `ioc` need (forced early depth tests), and those of multi-mesh draws.
+    open_device_with(RASTER_FEATURES | DRAW_FEATURES)
+}
+
+/// A device and queue as [`open_device`], with those of `wanted` that the
+/// adapter has.
+pub fn open_device_with(wanted: wgpu::Features) -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))?;
-    // occlude: the features `roc` and `ioc` need (forced early depth tests), where the adapter has them.
-    let required_features = adapter.features() & RASTER_FEATURES;
-    // occlude: end.
-    let descriptor = wgpu::DeviceDescriptor { required_features, ..Default::default() };
+    let descriptor = wgpu::DeviceDescriptor { required_features: adapter.features() & wanted, ..Default::default() };
     Ok(pollster::block_on(adapter.request_device(&descriptor))?)
 }
 
@@ -93,25 +159,35 @@ impl Renderer {
         let data = scene(options.grid);
         let bounds =
             data.iter().map(|d| Aabb::new(d.offset.into(), Vec3::from(d.offset) + Vec3::from(d.scale))).collect();
-        let (vertices, indices) = cube();
+        let (vertices, indices, meshes) = meshes(options.meshes.max(1));
+        // The grid's shapes take the meshes and groups in turn; the walls
+        // (last) are cubes.
+        let boxes = options.grid * options.grid;
+        let draws = (0..data.len() as u32)
+            .map(|i| {
+                let (mesh, group) = if i < boxes { (i % meshes.len() as u32, (i / 7) % GROUPS as u32) } else { (0, 0) };
+                InstanceDraw { mesh, group }
+            })
+            .collect();
         let buffer = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
         };
-        let cube_vertices = buffer("cube vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
-        let cube_indices = buffer("cube indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
+        let vertices = buffer("mesh vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
+        let indices = buffer("mesh indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
         let instances =
             buffer("instances", bytemuck::cast_slice(&data), wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE);
         let uniforms = buffer("uniforms", &[0; 64], wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
-        let pipeline = pipeline(&device, options);
-        let listed = pipeline_listed(&device, options);
+        let [plain, listed] = layouts(&device);
+        let pipelines = SHADINGS.map(|fragment| pipeline(&device, options, &plain, fragment));
+        let listed = SHADINGS.map(|fragment| pipeline_listed(&device, options, &listed, fragment));
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("uniforms"),
-            layout: &pipeline.get_bind_group_layout(0),
+            layout: &pipelines[0].get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
         });
         let listed_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("uniforms and instances"),
-            layout: &listed.get_bind_group_layout(0),
+            layout: &listed[0].get_bind_group_layout(0),
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: instances.as_entire_binding() },
@@ -137,14 +213,8 @@ impl Renderer {
             device,
             queue,
             options,
-            pipeline,
-            listed,
             uniforms,
-            group,
-            listed_group,
-            cube_vertices,
-            cube_indices,
-            instances,
+            draw: DrawState { pipelines, listed, group, listed_group, vertices, indices, meshes, instances, draws },
             bounds,
             color,
             depth,
@@ -171,11 +241,16 @@ impl Renderer {
         // occlude: the attachments, the instance boxes and the method, once.
         let attachments =
             Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
-        let draw = IndirectDraw::Indexed { index_count: CUBE_INDICES, first_index: 0, base_vertex: 0 };
+        let meshes = self.draw.meshes.iter().map(|m| IndirectDraw::Indexed {
+            index_count: m.index_count,
+            first_index: m.first_index,
+            base_vertex: m.base_vertex,
+        });
+        let draws = Draws::Meshes { meshes: meshes.collect(), instances: self.draw.draws.clone() };
         self.culling = match method {
             Some(method) => Some(
-                AnyCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draw)?
-                    .with_list_pipeline(&self.listed, 1, 0)?,
+                AnyCuller::new(&self.device, &self.queue, attachments, &self.bounds, method, draws)?
+                    .with_list_pipeline(&self.draw.listed[0], 1, 0)?,
             ),
             None => None,
         };
@@ -191,7 +266,7 @@ impl Renderer {
         let color = self.color.create_view(&Default::default());
         let depth = self.depth.create_view(&Default::default());
         let Some(culling) = self.culling.as_mut() else {
-            // Culling off: one pass, every instance in one instanced draw.
+            // Culling off: one pass, every instance drawn.
             let mut encoder = self.device.create_command_encoder(&Default::default());
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -211,8 +286,7 @@ impl Renderer {
                 ..Default::default()
             });
             let n = self.instance_count();
-            bind(&mut pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
-            pass.draw_indexed(0..CUBE_INDICES, 0, 0..n);
+            self.draw.instances(&mut pass, &(0..n).collect::<Vec<_>>());
             drop(pass);
             self.queue.submit([encoder.finish()]);
             return Ok(u64::from(n));
@@ -223,22 +297,13 @@ impl Renderer {
         let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
         let mut drawn = 0u64;
         // A query-driven method draws lists of instances, a GPU-driven one
-        // lists on the GPU with one indirect draw each.
+        // lists on the GPU with one multi-draw per pipeline.
+        let draw = &self.draw;
         let draw_instances = |pass: &mut wgpu::RenderPass<'_>, instances: &[u32]| {
-            bind(pass, &self.pipeline, &self.group, &self.cube_vertices, &self.instances, &self.cube_indices);
-            for &i in instances {
-                pass.draw_indexed(0..CUBE_INDICES, 0, i..i + 1);
-            }
+            draw.instances(pass, instances);
             drawn += instances.len() as u64;
         };
-        let draw_list = |pass: &mut wgpu::RenderPass<'_>, list: &VisibleList| {
-            pass.set_pipeline(&self.listed);
-            pass.set_bind_group(0, &self.listed_group, &[]);
-            pass.set_vertex_buffer(0, self.cube_vertices.slice(..));
-            pass.set_index_buffer(self.cube_indices.slice(..), wgpu::IndexFormat::Uint16);
-            list.draw(pass);
-        };
-        culling.render(&camera, target, draw_instances, draw_list)?;
+        culling.render(&camera, target, draw_instances, |pass, list| draw.list(pass, list))?;
         if let AnyCuller::Gpu(culler) = culling {
             // The lists' lengths, read back for the printout and the test
             // (the frame itself reads nothing back).
@@ -324,58 +389,81 @@ impl Renderer {
     }
 }
 
-/// Binds what drawing instances needs: pipeline, uniforms, the cube's
-/// vertices and indices, the instance buffer.
-fn bind(
-    pass: &mut wgpu::RenderPass<'_>,
-    pipeline: &wgpu::RenderPipeline,
-    group: &wgpu::BindGroup,
-    vertices: &wgpu::Buffer,
-    instances: &wgpu::Buffer,
-    indices: &wgpu::Buffer,
-) {
-    pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, group, &[]);
-    pass.set_vertex_buffer(0, vertices.slice(..));
-    pass.set_vertex_buffer(1, instances.slice(..));
-    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint16);
-}
-
-/// The cube vertex buffer's layout (position, normal).
-const CUBE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+/// The mesh vertex buffer's layout (position, normal).
+const MESH_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: 24,
     step_mode: wgpu::VertexStepMode::Vertex,
     attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
 };
 
-/// The render pipeline: cube vertices (position, normal) and instances
-/// (offset, scale, colour) as vertex buffers, back faces culled, depth
-/// written and tested with `Less`, or `GreaterEqual` for reverse Z.
-fn pipeline(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
+/// The render pipeline of group shading `fragment`: mesh vertices
+/// (position, normal) and instances (offset, scale, colour) as vertex
+/// buffers, the uniforms in group 0, back faces culled, depth written and
+/// tested with `Less`, or `GreaterEqual` for reverse Z.
+fn pipeline(
+    device: &wgpu::Device,
+    options: Options,
+    layout: &wgpu::PipelineLayout,
+    fragment: &str,
+) -> wgpu::RenderPipeline {
     let buffers = [
-        Some(CUBE_LAYOUT),
+        Some(MESH_LAYOUT),
         Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<InstanceData>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &wgpu::vertex_attr_array![2 => Float32x3, 3 => Float32x3, 4 => Float32x3],
         }),
     ];
-    render_pipeline(device, options, "vs_main", &buffers)
+    render_pipeline(device, options, layout, ("vs_main", fragment), &buffers)
 }
 
-/// The pipeline drawing a list of visible instances (`vs_listed`): cube
+/// The pipeline drawing a list of visible instances (`vs_listed`): mesh
 /// vertices as a vertex buffer, the instances beside the uniforms in group
 /// 0, the list in group 1; otherwise the render pipeline.
-fn pipeline_listed(device: &wgpu::Device, options: Options) -> wgpu::RenderPipeline {
-    render_pipeline(device, options, "vs_listed", &[Some(CUBE_LAYOUT)])
+fn pipeline_listed(
+    device: &wgpu::Device,
+    options: Options,
+    layout: &wgpu::PipelineLayout,
+    fragment: &str,
+) -> wgpu::RenderPipeline {
+    render_pipeline(device, options, layout, ("vs_listed", fragment), &[Some(MESH_LAYOUT)])
 }
 
-/// A pipeline of the renderer's shader with vertex entry point `vertex`
-/// reading `buffers`.
+/// The pipeline layouts, one for each group's pipeline alike (so that one
+/// bind group serves both): group 0 the uniforms; for listed draws also
+/// the instances, and group 1 the list.
+fn layouts(device: &wgpu::Device) -> [wgpu::PipelineLayout; 2] {
+    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    };
+    let uniform = entry(0, wgpu::BufferBindingType::Uniform);
+    let storage = |binding| entry(binding, wgpu::BufferBindingType::Storage { read_only: true });
+    let group = |entries: &[wgpu::BindGroupLayoutEntry]| {
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries })
+    };
+    let layout = |groups: &[Option<&wgpu::BindGroupLayout>]| {
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: groups,
+            immediate_size: 0,
+        })
+    };
+    let plain = group(&[uniform]);
+    let listed = group(&[uniform, storage(1)]);
+    let list = group(&[storage(0)]);
+    [layout(&[Some(&plain)]), layout(&[Some(&listed), Some(&list)])]
+}
+
+/// A pipeline of the renderer's shader with the `(vertex, fragment)` entry
+/// points reading `buffers`.
 fn render_pipeline(
     device: &wgpu::Device,
     options: Options,
-    vertex: &str,
+    layout: &wgpu::PipelineLayout,
+    (vertex, fragment): (&str, &str),
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
 ) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -385,7 +473,7 @@ fn render_pipeline(
     let compare = if options.reverse_z { wgpu::CompareFunction::GreaterEqual } else { wgpu::CompareFunction::Less };
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("own renderer"),
-        layout: None,
+        layout: Some(layout),
         vertex: wgpu::VertexState {
             module: &module,
             entry_point: Some(vertex),
@@ -403,7 +491,7 @@ fn render_pipeline(
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_main"),
+            entry_point: Some(fragment),
             compilation_options: Default::default(),
             targets: &[Some(COLOR_FORMAT.into())],
         }),
@@ -412,31 +500,63 @@ fn render_pipeline(
     })
 }
 
-/// A unit cube, `[0, 1]^3`: 4 vertices per face (position, normal), two
-/// counter-clockwise triangles per face seen from outside.
-fn cube() -> (Vec<[f32; 6]>, Vec<u16>) {
-    // Each face: its normal and two edge directions whose cross product is
-    // the normal, from the face's first corner.
-    let faces: [[[f32; 3]; 4]; 6] = [
-        [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        [[-1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
-        [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
-        [[0.0, -1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
-        [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        [[0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
-    ];
-    let mut vertices = Vec::new();
-    let mut indices = Vec::new();
-    for [normal, origin, u, v] in faces {
-        let (o, u, v) = (Vec3::from(origin), Vec3::from(u), Vec3::from(v));
-        let base = vertices.len() as u16;
-        for corner in [o, o + u, o + u + v, o + v] {
-            let [x, y, z] = corner.to_array();
-            vertices.push([x, y, z, normal[0], normal[1], normal[2]]);
+/// The meshes: `count` of them, cubes and wedges in turn, each inside the
+/// unit box `[0, 1]^3`, its indices counted from its own base vertex:
+/// vertices (position, normal), indices, and where each mesh lies.
+fn meshes(count: u32) -> (Vec<[f32; 6]>, Vec<u16>, Vec<MeshRange>) {
+    let (mut vertices, mut indices, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..count {
+        let faces = if k % 2 == 0 { cube() } else { wedge() };
+        let (base_vertex, first_index) = (vertices.len() as i32, indices.len() as u32);
+        let mut local = 0u16;
+        for corners in faces {
+            let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize();
+            for c in &corners {
+                vertices.push([c.x, c.y, c.z, normal.x, normal.y, normal.z]);
+            }
+            // A fan of counter-clockwise triangles seen from outside.
+            for j in 1..corners.len() as u16 - 1 {
+                indices.extend([local, local + j, local + j + 1]);
+            }
+            local += corners.len() as u16;
         }
-        indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        ranges.push(MeshRange { first_index, index_count: indices.len() as u32 - first_index, base_vertex });
     }
-    (vertices, indices)
+    (vertices, indices, ranges)
+}
+
+/// A unit cube's faces, corners counter-clockwise seen from outside.
+fn cube() -> Vec<Vec<Vec3>> {
+    // Each face: its first corner and two edge directions whose cross
+    // product points out.
+    let faces: [[[f32; 3]; 3]; 6] = [
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
+    ];
+    faces
+        .iter()
+        .map(|&[o, u, v]| {
+            let (o, u, v) = (Vec3::from(o), Vec3::from(u), Vec3::from(v));
+            vec![o, o + u, o + u + v, o + v]
+        })
+        .collect()
+}
+
+/// A wedge in the unit box: full height at x = 0, sloping to the floor at
+/// x = 1; faces as [`cube`]'s.
+fn wedge() -> Vec<Vec<Vec3>> {
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    vec![
+        vec![p(0.0, 0.0, 0.0), p(1.0, 0.0, 0.0), p(1.0, 0.0, 1.0), p(0.0, 0.0, 1.0)],
+        vec![p(0.0, 0.0, 0.0), p(0.0, 0.0, 1.0), p(0.0, 1.0, 1.0), p(0.0, 1.0, 0.0)],
+        vec![p(1.0, 0.0, 0.0), p(0.0, 1.0, 0.0), p(0.0, 1.0, 1.0), p(1.0, 0.0, 1.0)],
+        vec![p(0.0, 0.0, 0.0), p(0.0, 1.0, 0.0), p(1.0, 0.0, 0.0)],
+        vec![p(0.0, 0.0, 1.0), p(1.0, 0.0, 1.0), p(0.0, 1.0, 1.0)],
+    ]
 }
 
 /// The instances: a `grid` x `grid` grid of boxes of varied sizes and

@@ -5,7 +5,7 @@
 //! idle, and writes the last frame as a PNG.
 //!
 //! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc]
-//! [--frames N] [--grid N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
+//! [--frames N] [--grid N] [--meshes N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
 
 use own_renderer::{open_device, Options, Renderer};
 use std::error::Error;
@@ -21,7 +21,7 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn Error>> {
     let depth_format = wgpu::TextureFormat::Depth32Float;
-    let mut options = Options { size: 512, grid: 60, reverse_z: false, depth_format };
+    let mut options = Options { size: 512, grid: 60, reverse_z: false, depth_format, meshes: 4 };
     let (mut culling, mut frames, mut out) = (String::from("chcpp"), 8u32, PathBuf::from("own-renderer.png"));
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -30,6 +30,7 @@ fn run() -> Result<(), Box<dyn Error>> {
             "--culling" => culling = value()?,
             "--frames" => frames = value()?.parse()?,
             "--grid" => options.grid = value()?.parse()?,
+            "--meshes" => options.meshes = value()?.parse()?,
             "--size" => options.size = value()?.parse()?,
             "--out" => out = value()?.into(),
             "--reverse-z" => options.reverse_z = true,
@@ -37,8 +38,8 @@ fn run() -> Result<(), Box<dyn Error>> {
             _ => return Err(format!("unknown argument '{arg}' (see the README)").into()),
         }
     }
-    if frames == 0 || options.size == 0 || options.grid == 0 {
-        return Err("--frames, --size and --grid must be at least 1".into());
+    if frames == 0 || options.size == 0 || options.grid == 0 || options.meshes == 0 {
+        return Err("--frames, --size, --grid and --meshes must be at least 1".into());
     }
     let (device, queue) = open_device()?;
     let mut renderer = Renderer::new(device, queue, options);

@@ -1,5 +1,6 @@
-// The example renderer's own shader: a unit cube per instance, moved and
-// scaled by per-instance attributes, lit by one directional light.
+// The example renderer's own shader: a mesh in the unit box per instance,
+// moved and scaled by per-instance attributes, lit by one directional light,
+// in one of two shadings (the renderer's two draw groups).
 
 struct Uniforms {
     view_projection: mat4x4<f32>,
@@ -20,7 +21,7 @@ struct Shaded {
     @location(0) color: vec3<f32>,
 }
 
-// A cube vertex of an instance, placed and lit.
+// A mesh vertex of an instance, placed and lit.
 fn shade(v: Vertex) -> Shaded {
     let world = v.offset + v.scale * v.position;
     let light = 0.35 + 0.65 * max(dot(v.normal, normalize(vec3<f32>(0.3, 0.9, 0.5))), 0.0);
@@ -35,6 +36,12 @@ fn vs_main(v: Vertex) -> Shaded {
 @fragment
 fn fs_main(in: Shaded) -> @location(0) vec4<f32> {
     return vec4<f32>(in.color, 1.0);
+}
+
+// The second shading: the colour's channels turned round.
+@fragment
+fn fs_tinted(in: Shaded) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.color.bgr, 1.0);
 }
 
 // Drawing a list of visible instances written by occlude's GPU-driven
@@ -52,7 +59,7 @@ struct VisibleList {
 @group(0) @binding(1) var<storage, read> instances: array<f32>;
 @group(1) @binding(0) var<storage, read> visible: VisibleList;
 
-struct CubeVertex {
+struct MeshVertex {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
 }
@@ -63,7 +70,7 @@ fn instance_field(at: u32) -> vec3<f32> {
 }
 
 @vertex
-fn vs_listed(v: CubeVertex, @builtin(instance_index) k: u32) -> Shaded {
+fn vs_listed(v: MeshVertex, @builtin(instance_index) k: u32) -> Shaded {
     let row = 9u * visible.ids[k];
     return shade(Vertex(v.position, v.normal, instance_field(row), instance_field(row + 3u), instance_field(row + 6u)));
 }

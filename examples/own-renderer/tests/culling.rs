@@ -13,18 +13,27 @@ use occlude::methods::ioc::IocParams;
 use occlude::methods::roc::{RocMode, RocParams};
 use occlude::methods::Method;
 use occlude::wgpu::embed::{
-    Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
+    Attachments, Culler, Draws, EmbedError, FrameTarget, GpuCuller, IndirectDraw, InstanceDraw, DRAW_FEATURES,
+    GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
 use occlude::{Aabb, Camera, InstanceChange, Scene};
-use own_renderer::{open_device, Options, Renderer};
+use own_renderer::{open_device_with, Options, Renderer};
 
 /// Frames along the camera's walk.
 const FRAMES: u32 = 5;
 
+/// The depth format whose image can be read back.
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
 /// A device for test `test`, or `None` (after saying why) when there is no
 /// adapter and the environment does not require one.
 fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
-    match open_device() {
+    device_with(test, RASTER_FEATURES | DRAW_FEATURES)
+}
+
+/// A device as [`device`], with those of `features` the adapter has.
+fn device_with(test: &str, features: wgpu::Features) -> Option<(wgpu::Device, wgpu::Queue)> {
+    match open_device_with(features) {
         Ok(pair) => Some(pair),
         Err(e) if std::env::var("OCCLUDE_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
             panic!("{test}: OCCLUDE_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}")
@@ -45,7 +54,13 @@ fn device(test: &str) -> Option<(wgpu::Device, wgpu::Queue)> {
 /// in its early pass.
 fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::TextureFormat) {
     let Some((device, queue)) = device(test) else { return };
-    let options = Options { size: 256, grid: 24, reverse_z, depth_format };
+    let options = Options { size: 256, grid: 24, reverse_z, depth_format, meshes: 4 };
+    culling_keeps_the_image_on(&device, &queue, options);
+}
+
+/// [`culling_keeps_the_image`] on `device` with `options`.
+fn culling_keeps_the_image_on(device: &wgpu::Device, queue: &wgpu::Queue, options: Options) {
+    let depth_format = options.depth_format;
     let read_depth = depth_format == wgpu::TextureFormat::Depth32Float;
     let depth_image = |r: &Renderer| if read_depth { r.depth_image().unwrap() } else { Vec::new() };
     let mut off = Renderer::new(device.clone(), queue.clone(), options);
@@ -107,6 +122,52 @@ fn culling_keeps_the_image_with_reverse_z() {
 fn culling_keeps_the_image_with_depth24plus() {
     culling_keeps_the_image("culling_keeps_the_image_with_depth24plus", false, wgpu::TextureFormat::Depth24Plus);
     culling_keeps_the_image("culling_keeps_the_image_with_depth24plus", true, wgpu::TextureFormat::Depth24Plus);
+}
+
+/// Two hundred meshes in two draw groups: each GPU-driven list is drawn
+/// with one multi-draw per group, and the images are those of culling off.
+#[test]
+fn culling_keeps_the_image_of_two_hundred_meshes() {
+    let Some((device, queue)) = device("culling_keeps_the_image_of_two_hundred_meshes") else { return };
+    let options = Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 200 };
+    culling_keeps_the_image_on(&device, &queue, options);
+}
+
+/// Without `MULTI_DRAW_INDIRECT_COUNT` each group's multi-draw runs over
+/// all its meshes' commands, those without visible instances empty: the
+/// images are still those of culling off.
+#[test]
+fn culling_keeps_the_image_without_draw_counts() {
+    let features = RASTER_FEATURES | wgpu::Features::INDIRECT_FIRST_INSTANCE;
+    let Some((device, queue)) = device_with("culling_keeps_the_image_without_draw_counts", features) else { return };
+    assert!(!device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT));
+    let options = Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 20 };
+    culling_keeps_the_image_on(&device, &queue, options);
+}
+
+/// Several meshes on a device without `INDIRECT_FIRST_INSTANCE` are
+/// refused, naming the feature; one mesh needs none. Draws that do not fit
+/// the boxes are refused too.
+#[test]
+fn several_meshes_need_indirect_first_instance() {
+    let Some((device, queue)) = device_with("several_meshes_need_indirect_first_instance", wgpu::Features::empty())
+    else {
+        return;
+    };
+    let (attachments, _) = one_box();
+    let bounds = [Aabb::new(Vec3::ZERO, Vec3::ONE), Aabb::new(Vec3::X * 2.0, Vec3::new(3.0, 1.0, 1.0))];
+    let mesh = |first_index| IndirectDraw::Indexed { index_count: 36, first_index, base_vertex: 0 };
+    let instances = |meshes: [u32; 2]| meshes.map(|mesh| InstanceDraw { mesh, group: 0 }).to_vec();
+    let hiz = Method::Hiz(HizParams::default());
+    let new = |draws: Draws| GpuCuller::new(&device, &queue, attachments, &bounds, &hiz, draws);
+    match new(Draws::Meshes { meshes: vec![mesh(0), mesh(36)], instances: instances([0, 1]) }).err() {
+        Some(EmbedError::Adapter(message)) => assert!(message.contains("INDIRECT_FIRST_INSTANCE"), "{message}"),
+        other => panic!("two meshes without the feature: {other:?}"),
+    }
+    assert!(new(Draws::Meshes { meshes: vec![mesh(0), mesh(36)], instances: instances([1, 1]) }).is_ok());
+    assert!(new(mesh(0).into()).is_ok());
+    let unknown = Draws::Meshes { meshes: vec![mesh(0)], instances: instances([0, 1]) };
+    assert!(matches!(new(unknown).err(), Some(EmbedError::Draws(_))));
 }
 
 #[test]

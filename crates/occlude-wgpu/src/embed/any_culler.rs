@@ -2,7 +2,7 @@
 //! the [`Method`], so that a renderer switches between query-driven and
 //! GPU-driven culling without an enum of its own.
 
-use super::{Attachments, Culler, EmbedError, FrameTarget, GpuCuller, IndirectDraw, VisibleList};
+use super::{Attachments, Culler, Draws, EmbedError, FrameTarget, GpuCuller, VisibleList};
 use occlude_core::methods::Method;
 use occlude_core::{Aabb, Camera, FrameStats, InstanceChange, Upkeep};
 
@@ -20,18 +20,18 @@ pub enum AnyCuller {
 
 impl AnyCuller {
     /// The culler `method` runs in, over `bounds` (see [`Culler::new`] and
-    /// [`GpuCuller::new`]; `draw` is how a [`GpuCuller`] draws an instance
-    /// and is unused by a [`Culler`]). Errors as theirs.
+    /// [`GpuCuller::new`]; `draws` is how a [`GpuCuller`] draws each
+    /// instance and is unused by a [`Culler`]). Errors as theirs.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         attachments: Attachments,
         bounds: &[Aabb],
         method: Method,
-        draw: IndirectDraw,
+        draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
         Ok(if method.is_gpu_driven() {
-            AnyCuller::Gpu(GpuCuller::new(device, queue, attachments, bounds, &method, draw)?)
+            AnyCuller::Gpu(GpuCuller::new(device, queue, attachments, bounds, &method, draws)?)
         } else {
             AnyCuller::Queries(Culler::new(device, queue, attachments, bounds, method)?)
         })

@@ -4,9 +4,9 @@
 //! [`occlude_core::methods::roc`]; IOC poster, section 1) or its
 //! hierarchical form (`ioc`, [`occlude_core::methods::ioc`]; IOC poster,
 //! section 2). Each frame occlude writes two lists of visible instance ids
-//! (the early pass's and the late pass's) with an indirect draw's
-//! arguments each, and the renderer draws each list with one indirect draw
-//! of its own. The compute
+//! (the early pass's and the late pass's), each with one indirect command
+//! per draw group and mesh (`draws.rs`), and the renderer draws each list
+//! with a multi-draw per group of its own. The compute
 //! shaders are `cull.wgsl`'s, as the wgpu backend's GPU-resident culling
 //! runs them (frustum drop, compaction, pyramid reduction and pyramid box
 //! test), plus `cs_pyramid_base`, which reads level 0 from the renderer's
@@ -15,6 +15,7 @@
 
 use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
+use super::draws::{DrawTables, Draws, VisibleList};
 use super::node_levels::{NodeLevels, WalkInputs};
 use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
@@ -51,113 +52,6 @@ const STORAGE_BUFFERS_NEEDED: u32 = 6;
 
 /// Threads per workgroup of `cull.wgsl`'s compute shaders.
 const WORKGROUP_THREADS: u32 = 64;
-
-/// How the renderer draws every instance of a list: one indirect draw whose
-/// instance count occlude fills in with the list's length. Both kinds of
-/// arguments hold the instance count in their second word, so the length
-/// is copied there on the GPU; the first instance stays 0 (no
-/// `INDIRECT_FIRST_INSTANCE` needed): the vertex shader reads the instance
-/// id as `ids[instance_index]` of the list (see [`VisibleList`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum IndirectDraw {
-    /// `draw_indexed_indirect` of this mesh range
-    /// (`DrawIndexedIndirectArgs`).
-    Indexed {
-        /// Indices per instance.
-        index_count: u32,
-        /// First index in the renderer's index buffer.
-        first_index: u32,
-        /// Added to each index.
-        base_vertex: i32,
-    },
-    /// `draw_indirect` of this vertex range (`DrawIndirectArgs`).
-    NonIndexed {
-        /// Vertices per instance.
-        vertex_count: u32,
-        /// First vertex.
-        first_vertex: u32,
-    },
-}
-
-impl IndirectDraw {
-    /// The argument words, instance count 0.
-    fn words(self) -> Vec<u32> {
-        match self {
-            Self::Indexed { index_count, first_index, base_vertex } => {
-                vec![index_count, 0, first_index, base_vertex as u32, 0]
-            }
-            Self::NonIndexed { vertex_count, first_vertex } => vec![vertex_count, 0, first_vertex, 0],
-        }
-    }
-}
-
-/// One of the frame's two lists of visible instances, kept for the
-/// culler's life (the buffers never change, so bind groups over them can be
-/// made once).
-///
-/// `ids` holds the list as `cull.wgsl` writes it, which the renderer's
-/// vertex shader binds as a read-only storage buffer:
-///
-/// ```wgsl
-/// struct VisibleList { count: u32, capacity: u32, ids: array<u32> }
-/// @group(1) @binding(0) var<storage, read> visible: VisibleList;
-/// // in the vertex shader: let instance = visible.ids[instance_index];
-/// ```
-///
-/// `indirect` holds the [`IndirectDraw`] arguments with the list's length
-/// as instance count: [`VisibleList::draw`] (or
-/// `pass.draw_indexed_indirect(list.indirect(), 0)`, `draw_indirect` for
-/// [`IndirectDraw::NonIndexed`]) draws the list.
-///
-/// The renderer binds `ids` itself, in a bind group of its own, or has
-/// occlude make each list's bind group for its pipeline with
-/// [`GpuCuller::with_list_pipeline`], which [`VisibleList::draw`] then
-/// sets before drawing.
-pub struct VisibleList {
-    ids: wgpu::Buffer,
-    indirect: wgpu::Buffer,
-    draw: IndirectDraw,
-    /// The renderer's group index and the bind group holding the list
-    /// there ([`GpuCuller::with_list_pipeline`]).
-    group: Option<(u32, wgpu::BindGroup)>,
-    index: usize,
-}
-
-impl VisibleList {
-    /// The list: count, capacity, then the ids (`STORAGE` usage).
-    pub fn ids(&self) -> &wgpu::Buffer {
-        &self.ids
-    }
-
-    /// The list's indirect draw arguments (`INDIRECT` usage).
-    pub fn indirect(&self) -> &wgpu::Buffer {
-        &self.indirect
-    }
-
-    /// 0 for the early pass's list (last frame's visible instances still
-    /// in view), 1 for the late pass's (the instances found visible now
-    /// that the early pass did not draw); also its place in
-    /// [`GpuCuller::lists`].
-    pub fn index(&self) -> usize {
-        self.index
-    }
-
-    /// Records the list's draw in `pass`: its bind group set at the
-    /// renderer's group index, when [`GpuCuller::with_list_pipeline`]
-    /// made one, then one `draw_indexed_indirect` (or `draw_indirect`, as
-    /// the culler's [`IndirectDraw`] says) of the list's arguments. The
-    /// renderer's pipeline, its other bind groups and its vertex and index
-    /// buffers must be set before.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        if let Some((index, group)) = &self.group {
-            pass.set_bind_group(*index, group, &[]);
-        }
-        match self.draw {
-            IndirectDraw::Indexed { .. } => pass.draw_indexed_indirect(&self.indirect, 0),
-            IndirectDraw::NonIndexed { .. } => pass.draw_indirect(&self.indirect, 0),
-        }
-    }
-}
 
 /// The pyramid of one depth-texture size and the bind groups naming it.
 struct PyramidState {
@@ -212,7 +106,12 @@ pub struct GpuCuller {
     /// frame's the other.
     flags: [wgpu::Buffer; 2],
     parity: usize,
+    /// The early and the late list as the compaction writes them.
+    compacted: [wgpu::Buffer; 2],
+    /// The renderer's lists: the compacted ones sorted by draw bucket,
+    /// with their draw commands.
     lists: [VisibleList; 2],
+    draws: DrawTables,
     /// The renderer's pipeline drawing the lists
     /// ([`GpuCuller::with_list_pipeline`]).
     pipeline: Option<wgpu::RenderPipeline>,
@@ -252,17 +151,19 @@ impl GpuCuller {
     /// GPU-driven method `method` (one of [`GPU_METHODS`]; the parameters
     /// [`GpuCuller::check_method`] accepts) on the renderer's `device` and
     /// `queue`, whose passes draw into `attachments`, each instance drawn
-    /// as `draw` says. A method that does not run here, bad boxes or
-    /// attachments, or a device without what the method needs (compute
-    /// passes; for `roc` and `ioc` also `SHADER_EARLY_DEPTH_TEST`) are an
-    /// error.
+    /// as `draws` says (an [`IndirectDraw`](super::IndirectDraw) when all
+    /// draw one mesh). A method that does not run here, bad boxes,
+    /// attachments or draws, or a device without what the method and the
+    /// draws need (compute passes; for `roc` and `ioc` also
+    /// `SHADER_EARLY_DEPTH_TEST`; for several meshes or groups
+    /// `INDIRECT_FIRST_INSTANCE`) are an error.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         attachments: Attachments,
         bounds: &[Aabb],
         method: &Method,
-        draw: IndirectDraw,
+        draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
         Self::check_method(method)?;
         let raster = !matches!(method, Method::Hiz(_));
@@ -289,14 +190,9 @@ impl GpuCuller {
         let all = list(&(0..n).collect::<Vec<_>>());
         let flag_usage = wgpu::BufferUsages::COPY_DST;
         let flags = [0, 1].map(|_| storage_init(&ctx, "visibility", &vec![0; 4 * n as usize], flag_usage));
-        let indirect_usage = wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST;
-        let lists = [0, 1].map(|index| VisibleList {
-            ids: list(&[]),
-            indirect: storage_init(&ctx, "visible draw", bytemuck::cast_slice(&draw.words()), indirect_usage),
-            draw,
-            group: None,
-            index,
-        });
+        let compacted = [0, 1].map(|_| list(&[]));
+        let draws = DrawTables::new(&ctx, &draws.into(), n)?;
+        let lists = [0, 1].map(|index| draws.list(&ctx, &compacted[index], n, index));
         let boxes = box_set_buffer(&ctx, &boxes);
         let camera = cull_camera_buffer(device);
         let stats = storage_init(&ctx, "culling statistics", &[], wgpu::BufferUsages::empty());
@@ -305,10 +201,10 @@ impl GpuCuller {
         let drop_outside = compute("cs_drop_outside");
         let drop_groups = parity_groups(&ctx, &drop_outside, |p| vec![(0, &camera), (1, &boxes), (3, &flags[1 - p])]);
         let compact_early = compute("cs_compact");
-        let early_groups = parity_groups(&ctx, &compact_early, |p| vec![(6, &flags[1 - p]), (8, &lists[0].ids)]);
+        let early_groups = parity_groups(&ctx, &compact_early, |p| vec![(6, &flags[1 - p]), (8, &compacted[0])]);
         let compact_late = compute("cs_compact_unless");
         let late_groups =
-            parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &lists[1].ids)]);
+            parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &compacted[1])]);
         let late = if let Method::Ioc(params) = method {
             let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
             let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
@@ -351,7 +247,9 @@ impl GpuCuller {
             all,
             flags,
             parity: 0,
+            compacted,
             lists,
+            draws,
             pipeline: None,
             late,
             counts_staging: device.create_buffer(&wgpu::BufferDescriptor {
@@ -419,7 +317,7 @@ impl GpuCuller {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = pipeline.get_bind_group_layout(group);
         let made =
-            self.lists.each_ref().map(|list| bind_group(&self.ctx, "visible list", &layout, &[(binding, &list.ids)]));
+            self.lists.each_ref().map(|list| bind_group(&self.ctx, "visible list", &layout, &[(binding, list.ids())]));
         if let Some(error) = pollster::block_on(scope.pop()) {
             return Err(EmbedError::Binding(format!(
                 "the pipeline cannot read a visible list at group {group}, binding {binding}: {error}"
@@ -493,15 +391,16 @@ impl GpuCuller {
         }
         write_cull_camera(&self.ctx.queue, &self.camera, camera);
         let now = self.parity;
-        encoder.clear_buffer(&self.lists[0].ids, 0, Some(4));
-        encoder.clear_buffer(&self.lists[1].ids, 0, Some(4));
-        encoder.clear_buffer(&self.flags[now], 0, None);
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instance_count());
-            dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instance_count());
+        for (compacted, list) in self.compacted.iter().zip(&self.lists) {
+            encoder.clear_buffer(compacted, 0, Some(4));
+            self.draws.reset(encoder, list);
         }
-        self.copy_count(encoder, 0);
+        encoder.clear_buffer(&self.flags[now], 0, None);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instance_count());
+        dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instance_count());
+        self.draws.dispatch(&mut pass, &self.lists[0], self.instance_count());
+        drop(pass);
         self.frame_camera = Some(*camera);
         Ok(())
     }
@@ -544,8 +443,8 @@ impl GpuCuller {
                 dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instance_count());
             }
             dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instance_count());
+            self.draws.dispatch(&mut pass, &self.lists[1], self.instance_count());
         }
-        self.copy_count(encoder, 1);
         self.parity = before;
         Ok(())
     }
@@ -577,8 +476,8 @@ impl GpuCuller {
     /// anything back.
     pub fn read_counts(&self) -> Result<[u32; 2], EmbedError> {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        for (k, list) in self.lists.iter().enumerate() {
-            encoder.copy_buffer_to_buffer(&list.ids, 0, &self.counts_staging, 4 * k as u64, 4);
+        for (k, list) in self.compacted.iter().enumerate() {
+            encoder.copy_buffer_to_buffer(list, 0, &self.counts_staging, 4 * k as u64, 4);
         }
         self.ctx.queue.submit([encoder.finish()]);
         Mapping::start(&self.counts_staging, 8).wait(&self.ctx).map_err(EmbedError::Device)?;
@@ -590,11 +489,6 @@ impl GpuCuller {
     /// Instances culled: one per box given.
     fn instance_count(&self) -> u32 {
         self.scene.instances.len() as u32
-    }
-
-    /// Copies list `k`'s length into its draw's instance count.
-    fn copy_count(&self, encoder: &mut wgpu::CommandEncoder, k: usize) {
-        encoder.copy_buffer_to_buffer(&self.lists[k].ids, 0, &self.lists[k].indirect, 4, 4);
     }
 
     /// Records `hiz`'s test into `encoder`: the pyramid built from the

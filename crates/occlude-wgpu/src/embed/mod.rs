@@ -10,7 +10,8 @@
 //!   instances decided on the CPU from occlusion queries (below).
 //! - [`GpuCuller`], the GPU-driven methods `hiz`, `roc` and `ioc`: occlude writes
 //!   lists of visible instance ids into buffers on the GPU and you draw
-//!   each with one indirect draw (section "GPU-driven culling" below).
+//!   with one multi-draw per draw group, whatever the number of meshes
+//!   (section "GPU-driven culling" below).
 //!
 //! [`AnyCuller`] is either, as the [`Method`](occlude_core::methods::Method)
 //! says: give it both ways of drawing and switch methods freely.
@@ -143,11 +144,16 @@
 //!
 //! A list is one buffer: its length, its capacity and the ids, which your
 //! vertex shader reads as `ids[instance_index]` (the WGSL is at
-//! [`VisibleList`]); its length is also copied, on the GPU, into the
-//! instance count of an indirect draw of the mesh range you gave
-//! ([`IndirectDraw`]), so one `draw_indexed_indirect` draws the list. The
-//! first instance stays 0, so `INDIRECT_FIRST_INSTANCE` is not needed.
-//! Your shader declares the list in a bind group of its own, which
+//! [`VisibleList`]). You give each instance a mesh (an [`IndirectDraw`]:
+//! index range and base vertex) and a draw group (your pipeline or
+//! material; [`Draws`]). After each compaction a compute pass sorts the
+//! list by (group, mesh) and writes one indirect command per pair, its
+//! instance count the pair's visible instances and its first instance the
+//! pair's place in the list; [`VisibleList::draw_group`] draws a group with
+//! one multi-draw (counted on the GPU with `MULTI_DRAW_INDIRECT_COUNT`;
+//! without it, over all the group's commands, the empty ones drawing
+//! nothing). One mesh needs no feature; several need
+//! `INDIRECT_FIRST_INSTANCE` ([`DRAW_FEATURES`]). Your shader declares the list in a bind group of its own, which
 //! [`GpuCuller::with_list_pipeline`] makes from your pipeline's layout,
 //! and [`GpuCuller::render_lists`] sets your pipeline and, after your
 //! callback has set your other bind groups and buffers, the list's group
@@ -179,8 +185,9 @@
 //!
 //! ## Costs
 //!
-//! - **Per frame:** four compute dispatches over the instances, two 4-byte
-//!   buffer copies and your two indirect draws; for `hiz` one dispatch per
+//! - **Per frame:** six compute dispatches over the instances, two over
+//!   the (group, mesh) pairs, buffer copies of the commands and your
+//!   multi-draws (one per list and group); for `hiz` one dispatch per
 //!   pyramid level (level 0 over your depth's pixels, each further level
 //!   over its texels); for `roc` a render pass of its own drawing every
 //!   box in the frustum (12 triangles each, their fragments tested against
@@ -234,9 +241,6 @@
 //!
 //! ## Known limits
 //!
-//! - One mesh range per culler: every instance is drawn by the same
-//!   indirect draw (different meshes need a culler each, or your own
-//!   compute pass over the list).
 //! - `hiz`, `roc` and `ioc` ([`GPU_METHODS`]) with the settings
 //!   [`GpuCuller::check_method`] accepts: `hiz` at instance granularity,
 //!   `roc.mode=exact`, `ioc` with its frustum test and without
@@ -294,13 +298,15 @@ mod any_culler;
 mod backend;
 mod box_tests;
 mod culler;
+mod draws;
 mod gpu_culler;
 mod node_levels;
 
 pub use any_culler::AnyCuller;
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
 pub use culler::{Culler, QUERY_METHODS};
-pub use gpu_culler::{GpuCuller, IndirectDraw, VisibleList, GPU_METHODS, RASTER_FEATURES};
+pub use draws::{Draws, IndirectDraw, InstanceDraw, VisibleList, DRAW_FEATURES};
+pub use gpu_culler::{GpuCuller, GPU_METHODS, RASTER_FEATURES};
 
 use occlude_core::methods::MethodError;
 use occlude_core::SceneError;
@@ -340,6 +346,10 @@ pub enum EmbedError {
     /// ([`RASTER_FEATURES`]), named in the message.
     #[error("{0}")]
     Adapter(String),
+    /// The per-instance draws do not fit the instances ([`Draws`]): not one
+    /// per box, an unknown mesh, indexed and non-indexed meshes mixed.
+    #[error("bad draws: {0}")]
+    Draws(String),
     /// A visible list cannot be bound as the renderer's pipeline asks
     /// ([`GpuCuller::with_list_pipeline`]).
     #[error("cannot bind the visible lists: {0}")]
