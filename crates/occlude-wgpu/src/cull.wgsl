@@ -108,11 +108,14 @@ struct Stats {
 @group(0) @binding(13) var<storage, read_write> stats: Stats;
 @group(0) @binding(14) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(15) var<storage, read> levels: array<Level>;
-// The level a reduction writes, the reach of a pyramid test, or (1 or 0)
-// whether the depth texture a pyramid's level 0 is read from is reverse Z.
+// The level a reduction writes, the reach of a pyramid test, or for a
+// pyramid's level 0 read from a depth texture (1 or 0) whether it is reverse
+// Z and the viewport's corner (.yz).
 @group(0) @binding(16) var<uniform> param: vec4<u32>;
-// A renderer's depth texture (the embedding's pyramids are built from it).
+// A renderer's depth texture (the embedding's pyramids are built from it),
+// single-sample or multisampled.
 @group(0) @binding(17) var depth_texture: texture_depth_2d;
+@group(0) @binding(18) var depth_samples: texture_depth_multisampled_2d;
 
 
 const GROUP_SIZE: u32 = 64u;
@@ -319,24 +322,48 @@ fn cs_pyramid_level(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgr
 const LOAD_SLACK: f32 = 2.384185791015625e-7;
 
 // Level 0 of a depth pyramid from a renderer's depth texture (the
-// embedding's): each texel its pixel's depth, turned into depth 0 nearest
-// when param.x says the texture is reverse Z, and pushed LOAD_SLACK farther,
-// so that it is never nearer than the depth the renderer's fragments had.
-@compute @workgroup_size(64)
-fn cs_pyramid_base(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-                   @builtin(local_invocation_index) local: u32) {
-    let t = thread_index(group, groups, local);
+// embedding's): each texel its pixel's depth (in the viewport at param.yz),
+// turned into depth 0 nearest when param.x says the texture is reverse Z, and
+// pushed LOAD_SLACK farther, so that it is never nearer than the depth the
+// renderer's fragments had.
+fn base_texel(depth: f32) -> f32 {
+    return min(select(depth, 1.0 - depth, param.x != 0u) + LOAD_SLACK, 1.0);
+}
+
+// Level 0's texel of thread t: (x, y, index), or x past the level's width.
+fn base_slot(t: u32) -> vec3<u32> {
     let level = levels[0];
     if t >= level.width * level.height {
-        return;
+        return vec3<u32>(level.width, 0u, 0u);
     }
     let x = t % level.width;
     let y = t / level.width;
-    var depth = textureLoad(depth_texture, vec2<u32>(x, y), 0);
-    if param.x != 0u {
-        depth = 1.0 - depth;
+    return vec3<u32>(x, y, level.offset + y * level.pitch + x);
+}
+
+@compute @workgroup_size(64)
+fn cs_pyramid_base(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                   @builtin(local_invocation_index) local: u32) {
+    let slot = base_slot(thread_index(group, groups, local));
+    if slot.x < levels[0].width {
+        pyramid[slot.z] = base_texel(textureLoad(depth_texture, slot.xy + param.yz, 0));
     }
-    pyramid[level.offset + y * level.pitch + x] = min(depth + LOAD_SLACK, 1.0);
+}
+
+// With MSAA a texel is the farthest of its pixel's samples, so that it is
+// never nearer than any sample an instance may show at.
+@compute @workgroup_size(64)
+fn cs_pyramid_base_samples(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                           @builtin(local_invocation_index) local: u32) {
+    let slot = base_slot(thread_index(group, groups, local));
+    if slot.x >= levels[0].width {
+        return;
+    }
+    var farthest = 0.0;
+    for (var s = 0u; s < textureNumSamples(depth_samples); s++) {
+        farthest = max(farthest, base_texel(textureLoad(depth_samples, slot.xy + param.yz, s)));
+    }
+    pyramid[slot.z] = farthest;
 }
 
 // A bound on how far two f32 evaluations of a sum or quotient may differ,

@@ -353,7 +353,7 @@ impl Culling {
     /// Sets the frame's camera for box tests (frustum planes, near region,
     /// view-projection matrix and the constants of pyramid footprints).
     pub fn set_camera(&self, camera: &Camera) {
-        write_cull_camera(&self.ctx().queue, &self.camera, camera);
+        write_cull_camera(&self.ctx().queue, &self.camera, camera, PIXEL_MARGIN as f32);
     }
 
     /// Uploads `boxes` padded as query boxes, each with its slot; empty boxes
@@ -746,8 +746,10 @@ pub(crate) fn cull_module(device: &wgpu::Device, fragments: bool) -> wgpu::Shade
 /// Writes the culling camera uniform `buffer` (`Cull` of `cull.wgsl`) for
 /// `camera`: frustum planes, near region, the view-projection matrix the
 /// backends rasterize (depth 0 nearest) and the constants of pyramid
-/// footprints.
-pub(crate) fn write_cull_camera(queue: &wgpu::Queue, buffer: &wgpu::Buffer, camera: &Camera) {
+/// footprints, which are grown by `pixel_margin` pixels
+/// ([`PIXEL_MARGIN`]; with MSAA half a pixel more, for samples off the
+/// pixels' centres).
+pub(crate) fn write_cull_camera(queue: &wgpu::Queue, buffer: &wgpu::Buffer, camera: &Camera, pixel_margin: f32) {
     let mut uniform = [0f32; CAMERA_BYTES as usize / 4];
     for (k, plane) in camera.frustum().planes.iter().enumerate() {
         uniform[4 * k..4 * k + 4].copy_from_slice(&plane.to_array());
@@ -755,7 +757,7 @@ pub(crate) fn write_cull_camera(queue: &wgpu::Queue, buffer: &wgpu::Buffer, came
     let near = camera.near_region();
     uniform[24..28].copy_from_slice(&near.center.extend(near.radius * near.radius).to_array());
     uniform[28..44].copy_from_slice(&camera.view_projection().to_cols_array());
-    uniform[44..47].copy_from_slice(&[QUERY_DEPTH_BIAS, DEPTH_SLACK, PIXEL_MARGIN as f32]);
+    uniform[44..47].copy_from_slice(&[QUERY_DEPTH_BIAS, DEPTH_SLACK, pixel_margin]);
     queue.write_buffer(buffer, 0, bytemuck::cast_slice(&uniform));
 }
 

@@ -240,12 +240,14 @@ pub(crate) struct Targets {
     pub color: Option<wgpu::TextureFormat>,
     /// The depth attachment's format.
     pub depth: wgpu::TextureFormat,
+    /// Samples per pixel of both.
+    pub samples: u32,
 }
 
 impl Targets {
     /// A colour target of `color` and this crate's depth format.
     pub fn scene(color: wgpu::TextureFormat) -> Self {
-        Self { color: Some(color), depth: DEPTH_FORMAT }
+        Self { color: Some(color), depth: DEPTH_FORMAT, samples: 1 }
     }
 }
 
@@ -289,7 +291,7 @@ pub(crate) fn build_pipeline(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState { count: targets.samples, ..Default::default() },
         // Without a colour target, a depth-only pipeline (no fragment stage),
         // unless its fragments write storage; their colour output is then
         // ignored.

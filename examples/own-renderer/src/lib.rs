@@ -17,7 +17,8 @@
 use glam::{Mat4, Vec3};
 use occlude::methods::Method;
 use occlude::wgpu::embed::{
-    AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, VisibleList, DRAW_FEATURES, RASTER_FEATURES,
+    AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, Viewport, VisibleList, DRAW_FEATURES,
+    RASTER_FEATURES,
 };
 use occlude::{Aabb, Camera};
 use std::error::Error;
@@ -46,6 +47,11 @@ pub struct Options {
     /// Distinct meshes (cubes and wedges, alternating), each at its own
     /// place in the vertex and index buffers; instances take them in turn.
     pub meshes: u32,
+    /// Samples per pixel: 1, or the MSAA count (the colour resolved into a
+    /// single-sample image, which is what is read back).
+    pub samples: u32,
+    /// The rectangle of the image drawn into, or `None` for all of it.
+    pub viewport: Option<Viewport>,
 }
 
 /// Draw groups: pipelines of two shadings.
@@ -80,6 +86,8 @@ pub struct Renderer {
     /// World box of each instance (what occlude culls).
     bounds: Vec<Aabb>,
     color: wgpu::Texture,
+    /// With MSAA, the single-sample image the colour resolves into.
+    resolved: Option<wgpu::Texture>,
     depth: wgpu::Texture,
     /// occlude: the culling method, when culling is on.
     culling: Option<AnyCuller>,
@@ -193,12 +201,12 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 1, resource: instances.as_entire_binding() },
             ],
         });
-        let texture = |label, format| {
+        let texture = |label, format, sample_count| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d { width: options.size, height: options.size, depth_or_array_layers: 1 },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT
@@ -207,8 +215,9 @@ impl Renderer {
                 view_formats: &[],
             })
         };
-        let color = texture("colour", COLOR_FORMAT);
-        let depth = texture("depth", options.depth_format);
+        let color = texture("colour", COLOR_FORMAT, options.samples);
+        let resolved = (options.samples > 1).then(|| texture("resolved colour", COLOR_FORMAT, 1));
+        let depth = texture("depth", options.depth_format, options.samples);
         Self {
             device,
             queue,
@@ -217,6 +226,7 @@ impl Renderer {
             draw: DrawState { pipelines, listed, group, listed_group, vertices, indices, meshes, instances, draws },
             bounds,
             color,
+            resolved,
             depth,
             culling: None,
         }
@@ -239,8 +249,12 @@ impl Renderer {
     /// Culls with occlude's method `method` from now on (`None`: culling off).
     pub fn set_culling(&mut self, method: Option<Method>) -> Result<(), Box<dyn Error>> {
         // occlude: the attachments, the instance boxes and the method, once.
-        let attachments =
-            Attachments { color: Some(COLOR_FORMAT), depth: self.options.depth_format, compare: self.compare() };
+        let attachments = Attachments {
+            color: Some(COLOR_FORMAT),
+            depth: self.options.depth_format,
+            compare: self.compare(),
+            samples: self.options.samples,
+        };
         let meshes = self.draw.meshes.iter().map(|m| IndirectDraw::Indexed {
             index_count: m.index_count,
             first_index: m.first_index,
@@ -264,6 +278,7 @@ impl Renderer {
         let (view, projection) = self.camera(t);
         self.queue.write_buffer(&self.uniforms, 0, bytemuck::cast_slice(&(projection * view).to_cols_array()));
         let color = self.color.create_view(&Default::default());
+        let resolve = self.resolved.as_ref().map(|t| t.create_view(&Default::default()));
         let depth = self.depth.create_view(&Default::default());
         let Some(culling) = self.culling.as_mut() else {
             // Culling off: one pass, every instance drawn.
@@ -272,7 +287,7 @@ impl Renderer {
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: &color,
                     depth_slice: None,
-                    resolve_target: None,
+                    resolve_target: resolve.as_ref(),
                     ops: wgpu::Operations { load: wgpu::LoadOp::Clear(CLEAR_COLOR), store: wgpu::StoreOp::Store },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -285,6 +300,9 @@ impl Renderer {
                 }),
                 ..Default::default()
             });
+            if let Some(v) = self.options.viewport {
+                pass.set_viewport(v.x as f32, v.y as f32, v.width as f32, v.height as f32, 0.0, 1.0);
+            }
             let n = self.instance_count();
             self.draw.instances(&mut pass, &(0..n).collect::<Vec<_>>());
             drop(pass);
@@ -294,7 +312,11 @@ impl Renderer {
         // occlude: the frame's camera and views; occlude's method draws the
         // instances it finds visible with this renderer's draw code.
         let camera = Camera::from_matrices(view, projection, self.options.reverse_z)?;
-        let target = FrameTarget { color: Some(&color), clear_color: CLEAR_COLOR, depth: &depth };
+        let target = FrameTarget {
+            resolve: resolve.as_ref(),
+            viewport: self.options.viewport,
+            ..FrameTarget::new(Some(&color), CLEAR_COLOR, &depth)
+        };
         let mut drawn = 0u64;
         // A query-driven method draws lists of instances, a GPU-driven one
         // lists on the GPU with one multi-draw per pipeline.
@@ -319,10 +341,11 @@ impl Renderer {
         let eye = Vec3::new(-6.0 + 12.0 * t, 1.7, 6.0);
         let view = Mat4::look_at_rh(eye, Vec3::new(eye.x * 0.5, 1.5, -30.0), Vec3::Y);
         let fov = 60f32.to_radians();
+        let aspect = self.options.viewport.map_or(1.0, |v| v.width as f32 / v.height as f32);
         let projection = if self.options.reverse_z {
-            Mat4::perspective_infinite_reverse_rh(fov, 1.0, 0.1)
+            Mat4::perspective_infinite_reverse_rh(fov, aspect, 0.1)
         } else {
-            Mat4::perspective_rh(fov, 1.0, 0.1, 300.0)
+            Mat4::perspective_rh(fov, aspect, 0.1, 300.0)
         };
         (view, projection)
     }
@@ -334,13 +357,15 @@ impl Renderer {
         Ok(())
     }
 
-    /// The last frame's colour image, RGBA8 rows from the top (blocking).
+    /// The last frame's colour image (resolved, with MSAA), RGBA8 rows
+    /// from the top (blocking).
     pub fn color_image(&self) -> Result<Vec<u8>, Box<dyn Error>> {
-        self.read(&self.color, wgpu::TextureAspect::All)
+        self.read(self.resolved.as_ref().unwrap_or(&self.color), wgpu::TextureAspect::All)
     }
 
     /// The last frame's depth image, rows from the top (blocking; a
-    /// `Depth24Plus` image cannot be read back and is an error).
+    /// `Depth24Plus` or multisampled image cannot be read back and is an
+    /// error).
     pub fn depth_image(&self) -> Result<Vec<f32>, Box<dyn Error>> {
         let bytes = self.read(&self.depth, wgpu::TextureAspect::DepthOnly)?;
         Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
@@ -488,7 +513,7 @@ fn render_pipeline(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState { count: options.samples, ..Default::default() },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some(fragment),

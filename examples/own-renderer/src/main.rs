@@ -5,8 +5,9 @@
 //! idle, and writes the last frame as a PNG.
 //!
 //! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc]
-//! [--frames N] [--grid N] [--meshes N] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
+//! [--frames N] [--grid N] [--meshes N] [--msaa SAMPLES] [--viewport X,Y,W,H] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
 
+use occlude::wgpu::embed::Viewport;
 use own_renderer::{open_device, Options, Renderer};
 use std::error::Error;
 use std::path::PathBuf;
@@ -21,7 +22,8 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn Error>> {
     let depth_format = wgpu::TextureFormat::Depth32Float;
-    let mut options = Options { size: 512, grid: 60, reverse_z: false, depth_format, meshes: 4 };
+    let mut options =
+        Options { size: 512, grid: 60, reverse_z: false, depth_format, meshes: 4, samples: 1, viewport: None };
     let (mut culling, mut frames, mut out) = (String::from("chcpp"), 8u32, PathBuf::from("own-renderer.png"));
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -31,6 +33,8 @@ fn run() -> Result<(), Box<dyn Error>> {
             "--frames" => frames = value()?.parse()?,
             "--grid" => options.grid = value()?.parse()?,
             "--meshes" => options.meshes = value()?.parse()?,
+            "--msaa" => options.samples = value()?.parse()?,
+            "--viewport" => options.viewport = Some(viewport(&value()?)?),
             "--size" => options.size = value()?.parse()?,
             "--out" => out = value()?.into(),
             "--reverse-z" => options.reverse_z = true,
@@ -40,6 +44,9 @@ fn run() -> Result<(), Box<dyn Error>> {
     }
     if frames == 0 || options.size == 0 || options.grid == 0 || options.meshes == 0 {
         return Err("--frames, --size, --grid and --meshes must be at least 1".into());
+    }
+    if ![1, 4].contains(&options.samples) {
+        return Err("--msaa takes 1 or 4 (the counts every adapter has)".into());
     }
     let (device, queue) = open_device()?;
     let mut renderer = Renderer::new(device, queue, options);
@@ -66,4 +73,13 @@ fn run() -> Result<(), Box<dyn Error>> {
     renderer.save_png(&out)?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// A viewport from `X,Y,WIDTH,HEIGHT`.
+fn viewport(text: &str) -> Result<Viewport, Box<dyn Error>> {
+    let v: Vec<u32> = text.split(',').map(str::parse).collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, width, height] => Ok(Viewport { x, y, width, height }),
+        _ => Err(format!("--viewport takes X,Y,WIDTH,HEIGHT, not '{text}'").into()),
+    }
 }

@@ -13,8 +13,8 @@ use occlude::methods::ioc::IocParams;
 use occlude::methods::roc::{RocMode, RocParams};
 use occlude::methods::Method;
 use occlude::wgpu::embed::{
-    Attachments, Culler, Draws, EmbedError, FrameTarget, GpuCuller, IndirectDraw, InstanceDraw, DRAW_FEATURES,
-    GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
+    Attachments, Culler, Draws, EmbedError, FrameTarget, GpuCuller, IndirectDraw, InstanceDraw, Viewport,
+    DRAW_FEATURES, GPU_METHODS, QUERY_METHODS, RASTER_FEATURES,
 };
 use occlude::{Aabb, Camera, InstanceChange, Scene};
 use own_renderer::{open_device_with, Options, Renderer};
@@ -24,6 +24,9 @@ const FRAMES: u32 = 5;
 
 /// The depth format whose image can be read back.
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// A viewport inside the 256 x 256 target, off its corner.
+const INSET: Option<Viewport> = Some(Viewport { x: 40, y: 24, width: 192, height: 160 });
 
 /// A device for test `test`, or `None` (after saying why) when there is no
 /// adapter and the environment does not require one.
@@ -54,14 +57,16 @@ fn device_with(test: &str, features: wgpu::Features) -> Option<(wgpu::Device, wg
 /// in its early pass.
 fn culling_keeps_the_image(test: &str, reverse_z: bool, depth_format: wgpu::TextureFormat) {
     let Some((device, queue)) = device(test) else { return };
-    let options = Options { size: 256, grid: 24, reverse_z, depth_format, meshes: 4 };
+    let options = Options { size: 256, grid: 24, reverse_z, depth_format, meshes: 4, samples: 1, viewport: None };
     culling_keeps_the_image_on(&device, &queue, options);
 }
 
 /// [`culling_keeps_the_image`] on `device` with `options`.
 fn culling_keeps_the_image_on(device: &wgpu::Device, queue: &wgpu::Queue, options: Options) {
     let depth_format = options.depth_format;
-    let read_depth = depth_format == wgpu::TextureFormat::Depth32Float;
+    // Depth with 32-bit float depth and one sample can be read back.
+    let float_depth = matches!(depth_format, DEPTH | wgpu::TextureFormat::Depth32FloatStencil8);
+    let read_depth = float_depth && options.samples == 1;
     let depth_image = |r: &Renderer| if read_depth { r.depth_image().unwrap() } else { Vec::new() };
     let mut off = Renderer::new(device.clone(), queue.clone(), options);
     let mut reference = Vec::new();
@@ -74,7 +79,8 @@ fn culling_keeps_the_image_on(device: &wgpu::Device, queue: &wgpu::Queue, option
         // boxes, over the background (the top-left pixel).
         let background = &color[..4];
         let drawn_pixels = color.chunks(4).filter(|p| p != &background).count();
-        assert!(drawn_pixels > color.len() / 40, "frame {frame}: the image is nearly empty ({drawn_pixels} pixels)");
+        let area = options.viewport.map_or(options.size * options.size, |v| v.width * v.height);
+        assert!(drawn_pixels > area as usize / 10, "frame {frame}: the image is nearly empty ({drawn_pixels} pixels)");
         reference.push((color, depth_image(&off)));
     }
     let mut in_frustum = Vec::new();
@@ -129,7 +135,8 @@ fn culling_keeps_the_image_with_depth24plus() {
 #[test]
 fn culling_keeps_the_image_of_two_hundred_meshes() {
     let Some((device, queue)) = device("culling_keeps_the_image_of_two_hundred_meshes") else { return };
-    let options = Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 200 };
+    let options =
+        Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 200, samples: 1, viewport: None };
     culling_keeps_the_image_on(&device, &queue, options);
 }
 
@@ -141,7 +148,43 @@ fn culling_keeps_the_image_without_draw_counts() {
     let features = RASTER_FEATURES | wgpu::Features::INDIRECT_FIRST_INSTANCE;
     let Some((device, queue)) = device_with("culling_keeps_the_image_without_draw_counts", features) else { return };
     assert!(!device.features().contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT));
-    let options = Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 20 };
+    let options =
+        Options { size: 256, grid: 24, reverse_z: false, depth_format: DEPTH, meshes: 20, samples: 1, viewport: None };
+    culling_keeps_the_image_on(&device, &queue, options);
+}
+
+/// With 4x MSAA (the farthest sample of each pixel in `hiz`'s pyramid,
+/// footprints grown to whole pixels, box tests and queries counting
+/// samples), a depth-stencil format and a viewport smaller than the target,
+/// the resolved images are those of culling off.
+#[test]
+fn culling_keeps_the_image_with_msaa_in_a_viewport() {
+    let Some((device, queue)) = device("culling_keeps_the_image_with_msaa_in_a_viewport") else { return };
+    let depth_format = wgpu::TextureFormat::Depth24PlusStencil8;
+    let options =
+        Options { size: 256, grid: 24, reverse_z: false, depth_format, meshes: 4, samples: 4, viewport: INSET };
+    culling_keeps_the_image_on(&device, &queue, options);
+}
+
+/// In a viewport smaller than the target, with reverse Z and
+/// `Depth32FloatStencil8` (where the adapter has it), colour and depth are
+/// those of culling off.
+#[test]
+fn culling_keeps_the_image_in_a_viewport() {
+    let test = "culling_keeps_the_image_in_a_viewport";
+    let Some((device, queue)) =
+        device_with(test, RASTER_FEATURES | DRAW_FEATURES | wgpu::Features::DEPTH32FLOAT_STENCIL8)
+    else {
+        return;
+    };
+    let depth_format = if device.features().contains(wgpu::Features::DEPTH32FLOAT_STENCIL8) {
+        wgpu::TextureFormat::Depth32FloatStencil8
+    } else {
+        eprintln!("{test}: the adapter lacks DEPTH32FLOAT_STENCIL8; Depth32Float instead");
+        DEPTH
+    };
+    let options =
+        Options { size: 256, grid: 24, reverse_z: true, depth_format, meshes: 4, samples: 1, viewport: INSET };
     culling_keeps_the_image_on(&device, &queue, options);
 }
 
@@ -190,7 +233,7 @@ fn the_embedding_refuses_what_it_cannot_cull() {
     let mut culler = Culler::new(&device, &queue, attachments, &bounds, Method::default()).unwrap();
     let view = |format, size| texture_view(&device, format, size, wgpu::TextureUsages::RENDER_ATTACHMENT);
     let depth = view(depth_format, 8);
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
     let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
 
     // Views other than the attachments say: an error, nothing drawn.
@@ -217,7 +260,7 @@ fn the_embedding_counts_the_triangles_it_is_given() {
     let Some((device, queue)) = device("the_embedding_counts_the_triangles_it_is_given") else { return };
     let (attachments, bounds) = one_box();
     let depth = texture_view(&device, attachments.depth, 8, wgpu::TextureUsages::RENDER_ATTACHMENT);
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
     let camera = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
     for (counts, triangles) in [(None, 12), (Some([5000]), 5000)] {
         let mut scene = Scene::from_bounds("one box", &bounds).unwrap();
@@ -236,8 +279,12 @@ fn the_embedding_counts_the_triangles_it_is_given() {
 /// tested with `Less`, and one box in front of a camera at the origin
 /// looking down -z.
 fn one_box() -> (Attachments, [Aabb; 1]) {
-    let attachments =
-        Attachments { color: None, depth: wgpu::TextureFormat::Depth32Float, compare: wgpu::CompareFunction::Less };
+    let attachments = Attachments {
+        color: None,
+        depth: wgpu::TextureFormat::Depth32Float,
+        compare: wgpu::CompareFunction::Less,
+        samples: 1,
+    };
     (attachments, [Aabb::new(Vec3::new(-1.0, -1.0, -6.0), Vec3::new(1.0, 1.0, -5.0))])
 }
 
@@ -337,7 +384,7 @@ fn the_gpu_driven_embedding_draws_its_lists(
     let mut culler = GpuCuller::new(device, queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();
     let sampled = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
     let depth = texture_view(device, depth_format, 8, sampled);
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
     let mut calls = 0;
     let forward = Camera::from_matrices(Mat4::IDENTITY, Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0), false).unwrap();
     if method == "hiz" {
@@ -403,7 +450,7 @@ fn the_gpu_driven_embedding_follows_moving_instances() {
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let depth = sampled_depth(&device, attachments.depth);
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
     let forward = forward_camera();
     let behind = Aabb::new(bounds[0].min + Vec3::Z * 10.0, bounds[0].max + Vec3::Z * 10.0);
     for method in GPU_METHODS {
@@ -433,7 +480,7 @@ fn the_gpu_driven_phases_record_into_the_renderers_encoder() {
     let (attachments, bounds) = one_box();
     let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
     let depth = sampled_depth(&device, attachments.depth);
-    let target = FrameTarget { color: None, clear_color: wgpu::Color::BLACK, depth: &depth };
+    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
     let forward = forward_camera();
     for method in GPU_METHODS {
         let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &method.parse().unwrap(), draw).unwrap();

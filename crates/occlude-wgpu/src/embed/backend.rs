@@ -26,17 +26,20 @@ use std::time::Instant;
 pub struct Attachments {
     /// Format of the colour attachment the renderer draws into, or `None`
     /// for depth-only passes. Occlude's query pipeline writes no colour but
-    /// must name the pass's colour format. One colour attachment at most,
-    /// with one sample.
+    /// must name the pass's colour format. One colour attachment at most.
     pub color: Option<wgpu::TextureFormat>,
     /// Format of the depth attachment (`Depth32Float`, `Depth24Plus`, a
-    /// depth-stencil format: any with a depth aspect), one sample.
+    /// depth-stencil format: any with a depth aspect).
     pub depth: wgpu::TextureFormat,
     /// The renderer's depth test: `Less` or `LessEqual` (depth 0 nearest,
     /// cleared to 1), or `Greater` or `GreaterEqual` (reverse Z: depth 1
     /// nearest, cleared to 0). Query boxes are tested with the same
     /// function and drawn without depth or colour writes.
     pub compare: wgpu::CompareFunction,
+    /// Samples per pixel of the colour and depth attachments: 1, or the
+    /// MSAA count. Occlude's tests then count a pixel where any of its
+    /// samples may be visible.
+    pub samples: u32,
 }
 
 impl Attachments {
@@ -67,14 +70,18 @@ impl Attachments {
                 self.compare
             )));
         }
+        if !self.samples.is_power_of_two() || self.samples > 32 {
+            return Err(EmbedError::Attachments(format!("{} samples per pixel (use 1, 2, 4, 8 or 16)", self.samples)));
+        }
         Ok(())
     }
 }
 
 /// The views one frame draws into, as the renderer made them: views of
-/// whole single-sample 2D textures of the same size, in the formats of its
-/// [`Attachments`] (a colour view may be the sRGB or linear twin of the
-/// colour format).
+/// whole 2D textures of the same size and sample count, in the formats of
+/// its [`Attachments`] (a colour view may be the sRGB or linear twin of the
+/// colour format). [`FrameTarget::new`] makes one with no resolve target,
+/// drawing into the whole target.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameTarget<'a> {
     /// The colour view, when [`Attachments::color`] names a format.
@@ -82,16 +89,48 @@ pub struct FrameTarget<'a> {
     /// The colour the frame's first pass clears `color` to.
     pub clear_color: wgpu::Color,
     /// The depth view; the frame's first pass clears it to
-    /// [`Attachments::far_depth`]. Its texture's size is the frame's
-    /// ([`Backend::resolution`]).
+    /// [`Attachments::far_depth`].
     pub depth: &'a wgpu::TextureView,
+    /// With MSAA, the single-sample view each of occlude's passes resolves
+    /// the colour into (its last pass leaves the frame's image there); or
+    /// `None`, to resolve in a pass of your own.
+    pub resolve: Option<&'a wgpu::TextureView>,
+    /// The rectangle of the views the frame draws into, or `None` for the
+    /// whole target. Its size is the frame's ([`Backend::resolution`]);
+    /// your projection maps to it.
+    pub viewport: Option<Viewport>,
 }
 
-impl FrameTarget<'_> {
-    /// Width and height of the depth texture in pixels.
-    pub(super) fn size(&self) -> (u32, u32) {
+/// A rectangle of pixels of a target: the viewport of a [`FrameTarget`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Viewport {
+    /// The left column.
+    pub x: u32,
+    /// The top row.
+    pub y: u32,
+    /// Columns, at least 1.
+    pub width: u32,
+    /// Rows, at least 1.
+    pub height: u32,
+}
+
+impl<'a> FrameTarget<'a> {
+    /// The whole of `color` (if any) and `depth`, the colour cleared to
+    /// `clear_color`, no resolve target.
+    pub fn new(color: Option<&'a wgpu::TextureView>, clear_color: wgpu::Color, depth: &'a wgpu::TextureView) -> Self {
+        Self { color, clear_color, depth, resolve: None, viewport: None }
+    }
+
+    /// The rectangle drawn into: the viewport, or the whole depth texture.
+    pub(super) fn area(&self) -> Viewport {
         let texture = self.depth.texture();
-        (texture.width(), texture.height())
+        self.viewport.unwrap_or(Viewport { x: 0, y: 0, width: texture.width(), height: texture.height() })
+    }
+
+    /// Width and height of the rectangle drawn into, in pixels.
+    pub(super) fn size(&self) -> (u32, u32) {
+        let area = self.area();
+        (area.width, area.height)
     }
 
     /// Whether the views are what `attachments` says and of one size, so
@@ -107,12 +146,13 @@ impl FrameTarget<'_> {
         match (color, attachments.color) {
             (None, None) => {}
             (Some(c), Some(format)) if same(c.format(), format) => {
-                if c.size() != depth.size() || c.sample_count() != 1 {
+                if c.size() != depth.size() || c.sample_count() != depth.sample_count() {
                     return wrong(format!(
-                        "the colour view ({:?}, {} samples) is not the depth view's size ({:?}) with one sample",
+                        "the colour view ({:?}, {} samples) is not the depth view's size ({:?}) and samples ({})",
                         c.size(),
                         c.sample_count(),
-                        depth.size()
+                        depth.size(),
+                        depth.sample_count()
                     ));
                 }
             }
@@ -120,8 +160,34 @@ impl FrameTarget<'_> {
                 return wrong(format!("the colour view is {:?}, not {:?}", c.map(|c| c.format()), format));
             }
         }
-        if depth.sample_count() != 1 || depth.dimension() != wgpu::TextureDimension::D2 {
-            return wrong("the depth view is not of a single-sample 2D texture".into());
+        if depth.sample_count() != attachments.samples || depth.dimension() != wgpu::TextureDimension::D2 {
+            return wrong(format!(
+                "the depth view is not of a 2D texture of {} samples (it has {})",
+                attachments.samples,
+                depth.sample_count()
+            ));
+        }
+        if let Some(resolve) = self.resolve.map(|v| v.texture()) {
+            let fits = color.is_some_and(|c| same(c.format(), resolve.format()))
+                && resolve.size() == depth.size()
+                && resolve.sample_count() == 1
+                && attachments.samples > 1;
+            if !fits {
+                return wrong(format!(
+                    "the resolve view ({:?}, {:?}, {} samples) is not a single-sample twin of a multisampled colour view",
+                    resolve.format(),
+                    resolve.size(),
+                    resolve.sample_count()
+                ));
+            }
+        }
+        let area = self.area();
+        let inside = area.width > 0
+            && area.height > 0
+            && u64::from(area.x) + u64::from(area.width) <= u64::from(depth.width())
+            && u64::from(area.y) + u64::from(area.height) <= u64::from(depth.height());
+        if !inside {
+            return wrong(format!("the viewport {area:?} is empty or leaves the {:?} target", depth.size()));
         }
         Ok(())
     }
@@ -183,7 +249,7 @@ impl QueryBackend {
             label: Some("occlude query boxes"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../shader.wgsl").into()),
         });
-        let targets = Targets { color: attachments.color, depth: attachments.depth };
+        let targets = Targets { color: attachments.color, depth: attachments.depth, samples: attachments.samples };
         let variant = Variant { label: "embedded query boxes", compare: attachments.compare, ..QUERY };
         let pipeline = build_pipeline(device, None, &module, targets, variant);
         let camera_buffer = camera_buffer(device);
@@ -276,10 +342,10 @@ pub(super) fn begin_pass<'e>(
     let color = [target.color.filter(|_| writes).map(|view| wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,
-        resolve_target: None,
+        resolve_target: target.resolve,
         ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
     })];
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("occlude embedded frame"),
         color_attachments: if color[0].is_some() { &color } else { &[] },
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -290,7 +356,11 @@ pub(super) fn begin_pass<'e>(
         timestamp_writes: None,
         occlusion_query_set: queries,
         multiview_mask: None,
-    })
+    });
+    if let Some(v) = target.viewport {
+        pass.set_viewport(v.x as f32, v.y as f32, v.width as f32, v.height as f32, 0.0, 1.0);
+    }
+    pass
 }
 
 /// The bind group of the query pipeline: the camera and the boxes.
@@ -521,10 +591,10 @@ mod tests {
     fn attachments_need_a_depth_format_and_an_ordering_test() {
         use wgpu::CompareFunction::{Always, Equal, GreaterEqual, Less};
         use wgpu::TextureFormat::{Depth24Plus, Depth24PlusStencil8, Depth32Float, Rgba8Unorm};
-        let ok = |depth, compare| Attachments { color: None, depth, compare }.check().is_ok();
+        let ok = |depth, compare| Attachments { color: None, depth, compare, samples: 1 }.check().is_ok();
         assert!(ok(Depth32Float, Less) && ok(Depth24Plus, GreaterEqual) && ok(Depth24PlusStencil8, Less));
         assert!(!ok(Rgba8Unorm, Less) && !ok(Depth32Float, Always) && !ok(Depth32Float, Equal));
-        let reverse = Attachments { color: None, depth: Depth32Float, compare: GreaterEqual };
+        let reverse = Attachments { color: None, depth: Depth32Float, compare: GreaterEqual, samples: 1 };
         assert!(reverse.reverse_z() && reverse.far_depth() == 0.0);
         let forward = Attachments { compare: Less, ..reverse };
         assert!(!forward.reverse_z() && forward.far_depth() == 1.0);

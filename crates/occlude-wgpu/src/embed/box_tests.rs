@@ -76,7 +76,7 @@ impl BoxTests {
             label: Some("occlude query boxes"),
             source: wgpu::ShaderSource::Wgsl(include_str!("../shader.wgsl").into()),
         });
-        let targets = Targets { color: None, depth: attachments.depth };
+        let targets = Targets { color: None, depth: attachments.depth, samples: attachments.samples };
         let variant = Variant {
             label: "embedded box tests",
             fragment_entry: "fs_test_box",

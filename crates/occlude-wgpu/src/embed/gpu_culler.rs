@@ -25,6 +25,7 @@ use crate::culling::{
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
+use occlude_core::depth_pyramid::PIXEL_MARGIN;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::hiz::Granularity;
 use occlude_core::methods::ioc::IocWalk;
@@ -69,10 +70,13 @@ struct PyramidTest {
     base: wgpu::ComputePipeline,
     reduce: wgpu::ComputePipeline,
     test: wgpu::ComputePipeline,
-    /// `param` uniforms: the pyramid test's reach and whether depth is
-    /// reverse Z (each reduction's level is made with the pyramid).
+    /// `param` uniforms: the pyramid test's reach, and for level 0 whether
+    /// depth is reverse Z and the viewport's corner, written each frame
+    /// (each reduction's level is made with the pyramid).
     reach: wgpu::Buffer,
-    reverse: wgpu::Buffer,
+    base_param: wgpu::Buffer,
+    /// The depth texture's binding: 17 single-sample, 18 multisampled.
+    depth_binding: u32,
     /// Made for the first frame's depth size, and again when it changes.
     state: Option<PyramidState>,
 }
@@ -223,12 +227,19 @@ impl GpuCuller {
             });
             LateTest::Every(tests, every)
         } else {
+            let samples = attachments.samples > 1;
             LateTest::Pyramid(PyramidTest {
-                base: compute("cs_pyramid_base"),
+                base: compute(if samples { "cs_pyramid_base_samples" } else { "cs_pyramid_base" }),
                 reduce: compute("cs_pyramid_level"),
                 test: compute("cs_test_boxes_pyramid"),
                 reach: param_buffer(device, reach),
-                reverse: param_buffer(device, u32::from(attachments.reverse_z())),
+                base_param: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("pyramid base parameters"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                depth_binding: if samples { 18 } else { 17 },
                 state: None,
             })
         };
@@ -389,7 +400,10 @@ impl GpuCuller {
                 if self.attachments.reverse_z() { "reverse Z" } else { "forward Z" }
             )));
         }
-        write_cull_camera(&self.ctx.queue, &self.camera, camera);
+        // With MSAA a sample off a pixel's centre may show an instance whose
+        // footprint holds no centre: footprints grow by half a pixel more.
+        let samples_margin = if self.attachments.samples > 1 { 0.5 } else { 0.0 };
+        write_cull_camera(&self.ctx.queue, &self.camera, camera, PIXEL_MARGIN as f32 + samples_margin);
         let now = self.parity;
         for (compacted, list) in self.compacted.iter().zip(&self.lists) {
             encoder.clear_buffer(compacted, 0, Some(4));
@@ -424,7 +438,7 @@ impl GpuCuller {
         target.check(&self.attachments)?;
         let (now, before) = (self.parity, 1 - self.parity);
         match &self.late {
-            LateTest::Pyramid(_) => self.encode_pyramid_test(encoder, target.depth, now),
+            LateTest::Pyramid(_) => self.encode_pyramid_test(encoder, target, now),
             LateTest::Every(tests, every) => {
                 tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
                 tests.encode(encoder, target, &self.attachments, &every[now]);
@@ -492,15 +506,18 @@ impl GpuCuller {
     }
 
     /// Records `hiz`'s test into `encoder`: the pyramid built from the
-    /// depth texture of `depth` (made, with its bind groups, for the
-    /// texture's size unless it is of that size already), every box tested
-    /// against it, setting flag buffer `now`.
-    fn encode_pyramid_test(&mut self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::TextureView, now: usize) {
+    /// viewport of `target`'s depth texture (made, with its bind groups,
+    /// for the viewport's size unless it is of that size already), every
+    /// box tested against it, setting flag buffer `now`.
+    fn encode_pyramid_test(&mut self, encoder: &mut wgpu::CommandEncoder, target: &FrameTarget<'_>, now: usize) {
         let n = self.instance_count();
+        let reverse = u32::from(self.attachments.reverse_z());
         let LateTest::Pyramid(p) = &mut self.late else { return };
         let (ctx, device) = (&self.ctx, &self.ctx.device);
-        let depth = depth.texture();
-        let size = (depth.width(), depth.height());
+        let depth = target.depth.texture();
+        let size = target.size();
+        let corner = target.area();
+        ctx.queue.write_buffer(&p.base_param, 0, bytemuck::cast_slice(&[reverse, corner.x, corner.y, 0]));
         if p.state.as_ref().is_none_or(|state| state.size != size) {
             let buffers = PyramidBuffers::new(ctx, size.0, size.1, size.0);
             let layout = p.reduce.get_bind_group_layout(0);
@@ -536,8 +553,11 @@ impl GpuCuller {
             entries: &[
                 wgpu::BindGroupEntry { binding: 14, resource: pyramid.buffers.texels.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 15, resource: pyramid.buffers.levels.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 16, resource: p.reverse.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 17, resource: wgpu::BindingResource::TextureView(&depth_view) },
+                wgpu::BindGroupEntry { binding: 16, resource: p.base_param.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: p.depth_binding,
+                    resource: wgpu::BindingResource::TextureView(&depth_view),
+                },
             ],
         });
         let mut pass = encoder.begin_compute_pass(&Default::default());

@@ -61,8 +61,11 @@
 //!
 //! ## Known limits
 //!
-//! - One colour attachment at most, one sample (no MSAA), no viewport or
-//!   scissor other than the whole target.
+//! - One colour attachment at most. With MSAA ([`Attachments::samples`])
+//!   occlude's passes resolve into [`FrameTarget::resolve`] each time
+//!   they end (a query's wait ends one), so a frame may resolve several
+//!   times. A viewport ([`FrameTarget::viewport`]) is one rectangle of
+//!   whole pixels; no scissor.
 //! - Each instance counts 12 triangles in [`FrameStats`] and in `chcpp`'s
 //!   cost estimates, unless you give the real counts
 //!   ([`Culler::for_scene`] with
@@ -87,6 +90,7 @@
 //!     color: Some(wgpu::TextureFormat::Rgba8Unorm),
 //!     depth: wgpu::TextureFormat::Depth32Float,
 //!     compare: wgpu::CompareFunction::Less,
+//!     samples: 1,
 //! };
 //! let bounds: Vec<Aabb> = (0..1000).map(|i| {
 //!     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
@@ -98,7 +102,7 @@
 //! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
 //! let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
 //! let camera = Camera::from_matrices(view, projection, false)?;
-//! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth };
+//! let target = FrameTarget::new(Some(color), wgpu::Color::BLACK, depth);
 //! let stats = culler.render(&camera, target, |pass, instances| {
 //!     pass.set_pipeline(pipeline);
 //!     for &i in instances {
@@ -250,8 +254,10 @@
 //!   its walk.
 //! - No statistics from the frame: [`GpuCuller::read_counts`] reads the
 //!   lists' lengths back (blocking), for tests and printouts.
-//! - The attachment rules of [`Culler`] (one colour attachment, one
-//!   sample, the whole target).
+//! - The attachment rules of [`Culler`]. With MSAA, `hiz`'s pyramid holds
+//!   the farthest sample of each pixel and footprints cover every pixel a
+//!   box touches (not only those whose centre it holds); `roc`'s and
+//!   `ioc`'s box tests and the queries count samples.
 //!
 //! ## Example
 //!
@@ -270,6 +276,7 @@
 //!     color: Some(wgpu::TextureFormat::Rgba8Unorm),
 //!     depth: wgpu::TextureFormat::Depth32Float,
 //!     compare: wgpu::CompareFunction::Less,
+//!     samples: 1,
 //! };
 //! let bounds: Vec<Aabb> = (0..1000).map(|i| {
 //!     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
@@ -285,7 +292,7 @@
 //! let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
 //! let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
 //! let camera = Camera::from_matrices(view, projection, false)?;
-//! let target = FrameTarget { color: Some(color), clear_color: wgpu::Color::BLACK, depth };
+//! let target = FrameTarget::new(Some(color), wgpu::Color::BLACK, depth);
 //! culler.render_lists(&camera, target, |pass| pass.set_bind_group(0, instances, &[]))?;
 //! # Ok(())
 //! # }
@@ -303,7 +310,7 @@ mod gpu_culler;
 mod node_levels;
 
 pub use any_culler::AnyCuller;
-pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend};
+pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend, Viewport};
 pub use culler::{Culler, QUERY_METHODS};
 pub use draws::{Draws, IndirectDraw, InstanceDraw, VisibleList, DRAW_FEATURES};
 pub use gpu_culler::{GpuCuller, GPU_METHODS, RASTER_FEATURES};
