@@ -309,10 +309,8 @@ impl AisleWalk {
 ///   inner aisle (3270 on) and along it over the whole hall, looking across
 ///   the equipment on either side.
 ///
-/// How the sections came out under the methods is in docs/benchmarks.md
-/// ("The city and plant walkthroughs as long as the paper's"): the views
-/// along a whole aisle are where occlusion pays most, and no view has every
-/// method slow as the paper's spikes.
+/// Under the methods, the views along a whole aisle are where occlusion
+/// pays most, and no view has every method slow as the paper's spikes.
 fn walkthrough(nx: u32, nz: u32, levels: u32, row: u32, shaft: u32) -> CameraPath {
     // `p(x, level, z)` is at eye height on `level` at `x`, `z` in bays; the
     // aisles run along the bays' centre lines (`x` or `z` a whole number and

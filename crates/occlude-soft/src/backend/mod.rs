@@ -68,7 +68,7 @@ const RASTER_TRIANGLES: usize = 1 << 16;
 
 /// Triangles per rasterizer call of the oracle pass: 3 MiB in clip space, so
 /// that they are still in the caches when the rasterizer sets them up
-/// (`FLUSH_TRIANGLES`' 48 MiB are not; docs/benchmarks.md has the figures).
+/// (`FLUSH_TRIANGLES`' 48 MiB are not).
 /// The oracle's image and counts do not depend on it, and it has no time
 /// line to replay.
 const ORACLE_PART: usize = 1 << 16;
@@ -79,7 +79,7 @@ const ORACLE_PART: usize = 1 << 16;
 /// fewest instructions per frame of the power plant's `--paper chc` (2^14:
 /// 6.71 billion, 2^16: 5.71, 2^18: 5.57, 2^20: 5.84) and 10 % fewer than
 /// 2^16 on the teapots, 6 % more on the city, whose whole view takes one or
-/// two calls (docs/benchmarks.md).
+/// two calls.
 const ORACLE_PREPARED_PART: usize = 1 << 18;
 
 /// A recorded command's place on the simulated GPU time line.

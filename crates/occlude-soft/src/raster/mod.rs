@@ -523,7 +523,7 @@ pub struct Prepared {
 /// them instead of each triangle's once per lane. Runs of 8 took the fewest
 /// instructions per frame of the power plant's `--paper chc` (4: 5.77
 /// billion, 8: 5.71, 16: 5.77, 32: 5.91, 64: 6.01, 128: 6.11; 6.61 with
-/// none, docs/benchmarks.md); results are the same at any size.
+/// none); results are the same at any size.
 const GROUP: usize = 8;
 
 /// A run of [`GROUP`] set-up triangles of a [`Prepared`] (fewer at its end).

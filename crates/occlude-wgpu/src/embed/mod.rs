@@ -214,8 +214,8 @@
 //!   again in its early pass. Occlusion
 //!   shows from the third frame on, and again two frames after a camera
 //!   cut (in the example, 2,717 of 3,603 instances in frames 0 and 1,
-//!   then for `hiz` about 130 to 270 a frame, `roc` 30 to 140, `ioc` 130
-//!   to 390: docs/benchmarks.md).
+//!   then for `hiz` about 70 to 180 a frame, `roc` 50 to 160, `ioc` 210
+//!   to 540: docs/benchmarks.md).
 //!
 //! ## Requirements
 //!
