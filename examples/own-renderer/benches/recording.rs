@@ -54,7 +54,8 @@ fn recording(c: &mut Criterion) {
     group.sample_size(20).measurement_time(Duration::from_secs(4));
     for n in [1_000, 100_000, 1_000_000] {
         let bounds = grid(n);
-        let meshes = (0..MESHES).map(|m| IndirectDraw::Indexed { index_count: 36, first_index: 36 * m, base_vertex: 0 });
+        let meshes =
+            (0..MESHES).map(|m| IndirectDraw::Indexed { index_count: 36, first_index: 36 * m, base_vertex: 0 });
         let instances = (0..n).map(|i| InstanceDraw { mesh: i % MESHES, group: i % 2 }).collect();
         let draws = Draws::Meshes { meshes: meshes.collect(), instances };
         let hiz: Method = "hiz".parse().expect("a method");

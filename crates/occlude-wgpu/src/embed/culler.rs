@@ -1,5 +1,14 @@
 //! [`Culler`]: a query-driven method, its hierarchy over the renderer's
 //! instance boxes and a [`QueryBackend`], behind one call per frame.
+//!
+//! Each frame the method walks a BVH over the boxes front to back. Where it
+//! draws, occlude calls the renderer's draw callback inside a render pass
+//! on its views; where it needs to know whether a node is hidden, it draws
+//! the node's box into the same pass inside a hardware occlusion query,
+//! with a pipeline matching the renderer's depth state and no writes.
+//! Results are resolved and mapped with `map_async`: "is it available?"
+//! polls, "give me the result" waits (CHC paper, section 3; CHC++ paper,
+//! sections 3-4, for how `chcpp` hides the wait).
 
 use super::{Attachments, EmbedError, FrameTarget, QueryBackend};
 use occlude_core::hierarchy::BuildOptions;
@@ -21,6 +30,44 @@ pub const QUERY_METHODS: [&str; 6] = ["vfc", "sw", "chc", "chcpp", "om", "auto"]
 /// it the renderer's device, attachments and per-instance boxes once, then
 /// each frame the camera, the frame's views and a callback drawing a list
 /// of instances.
+///
+/// # Example
+///
+/// ```no_run
+/// use occlude_wgpu::embed::{Attachments, Culler, FrameTarget};
+/// use glam::{Mat4, Vec3};
+/// use occlude_core::{Aabb, Camera};
+///
+/// # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, color: &wgpu::TextureView,
+/// #          depth: &wgpu::TextureView, pipeline: &wgpu::RenderPipeline) -> Result<(), Box<dyn std::error::Error>> {
+/// // Once: your attachments and one box per instance you draw.
+/// let attachments = Attachments {
+///     color: Some(wgpu::TextureFormat::Rgba8Unorm),
+///     depth: wgpu::TextureFormat::Depth32Float,
+///     compare: wgpu::CompareFunction::Less,
+///     samples: 1,
+/// };
+/// let bounds: Vec<Aabb> = (0..1000).map(|i| {
+///     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
+///     Aabb::new(at, at + Vec3::ONE)
+/// }).collect();
+/// let mut culler = Culler::new(device, queue, attachments, &bounds, "chcpp".parse()?)?;
+///
+/// // Each frame: your camera, your views, your draws.
+/// let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
+/// let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
+/// let camera = Camera::from_matrices(view, projection, false)?;
+/// let target = FrameTarget::new(Some(color), wgpu::Color::BLACK, depth);
+/// let stats = culler.render(&camera, target, |pass, instances| {
+///     pass.set_pipeline(pipeline);
+///     for &i in instances {
+///         pass.draw(0..36, i..i + 1); // instance i, with your own buffers
+///     }
+/// })?;
+/// println!("drew {} of {} instances", stats.visible_objects, bounds.len());
+/// # Ok(())
+/// # }
+/// ```
 pub struct Culler {
     backend: QueryBackend,
     scene: Scene,

@@ -13,6 +13,32 @@
 //! depth texture; `roc`'s and `ioc`'s box tests are the backend's too
 //! (`box_tests.rs`), `ioc`'s walk is `node_levels.rs`.
 
+//!
+//! A frame, in the renderer's encoder: `encode_early` drops last frame's
+//! visible instances whose boxes left the frustum and compacts the rest
+//! into the early list; the renderer draws it; `encode_late` tests every
+//! box against the depth that draw left (`hiz`: a pyramid of the depth
+//! texture, each level the 2x2 maximum of the one before; `roc`: the boxes
+//! rasterized in a read-only depth pass, each fragment that passes its
+//! forced early depth test setting a flag; `ioc`: so, the BVH's node boxes
+//! level by level, a hidden node ending the descent) and compacts the
+//! instances visible now and not drawn early into the late list; the
+//! renderer draws it. After each compaction `draws.rs` sorts the list by
+//! (group, mesh) and writes the draw commands.
+//!
+//! Why the image is the image without culling: an instance with a pixel in
+//! the final image is at that pixel no farther than the early pass's
+//! depth. So its box (which holds it, padded and pulled towards the eye)
+//! passes `roc`'s depth test there (as does every node box above it, for
+//! `ioc`), and is not hidden by `hiz`'s pyramid, whose texels are at least
+//! the farthest depth of the pixels they cover
+//! ([`occlude_core::depth_pyramid`] has the proof). Level 0 reads the depth
+//! texture with two changes: reverse Z turned into depth 0 nearest
+//! (`1 - d`), and each texel taken 2^-22 farther, which covers a 24-bit
+//! depth buffer's rounding and that of `1 - d`. With MSAA a texel is the
+//! farthest of its pixel's samples and footprints cover every pixel a box
+//! touches, since a sample off the centre may show an instance; box tests
+//! and their fragments count samples.
 use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
 use super::draws::{DrawTables, Draws, VisibleList};
@@ -95,8 +121,47 @@ enum LateTest {
 
 /// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
 /// passes: give it the renderer's device, attachments, per-instance boxes
-/// and how it draws an instance once; each frame, the camera, the frame's views and
-/// a callback that draws a [`VisibleList`] with one indirect draw.
+/// and how each instance is drawn once; each frame, the camera and the
+/// frame's views, and draw its two [`VisibleList`]s.
+///
+/// # Example
+///
+/// ```no_run
+/// use occlude_wgpu::embed::{Attachments, FrameTarget, GpuCuller, IndirectDraw};
+/// use glam::{Mat4, Vec3};
+/// use occlude_core::methods::{hiz::HizParams, Method};
+/// use occlude_core::{Aabb, Camera};
+///
+/// # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, color: &wgpu::TextureView,
+/// #          depth: &wgpu::TextureView, pipeline: &wgpu::RenderPipeline,
+/// #          instances: &wgpu::BindGroup) -> Result<(), Box<dyn std::error::Error>> {
+/// // Once: your attachments, one box per instance, how an instance is drawn,
+/// // and where your vertex shader reads the list: group 1, binding 0.
+/// let attachments = Attachments {
+///     color: Some(wgpu::TextureFormat::Rgba8Unorm),
+///     depth: wgpu::TextureFormat::Depth32Float,
+///     compare: wgpu::CompareFunction::Less,
+///     samples: 1,
+/// };
+/// let bounds: Vec<Aabb> = (0..1000).map(|i| {
+///     let at = Vec3::new((i % 40) as f32 * 2.0, 0.0, -((i / 40) as f32) * 2.0);
+///     Aabb::new(at, at + Vec3::ONE)
+/// }).collect();
+/// let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+/// let method = Method::Hiz(HizParams { texels: 4, ..Default::default() });
+/// let mut culler = GpuCuller::new(device, queue, attachments, &bounds, &method, draw)?
+///     .with_list_pipeline(pipeline, 1, 0)?;
+///
+/// // Each frame: your camera, your views, your other bind groups and buffers;
+/// // occlude sets your pipeline and the list and draws it indirectly.
+/// let view = Mat4::look_at_rh(Vec3::new(40.0, 2.0, 10.0), Vec3::new(40.0, 0.0, 0.0), Vec3::Y);
+/// let projection = Mat4::perspective_rh(1.0, 1.0, 0.1, 200.0);
+/// let camera = Camera::from_matrices(view, projection, false)?;
+/// let target = FrameTarget::new(Some(color), wgpu::Color::BLACK, depth);
+/// culler.render_lists(&camera, target, |pass| pass.set_bind_group(0, instances, &[]))?;
+/// # Ok(())
+/// # }
+/// ```
 pub struct GpuCuller {
     ctx: GpuContext,
     attachments: Attachments,
