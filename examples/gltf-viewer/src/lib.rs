@@ -81,7 +81,8 @@ struct MeshRange {
     base_vertex: i32,
 }
 
-/// One instance as the shader reads it: transform, then base colour.
+/// One instance as the shader reads it: transform, then base colour and
+/// material id.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct InstanceData {
@@ -374,7 +375,8 @@ fn boxes(scene: &Scene, changed: &[u32]) -> Vec<InstanceChange> {
     changed.iter().flat_map(|&i| change(i)).collect()
 }
 
-/// The instances as the shader reads them: transforms and base colours.
+/// The instances as the shader reads them: transforms, base colours and
+/// material ids.
 fn instance_data(scene: &Scene) -> Vec<InstanceData> {
     scene
         .instances
@@ -383,11 +385,12 @@ fn instance_data(scene: &Scene) -> Vec<InstanceData> {
         .collect()
 }
 
-/// A base colour of material `m`: a hash of its id, light and unsaturated.
+/// The base colour of material `m` (a hash of its id, light and
+/// unsaturated), then `m`.
 fn material_color(m: u32) -> [f32; 4] {
     let h = m.wrapping_add(1).wrapping_mul(2_654_435_761) ^ m.wrapping_mul(40_503);
     let unit = |shift: u32| ((h >> shift) & 0xff) as f32 / 255.0;
-    [0.35 + 0.6 * unit(0), 0.35 + 0.6 * unit(8), 0.35 + 0.6 * unit(16), 1.0]
+    [0.35 + 0.6 * unit(0), 0.35 + 0.6 * unit(8), 0.35 + 0.6 * unit(16), (m % 8) as f32]
 }
 
 /// A render pass into `color` and `depth`, cleared (`clear`) or loaded.
