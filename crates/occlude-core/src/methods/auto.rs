@@ -159,6 +159,9 @@ pub struct Auto {
     probing: bool,
     /// How the frame time is found when the backend reports none.
     fallback: CostModel,
+    /// Whether `fallback` is the backend's own model (a simulator's, whose
+    /// bound on `vfc`'s time holds), not the default.
+    modelled: bool,
     /// Whether the fallback was announced.
     warned: bool,
     warnings: Vec<String>,
@@ -178,6 +181,7 @@ impl Auto {
             frame: 0,
             probing: false,
             fallback: CostModel::default(),
+            modelled: false,
             warned: false,
             warnings: Vec::new(),
         }
@@ -210,6 +214,7 @@ impl Auto {
                 frames: 0,
             })
             .collect();
+        self.modelled = backend.cost_model().is_some();
         self.fallback = backend.cost_model().unwrap_or_default();
     }
 
@@ -258,6 +263,25 @@ impl Auto {
         }
     }
 
+    /// Drops a probe of `vfc` that cannot win: where the backend models its
+    /// costs, a frame of `vfc` costs at least its draws of the instances in
+    /// view ([`vfc_bound`]), and if that is no faster than the current mean
+    /// by the margin, the probe is put off as if it had lost at that time.
+    /// This spares a frame of drawing everything in view where occlusion
+    /// culling wins by far.
+    fn skip_hopeless_vfc_probe(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend) {
+        let (Some(probe), Some(mean)) = (&self.probe, self.mean) else { return };
+        if !self.modelled || !self.choices[probe.choice].stateless {
+            return;
+        }
+        let bound = vfc_bound(ctx, backend, &self.fallback);
+        if bound >= mean * (1.0 - f64::from(self.params.margin)) {
+            let choice = probe.choice;
+            self.probe = None;
+            self.schedule(choice, bound, 0.0);
+        }
+    }
+
     /// The method due for a probe now, if any (the earliest due first):
     /// one whose wait is over, or one last measured faster than the
     /// current method is now (the current one has stopped paying).
@@ -276,6 +300,28 @@ impl Auto {
     }
 }
 
+/// A lower bound of `vfc`'s frame time under `model`, ms: one draw call
+/// for each shown instance in the leaves in view, its triangles, the CPU's
+/// and the GPU's share overlapping (fragments and material switches left
+/// out). The walk is charged to `backend` as `vfc`'s is.
+fn vfc_bound(ctx: &FrameContext<'_>, backend: &mut dyn Backend, model: &CostModel) -> f64 {
+    let mut leaves = Vec::new();
+    let visited = ctx.leaves_in_view(ctx.hierarchy.root(), &mut leaves);
+    backend.traverse(visited);
+    let mut counted = vec![false; ctx.scene.instances.len()];
+    let (mut draws, mut triangles) = (0u64, 0u64);
+    for i in leaves.iter().flat_map(|&leaf| ctx.hierarchy.instances(leaf)) {
+        let i = *i as usize;
+        if ctx.scene.instances[i].enabled && !std::mem::replace(&mut counted[i], true) {
+            draws += 1;
+            triangles += ctx.scene.instance_triangles(i);
+        }
+    }
+    let cpu = draws as f64 * model.cpu_draw_call_us;
+    let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
+    cpu.max(gpu) * 1e-3
+}
+
 impl CullingMethod for Auto {
     fn name(&self) -> &'static str {
         "auto"
@@ -287,6 +333,7 @@ impl CullingMethod for Auto {
         }
         if self.probe.is_none() {
             self.probe = self.due().map(|choice| Probe { choice, times: Vec::new(), excess: 0.0 });
+            self.skip_hopeless_vfc_probe(ctx, backend);
         }
         self.probing = self.probe.is_some();
         self.running = self.probe.as_ref().map_or(self.current, |p| p.choice);
@@ -353,8 +400,16 @@ mod tests {
     /// each frame reported as costing `cost(frame, method)` ms; returns the
     /// method that rendered each frame.
     fn run(frames: u64, cost: impl Fn(u64, &str) -> f64) -> Vec<&'static str> {
+        run_modelled(None, frames, cost)
+    }
+
+    /// [`run`] on a backend whose cost model is `model`, if any.
+    fn run_modelled(model: Option<CostModel>, frames: u64, cost: impl Fn(u64, &str) -> f64) -> Vec<&'static str> {
         let rig = Rig::wall();
         let mut backend = rig.mock().with_gpu_culling();
+        if let Some(model) = model {
+            backend = backend.with_cost_model(model);
+        }
         let mut auto = Auto::new(AutoParams::default());
         let mut drawn = DrawnSet::default();
         let mut ran = Vec::new();
@@ -425,6 +480,21 @@ mod tests {
         // chcpp takes over from hiz; vfc, 5 % slower, is probed at most
         // once in 300 frames.
         assert!(share(&ran, "chcpp") > 0.97, "{}", share(&ran, "chcpp"));
+    }
+
+    #[test]
+    fn vfc_is_not_probed_where_the_cost_model_says_it_cannot_win() {
+        let cost = |_, name: &str| if name == "vfc" { 1.0 } else { 0.5 };
+        // One millisecond a draw call: drawing the wall rig's instances in
+        // view costs far more than the 0.5 ms the others take.
+        let slow_draws = CostModel { cpu_draw_call_us: 1000.0, ..CostModel::default() };
+        let ran = run_modelled(Some(slow_draws), 600, cost);
+        assert_eq!(share(&ran, "vfc"), 0.0);
+        // Under a model in which its draws are cheap, vfc is probed (and
+        // loses).
+        let cheap_draws = CostModel { cpu_draw_call_us: 0.0, gpu_draw_call_us: 0.0, ..CostModel::default() };
+        let ran = run_modelled(Some(cheap_draws), 600, cost);
+        assert!(ran.contains(&"vfc"));
     }
 
     #[test]

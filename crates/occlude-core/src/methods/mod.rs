@@ -301,11 +301,13 @@ impl<'a> FrameContext<'a> {
     }
 
     /// Appends the leaves in view under `node` (itself if it is a leaf), in
-    /// no particular order.
-    pub fn leaves_in_view(&self, node: NodeId, out: &mut Vec<NodeId>) {
+    /// no particular order; returns the nodes visited.
+    pub fn leaves_in_view(&self, node: NodeId, out: &mut Vec<NodeId>) -> u64 {
         let h = self.hierarchy;
         let mut stack = vec![node];
+        let mut visited = 0;
         while let Some(n) = stack.pop() {
+            visited += 1;
             if !self.in_frustum(n) {
                 continue;
             }
@@ -315,6 +317,7 @@ impl<'a> FrameContext<'a> {
                 stack.extend_from_slice(h.children(n));
             }
         }
+        visited
     }
 
     /// True when `instance` was drawn this frame.
