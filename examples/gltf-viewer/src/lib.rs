@@ -24,7 +24,7 @@ use occlude::methods::Method;
 use occlude::scenes::OwnMotion;
 use occlude::wgpu::embed::{AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, DRAW_FEATURES};
 use occlude::wgpu::embed::{VisibleList, RASTER_FEATURES};
-use occlude::{Camera, InstanceChange, Keyframe, Scene};
+use occlude::{Camera, Keyframe, Scene};
 use std::error::Error;
 use wgpu::util::DeviceExt;
 
@@ -231,11 +231,14 @@ impl Renderer {
 
     /// Culls with occlude's `method` from now on (`None`: culling off).
     pub fn set_culling(&mut self, method: Option<Method>) -> Result<(), Box<dyn Error>> {
-        // occlude: the attachments, the boxes, each mesh's range and each
+        // occlude: the attachments, the scene, each mesh's range and each
         // instance's mesh (one draw group), and the list's binding.
-        let attachments =
-            Attachments { color: Some(self.color_format), depth: DEPTH_FORMAT, compare: wgpu::CompareFunction::Less };
-        let bounds: Vec<_> = self.scene.instances.iter().map(|i| i.bounds).collect();
+        let attachments = Attachments {
+            color: Some(self.color_format),
+            depth: DEPTH_FORMAT,
+            compare: wgpu::CompareFunction::Less,
+            samples: 1,
+        };
         let meshes = self.draw.meshes.iter().map(|m| IndirectDraw::Indexed {
             index_count: m.index_count,
             first_index: m.first_index,
@@ -245,11 +248,9 @@ impl Renderer {
         let draws = Draws::Meshes { meshes: meshes.collect(), instances };
         self.culling = match method {
             Some(method) => {
-                let culler = AnyCuller::new(&self.device, &self.queue, attachments, &bounds, method, draws)?;
-                let mut culler = culler.with_list_pipeline(&self.draw.listed, 1, 0)?;
-                let hidden: Vec<u32> = (0..bounds.len() as u32).filter(|&i| !self.is_enabled(i)).collect();
-                culler.update(&boxes(&self.scene, &hidden))?;
-                Some(culler)
+                let scene = self.scene.clone();
+                let culler = AnyCuller::for_scene(&self.device, &self.queue, attachments, scene, method, draws)?;
+                Some(culler.with_list_pipeline(&self.draw.listed, 1, 0)?)
             }
             None => None,
         };
@@ -261,7 +262,8 @@ impl Renderer {
     /// says): the instances' transforms here, their boxes in the culler.
     pub fn set_time(&mut self, t: f32) -> Result<(), Box<dyn Error>> {
         let Some(motion) = &self.motion else { return Ok(()) };
-        let changed = self.scene.apply(&motion.changes_at(t))?;
+        let changes = motion.changes_at(t);
+        let changed = self.scene.apply(&changes)?;
         if changed.is_empty() {
             return Ok(());
         }
@@ -271,7 +273,7 @@ impl Renderer {
             self.queue.write_buffer(&self.draw.instances, row, bytemuck::bytes_of(&data[i as usize]));
         }
         if let Some(culling) = &mut self.culling {
-            culling.update(&boxes(&self.scene, &changed))?; // occlude: the moved boxes.
+            culling.update(&changes)?; // occlude: the frame's changes.
         }
         Ok(())
     }
@@ -310,7 +312,7 @@ impl Renderer {
         // phases around this renderer's passes drawing its lists (timed),
         // a query-driven method's passes drawing the instances it finds.
         let camera = Camera::from_matrices(view, projection, false)?;
-        let frame = FrameTarget { color: Some(target), clear_color: CLEAR_COLOR, depth: &depth };
+        let frame = FrameTarget::new(Some(target), CLEAR_COLOR, &depth);
         let draw = &self.draw;
         let stamp = |encoder: &mut wgpu::CommandEncoder, k| self.timer.iter().for_each(|t| t.stamp(encoder, k));
         match culling {
@@ -363,16 +365,6 @@ impl Renderer {
         let bytes = read_texture(&self.device, &self.queue, depth, wgpu::TextureAspect::DepthOnly)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
-}
-
-/// occlude: the culler's changes for `changed` instances of `scene` (a
-/// culler over boxes): each shown one moved to its box, the others hidden.
-fn boxes(scene: &Scene, changed: &[u32]) -> Vec<InstanceChange> {
-    let change = |i: u32| match &scene.instances[i as usize] {
-        instance if instance.enabled => vec![InstanceChange::Show(i), InstanceChange::to_box(i, &instance.bounds)],
-        _ => vec![InstanceChange::Hide(i)],
-    };
-    changed.iter().flat_map(|&i| change(i)).collect()
 }
 
 /// The instances as the shader reads them: transforms, base colours and

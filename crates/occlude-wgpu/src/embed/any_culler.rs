@@ -4,7 +4,7 @@
 
 use super::{Attachments, Culler, Draws, EmbedError, FrameTarget, GpuCuller, VisibleList};
 use occlude_core::methods::Method;
-use occlude_core::{Aabb, Camera, FrameStats, InstanceChange, Upkeep};
+use occlude_core::{Aabb, Camera, FrameStats, InstanceChange, Scene, Upkeep};
 
 /// A [`Culler`] for a query-driven method, a [`GpuCuller`] for a
 /// GPU-driven one ([`Method::is_gpu_driven`]). The renderer gives both ways
@@ -30,10 +30,23 @@ impl AnyCuller {
         method: Method,
         draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
+        Self::for_scene(device, queue, attachments, Scene::from_bounds("embedded", bounds)?, method, draws)
+    }
+
+    /// [`AnyCuller::new`] over `scene`'s instances ([`Culler::for_scene`],
+    /// [`GpuCuller::for_scene`]).
+    pub fn for_scene(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        attachments: Attachments,
+        scene: Scene,
+        method: Method,
+        draws: impl Into<Draws>,
+    ) -> Result<Self, EmbedError> {
         Ok(if method.is_gpu_driven() {
-            AnyCuller::Gpu(GpuCuller::new(device, queue, attachments, bounds, &method, draws)?)
+            AnyCuller::Gpu(GpuCuller::for_scene(device, queue, attachments, scene, &method, draws)?)
         } else {
-            AnyCuller::Queries(Culler::new(device, queue, attachments, bounds, method)?)
+            AnyCuller::Queries(Culler::for_scene(device, queue, attachments, scene, method)?)
         })
     }
 

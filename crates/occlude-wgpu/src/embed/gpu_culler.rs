@@ -234,12 +234,27 @@ impl GpuCuller {
         method: &Method,
         draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
+        Self::for_scene(device, queue, attachments, Scene::from_bounds("embedded", bounds)?, method, draws)
+    }
+
+    /// [`GpuCuller::new`] over `scene`'s instances, as they stand (their
+    /// culling boxes; hidden ones hidden): for a renderer that keeps its
+    /// scene as an occlude [`Scene`], whose frames' changes
+    /// ([`GpuCuller::update`]) then move instances by their transforms.
+    pub fn for_scene(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        attachments: Attachments,
+        scene: Scene,
+        method: &Method,
+        draws: impl Into<Draws>,
+    ) -> Result<Self, EmbedError> {
         Self::check_method(method)?;
         let raster = !matches!(method, Method::Hiz(_));
         let reach = if let Method::Hiz(p) = method { p.texels } else { 0 };
         attachments.check()?;
         check_device(device, raster)?;
-        let scene = Scene::from_bounds("embedded", bounds)?;
+        scene.validate()?;
         let ctx = GpuContext::from_device(device, queue);
         // Where the device lacks what the box tests need after all (storage
         // written by fragment shaders, on some GL drivers), making their
@@ -248,7 +263,7 @@ impl GpuCuller {
         let module = cull_module(device, raster);
         let compute = |entry: &str| compute_pipeline(device, &module, entry);
         let n = scene.instances.len() as u32;
-        let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.bounds).collect();
+        let boxes: Vec<Aabb> = scene.instances.iter().map(|i| i.culling_bounds()).collect();
         let list_usage = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let list = |ids: &[u32]| {
             let mut words = vec![ids.len() as u32, n];
