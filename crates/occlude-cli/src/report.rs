@@ -14,9 +14,9 @@
 //! the same list of `Block`s, so they cannot drift apart.
 
 use crate::bench::plot::{self, PlotKind};
-use crate::bench::summary::BenchReport;
-use crate::bench::table;
 use anyhow::{bail, Context, Result};
+use occlude_bench::summary::BenchReport;
+use occlude_bench::table;
 use serde_json::Value;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -55,13 +55,13 @@ pub fn load(path: &Path) -> Result<Vec<BenchReport>> {
 /// Parses the reports of one bench JSON document: one [`BenchReport`]
 /// object or a non-empty array of them (a leading byte-order mark is
 /// ignored), every figure finite and within
-/// ±[`crate::figures::MAX_FIGURE`]. Anything else is an error naming the
+/// ±[`occlude_bench::figures::MAX_FIGURE`]. Anything else is an error naming the
 /// file `name` and saying what is wrong (not JSON, not an object, a missing
 /// key, a figure out of range, ...).
 pub fn parse(text: &str, name: &str) -> Result<Vec<BenchReport>> {
     let value: Value = serde_json::from_str(occlude_core::input_file::strip_bom(text))
         .with_context(|| format!("{name} is not valid JSON"))?;
-    crate::figures::check_input(&value).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    occlude_bench::figures::check_input(&value).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     let (items, in_array) = match value {
         Value::Array(items) => (items, true),
         Value::Object(mut tables) if tables.contains_key("tables") => match tables.remove("reports") {
@@ -362,7 +362,7 @@ pub fn write_markdown(reports: &[BenchReport], path: &Path) -> Result<Vec<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::summary::{MethodSummary, SceneStats};
+    use occlude_bench::summary::{MethodSummary, SceneStats};
     use occlude_core::FrameStats;
     use std::collections::BTreeMap;
 
@@ -556,7 +556,7 @@ mod tests {
         let e = error("number.json", "42");
         assert!(e.contains("number.json: expected a bench report") && e.contains("found a number"), "{e}");
         let tables = dir.join("tables.json");
-        let paper: crate::bench::paper_tables::PaperTables = crate::bench::paper_tables::PaperTables {
+        let paper: occlude_bench::paper_tables::PaperTables = occlude_bench::paper_tables::PaperTables {
             paper: "chc".into(),
             tables: Vec::new(),
             reports: vec![report("city"), report("plant")],

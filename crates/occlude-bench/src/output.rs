@@ -1,16 +1,16 @@
 //! Writing a report as JSON (the schema in `docs/design.md`) or CSV (one row per method and
 //! frame, for spreadsheets and plotting tools).
 
-use super::summary::{BenchReport, MethodSummary};
-use anyhow::{Context, Result};
+use crate::error::{Error, Result};
+use crate::summary::{BenchReport, MethodSummary};
 use std::io::Write;
 use std::path::Path;
 
 /// Writes a report (or, for `--paper`, a list of them) as pretty JSON.
 pub fn write_json<T: serde::Serialize + ?Sized>(report: &T, path: &Path) -> Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let file = create(path)?;
     serde_json::to_writer_pretty(std::io::BufWriter::new(file), report)
-        .with_context(|| format!("cannot write {}", path.display()))
+        .map_err(|source| Error::Json { context: format!("cannot write {}", path.display()), source })
 }
 
 /// The CSV header row.
@@ -46,12 +46,15 @@ pub fn write_paper_csv(reports: &[BenchReport], path: &Path) -> Result<()> {
 /// Creates `path`, writes `header` and what `rows` writes, with the path
 /// named in any error.
 fn write_rows(path: &Path, header: &str, rows: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    let context = || format!("cannot write {}", path.display());
-    writeln!(w, "{header}").with_context(context)?;
-    rows(&mut w).with_context(context)?;
-    w.flush().with_context(context)
+    let mut w = std::io::BufWriter::new(create(path)?);
+    let written = writeln!(w, "{header}").and_then(|()| rows(&mut w)).and_then(|()| w.flush());
+    written.map_err(|source| Error::Io { context: format!("cannot write {}", path.display()), source })
+}
+
+/// Creates `path`, named in the error.
+fn create(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::create(path)
+        .map_err(|source| Error::Io { context: format!("cannot create {}", path.display()), source })
 }
 
 /// One row per frame of `m`, each led by `lead`.

@@ -1,7 +1,7 @@
 //! The comparison table printed by `occlude bench`, shaped like Table 1 of the
 //! CHC paper. Times from the soft backend are simulated and labelled so.
 
-use super::summary::BenchReport;
+use crate::summary::BenchReport;
 use std::fmt::Write;
 
 /// Renders the report as an aligned text table.
