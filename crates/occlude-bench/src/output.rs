@@ -1,8 +1,9 @@
 //! Writing a report as JSON (the schema in `docs/design.md`) or CSV (one row per method and
-//! frame, for spreadsheets and plotting tools).
+//! frame, for spreadsheets and plotting tools), and reading JSON reports back.
 
-use crate::error::{Error, Result};
+use crate::error::{invalid, Error, Result};
 use crate::summary::{BenchReport, MethodSummary};
+use serde_json::Value;
 use std::io::Write;
 use std::path::Path;
 
@@ -83,4 +84,67 @@ fn write_method_rows(w: &mut dyn Write, lead: &str, m: &MethodSummary) -> std::i
         )?;
     }
     Ok(())
+}
+
+/// The largest bench JSON file read, bytes.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// Reads the reports of one bench JSON file (a regular file of at most
+/// [`MAX_FILE_BYTES`]) as [`parse`] does.
+pub fn load(path: &Path) -> Result<Vec<BenchReport>> {
+    let text = occlude_core::input_file::read_text(path, MAX_FILE_BYTES)
+        .map_err(|source| Error::Io { context: format!("cannot read {}", path.display()), source })?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Parses the reports of one bench JSON document: one [`BenchReport`]
+/// object or a non-empty array of them (a leading byte-order mark is
+/// ignored), every figure finite and within
+/// ±[`crate::figures::MAX_FIGURE`]. Anything else is an error naming the
+/// file `name` and saying what is wrong (not JSON, not an object, a missing
+/// key, a figure out of range, ...).
+pub fn parse(text: &str, name: &str) -> Result<Vec<BenchReport>> {
+    let value: Value = serde_json::from_str(occlude_core::input_file::strip_bom(text))
+        .map_err(|source| Error::Json { context: format!("{name} is not valid JSON"), source })?;
+    crate::figures::check_input(&value).map_err(|e| Error::Invalid(format!("{name}: {e}")))?;
+    let (items, in_array) = match value {
+        Value::Array(items) => (items, true),
+        Value::Object(mut tables) if tables.contains_key("tables") => match tables.remove("reports") {
+            Some(Value::Array(items)) => (items, true),
+            _ => invalid!("{name}: a paper's tables without the array of their reports (\"reports\")"),
+        },
+        object @ Value::Object(_) => (vec![object], false),
+        other => {
+            invalid!("{name}: expected a bench report (a JSON object) or an array of them, found {}", json_kind(&other))
+        }
+    };
+    if items.is_empty() {
+        invalid!("{name}: the array holds no bench reports");
+    }
+    items
+        .into_iter()
+        .enumerate()
+        .map(|(i, item)| {
+            serde_json::from_value(item).map_err(|source| {
+                let context = if in_array {
+                    format!("{name}: item {i} of the array is not a bench report")
+                } else {
+                    format!("{name} is not a bench report")
+                };
+                Error::Json { context, source }
+            })
+        })
+        .collect()
+}
+
+/// What kind of JSON value `v` is, for error messages.
+fn json_kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "an object",
+    }
 }

@@ -559,7 +559,7 @@ fn report(args: &ReportArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Usage(anyhow::anyhow!(e)))?;
     let mut reports = Vec::new();
     for path in &args.files {
-        reports.extend(occlude_cli::report::load(path).map_err(Failure::Usage)?);
+        reports.extend(occlude_bench::output::load(path).map_err(|e| Failure::Usage(e.into()))?);
     }
     occlude_cli::report::write_html(&reports, &args.out).map_err(Failure::Run)?;
     eprintln!("wrote {}", args.out.display());
