@@ -188,7 +188,7 @@ pub struct PaperResult {
     pub gvq: Option<PaperTables<crate::gvq::GvqRows>>,
     /// Indices into `tables.reports` of each scene's run of the compared
     /// methods (not of a table's variants), in scene order: what
-    /// [`crate::paper_figures`] plots.
+    /// the command line's `--plot` draws (`occlude_cli::bench::paper_figures`).
     pub compared_runs: Vec<usize>,
 }
 
