@@ -475,7 +475,7 @@ pub fn cpu_model() -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
-/// "soft, 2 threads" or "wgpu": a backend as the progress bar names it.
+/// "soft, 2 threads" or "wgpu": a backend as the progress message names it.
 fn label(backend: &dyn RasterBackend) -> String {
     match backend.threads() {
         0 => backend.name(),

@@ -43,7 +43,7 @@ pub struct BenchRun {
     /// the frames kept are those every method finished.
     pub aborted: Option<String>,
     /// Warnings the methods gave about their parameters on this scene
-    /// (printed above the progress bar as they come).
+    /// (shown through [`Progress::println`] as they come).
     pub warnings: Vec<String>,
 }
 
