@@ -6,8 +6,8 @@
 
 #![no_main]
 
-use occlude_cli::camera_path::{cameras, check_keyframe, parse, MIN_TARGET_DISTANCE};
-use occlude_cli::limits::MAX_FRAMES;
+use occlude_bench::camera_path::{cameras, check_keyframe, parse, MIN_TARGET_DISTANCE};
+use occlude_bench::limits::MAX_FRAMES;
 use occlude_core::Sampling;
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {

@@ -5,8 +5,9 @@
 
 #![no_main]
 
-use occlude_cli::figures::check_output;
-use occlude_cli::report::{html, parse};
+use occlude_bench::figures::check_output;
+use occlude_bench::output::parse;
+use occlude_cli::report::html;
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };

@@ -5,14 +5,14 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use indicatif::ProgressBar;
-use occlude_cli::bench::config::{
+use occlude_bench::config::{
     parse_frames, BackendKind, ALL_FRAMES, DEFAULT_FPS, DEFAULT_FRAMES, DEFAULT_METHODS, DEFAULT_RESOLUTION,
 };
-use occlude_cli::bench::paper::PAPERS;
-use occlude_cli::bench::plot::PlotKind;
-use occlude_cli::bench::{self, BenchConfig};
-use occlude_cli::limits::{parse_fps, parse_frame_count, parse_repeats, parse_resolution, parse_threads};
+use occlude_bench::limits::{parse_fps, parse_frame_count, parse_repeats, parse_resolution, parse_threads};
+use occlude_bench::paper::PAPERS;
+use occlude_bench::{output, paper, table, BenchConfig, Progress};
+use occlude_cli::bench::plot::{self, PlotKind};
+use occlude_cli::bench::{dump, paper_figures};
 use occlude_cli::output_path::check_distinct;
 use occlude_cli::output_path::parse_output_path;
 use occlude_cli::stdout::print;
@@ -20,7 +20,7 @@ use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::HierarchyKind;
 use occlude_scenes::import::SceneSource;
-use occlude_scenes::{AutoPath, ImportOptions, LoadError, Size};
+use occlude_scenes::{AutoPath, ImportOptions, Size};
 use occlude_soft::GpuModel;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -136,7 +136,12 @@ impl SceneArgs {
             build: BuildOptions { leaf_size: self.leaf_size, ..BuildOptions::default() },
             options: MethodOptions::parse(&self.method_opt).map_err(|e| usage(e.into()))?,
             import: ImportOptions { split_triangles: self.split_triangles, auto_path: self.auto_path },
-            camera_path: self.camera_path.as_deref().map(occlude_cli::camera_path::load).transpose().map_err(usage)?,
+            camera_path: self
+                .camera_path
+                .as_deref()
+                .map(occlude_bench::camera_path::load)
+                .transpose()
+                .map_err(|e| usage(e.into()))?,
             motion: self.motion,
             ..BenchConfig::default()
         })
@@ -310,21 +315,27 @@ enum Failure {
 /// camera on its target), `--backend wgpu`, `view` or `raster-bench --gpu required`
 /// found no GPU adapter that can run the backend (or none with what a
 /// GPU-driven method needs), or `view` found no display: exit code 2 like
-/// any bad argument; anything else exit code 1.
+/// any bad argument; anything else exit code 1. The harness's errors say
+/// which they are by their kind ([`occlude_bench::Error`]).
 fn run_failure(e: anyhow::Error) -> Failure {
+    use occlude_bench::Error as Bench;
+    let gpu_missing = |e: &occlude_wgpu::GpuError| {
+        matches!(e, occlude_wgpu::GpuError::NoAdapter(_) | occlude_wgpu::GpuError::Unsuitable(_))
+    };
     let no_adapter = |c: &(dyn std::error::Error + 'static)| {
-        matches!(
-            c.downcast_ref::<occlude_wgpu::GpuError>(),
-            Some(occlude_wgpu::GpuError::NoAdapter(_) | occlude_wgpu::GpuError::Unsuitable(_))
-        )
+        c.downcast_ref::<occlude_wgpu::GpuError>().is_some_and(gpu_missing)
+            || matches!(bench(c), Some(Bench::Gpu(e)) if gpu_missing(e))
     };
     let input = |c: &(dyn std::error::Error + 'static)| {
-        c.downcast_ref::<LoadError>().is_some_and(LoadError::is_input_error)
-            || no_adapter(c)
+        no_adapter(c)
             || c.is::<occlude_core::GpuCullingUnsupported>()
             || c.is::<occlude_core::methods::Unsupported>()
             || c.is::<occlude_cli::view::ViewError>()
-            || c.is::<occlude_cli::camera_path::UnusableWalkthrough>()
+            || match bench(c) {
+                Some(Bench::Load(e)) => e.is_input_error(),
+                Some(Bench::GpuCulling(_) | Bench::Unsupported(_) | Bench::Walkthrough(_)) => true,
+                _ => false,
+            }
     };
     if e.chain().any(no_adapter) {
         Failure::Usage(e.context("no GPU to run on: `occlude bench --backend soft` (the default) needs none"))
@@ -335,6 +346,11 @@ fn run_failure(e: anyhow::Error) -> Failure {
     }
 }
 
+/// `c` as the harness's error, under any context it gave it.
+fn bench<'a>(c: &'a (dyn std::error::Error + 'static)) -> Option<&'a occlude_bench::Error> {
+    c.downcast_ref::<occlude_bench::Error>().map(occlude_bench::Error::innermost)
+}
+
 fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
     let usage = Failure::Usage;
     let config = BenchConfig {
@@ -343,7 +359,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         fps: Some(args.fps),
         resolution: args
             .resolution
-            .or(args.paper.as_deref().and_then(bench::paper::default_resolution))
+            .or(args.paper.as_deref().and_then(paper::default_resolution))
             .unwrap_or(DEFAULT_RESOLUTION),
         backend: args.backend,
         queries: args.queries,
@@ -353,30 +369,27 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         ..args.scene.config(args.paper.is_some())?
     };
     let config = match (&args.paper, &args.scene.size) {
-        (Some(_), None) => BenchConfig { size: bench::paper::DEFAULT_SIZE, ..config },
+        (Some(_), None) => BenchConfig { size: paper::DEFAULT_SIZE, ..config },
         _ => config,
     };
-    config.validate().map_err(usage)?;
+    config.validate().map_err(|e| usage(e.into()))?;
     if let Some(paper) = &args.paper {
         if args.dump_frame.is_some() {
             return Err(usage(anyhow::anyhow!("--dump-frame cannot be combined with --paper")));
         }
-        if !bench::paper::PAPERS.contains(&paper.as_str()) {
-            return Err(usage(anyhow::anyhow!(
-                "unknown paper '{paper}': expected one of {}",
-                bench::paper::PAPERS.join(", ")
-            )));
+        if !PAPERS.contains(&paper.as_str()) {
+            return Err(usage(anyhow::anyhow!("unknown paper '{paper}': expected one of {}", PAPERS.join(", "))));
         }
         if args.scene.scene.is_some() {
-            bench::paper::check_scenes(paper, &paper_scenes(args)).map_err(usage)?;
+            paper::check_scenes(paper, &paper_scenes(args)).map_err(|e| usage(e.into()))?;
         }
         let per_frame = [(&args.plot, "--plot"), (&args.plot_queries, "--plot-queries"), (&args.csv, "--csv")];
         for (_, option) in per_frame.iter().filter(|(path, _)| path.is_some()) {
-            bench::paper::check_walkthroughs(paper, option).map_err(usage)?;
+            paper::check_walkthroughs(paper, option).map_err(|e| usage(e.into()))?;
         }
     }
     for path in args.plot.iter().chain(&args.plot_queries) {
-        bench::plot::plot_format(path).map_err(usage)?;
+        plot::plot_format(path).map_err(usage)?;
     }
     if args.dump_frame.is_some() && args.dump_dir.exists() && !args.dump_dir.is_dir() {
         return Err(usage(anyhow::anyhow!("--dump-dir {} is a file, not a folder", args.dump_dir.display())));
@@ -398,8 +411,8 @@ fn paper_scenes(args: &BenchArgs) -> Vec<String> {
 }
 
 /// `occlude bench`, on a pool of `--threads` threads (default: rayon's), whose
-/// threads run the frames and the rasterizer (`bench::runner::run_scene`).
-fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
+/// threads run the frames and the rasterizer (`occlude_bench::runner::run_scene`).
+fn run_bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
@@ -410,53 +423,53 @@ fn bench(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
 fn bench_on_pool(args: &BenchArgs, config: &BenchConfig) -> Result<()> {
     let progress = occlude_cli::progress::bar(0, "frames");
     if let Some(paper) = &args.paper {
-        let result = bench::paper::run(paper, config, &paper_scenes(args), &progress)?;
+        let result = paper::run(paper, config, &paper_scenes(args), &progress)?;
         progress.finish_and_clear();
-        occlude_cli::figures::check_output(&result.tables.reports)?;
+        occlude_bench::figures::check_output(&result.tables.reports)?;
         if let Some(path) = &args.json {
             match &result.gvq {
-                Some(gvq) => bench::output::write_json(gvq, path)?,
-                None => bench::output::write_json(&result.tables, path)?,
+                Some(gvq) => output::write_json(gvq, path)?,
+                None => output::write_json(&result.tables, path)?,
             }
             eprintln!("wrote {}", path.display());
         }
         if let Some(path) = &args.csv {
-            bench::output::write_paper_csv(&result.tables.reports, path)?;
+            output::write_paper_csv(&result.tables.reports, path)?;
             eprintln!("wrote {}", path.display());
         }
         for (path, kind) in plots(args) {
-            for written in bench::paper_figures::write(&result, kind, path)? {
+            for written in paper_figures::write(&result, kind, path)? {
                 eprintln!("wrote {}", written.display());
             }
         }
         return print(&result.text);
     }
-    progress.set_message(format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
-    let run = bench::run(config, &progress)?;
+    progress.message(&format!("{} {}: {}", config.scene, config.size, config.methods.join(", ")));
+    let run = occlude_bench::run(config, &progress)?;
     progress.finish_and_clear();
     let report = run.report(config);
-    occlude_cli::figures::check_output(&report)?;
+    occlude_bench::figures::check_output(&report)?;
     if let Some(path) = &args.json {
-        bench::output::write_json(&report, path)?;
+        output::write_json(&report, path)?;
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &args.csv {
-        bench::output::write_csv(&report, path)?;
+        output::write_csv(&report, path)?;
         eprintln!("wrote {}", path.display());
     }
     for (path, kind) in plots(args) {
-        bench::plot::write_plot(&report, kind, path)?;
+        plot::write_plot(&report, kind, path)?;
         eprintln!("wrote {}", path.display());
     }
     if config.dump_frame.is_some() && run.dumps.is_empty() {
         eprintln!("note: --dump-frame wrote nothing: none of the methods records its decisions (om does)");
     }
     for dump in &run.dumps {
-        for path in bench::dump::write(dump, &args.dump_dir)? {
+        for path in dump::write(dump, &args.dump_dir)? {
             eprintln!("wrote {}", path.display());
         }
     }
-    print(&bench::table::render(&report))?;
+    print(&table::render(&report))?;
     match &run.aborted {
         Some(why) => anyhow::bail!(
             "the run stopped early ({why}); the {} frames every method finished are reported above",
@@ -502,12 +515,12 @@ fn calibrate(args: &CalibrateArgs) -> Result<(), Failure> {
         })
         .transpose()
         .map_err(usage)?;
-    let config = occlude_cli::calibrate::CalibrateConfig { resolution: args.resolution, repeats: args.repeats, check };
-    let progress = ProgressBar::new_spinner();
-    progress.enable_steady_tick(std::time::Duration::from_millis(200));
-    let calibration = occlude_cli::calibrate::calibrate(&config, &progress).map_err(run_failure)?;
+    let config =
+        occlude_bench::calibrate::CalibrateConfig { resolution: args.resolution, repeats: args.repeats, check };
+    let progress = occlude_cli::progress::Bar::spinner();
+    let calibration = occlude_bench::calibrate::calibrate(&config, &progress).map_err(|e| run_failure(e.into()))?;
     progress.finish_and_clear();
-    let text = calibration.to_toml().map_err(Failure::Run)?;
+    let text = calibration.to_toml().map_err(|e| Failure::Run(e.into()))?;
     std::fs::write(&args.out, &text)
         .with_context(|| format!("cannot write {}", args.out.display()))
         .map_err(Failure::Run)?;
@@ -546,7 +559,7 @@ fn report(args: &ReportArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Usage(anyhow::anyhow!(e)))?;
     let mut reports = Vec::new();
     for path in &args.files {
-        reports.extend(occlude_cli::report::load(path).map_err(Failure::Usage)?);
+        reports.extend(occlude_bench::output::load(path).map_err(|e| Failure::Usage(e.into()))?);
     }
     occlude_cli::report::write_html(&reports, &args.out).map_err(Failure::Run)?;
     eprintln!("wrote {}", args.out.display());
@@ -577,14 +590,14 @@ fn scenes(size: &str, seed: u64) -> Result<(), Failure> {
     } else {
         vec![size.parse::<Size>().map_err(|e| Failure::Usage(e.into()))?]
     };
-    let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude_cli::scenes::rows(s, seed)).collect();
-    print(&occlude_cli::scenes::render(&rows)).map_err(Failure::Run)
+    let rows: Vec<_> = sizes.into_iter().flat_map(|s| occlude_bench::scenes::rows(s, seed)).collect();
+    print(&occlude_bench::scenes::render(&rows)).map_err(Failure::Run)
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match &cli.command {
-        Command::Bench(args) => configure(args).and_then(|config| bench(args, &config).map_err(run_failure)),
+        Command::Bench(args) => configure(args).and_then(|config| run_bench(args, &config).map_err(run_failure)),
         Command::Report(args) => report(args),
         Command::Calibrate(args) => calibrate(args),
         Command::View(args) => view(args),

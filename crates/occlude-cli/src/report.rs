@@ -1,6 +1,6 @@
 //! `occlude report`: bench JSON files (one [`BenchReport`] each, an array of
 //! them, or a paper's tables with their reports as `occlude bench --paper
-//! --json` writes) turned into one
+//! --json` writes, read by [`occlude_bench::output::load`]) turned into one
 //! self-contained HTML page, and optionally the same content as Markdown.
 //!
 //! Each report gets a heading with its setup, the scene statistics, the
@@ -14,10 +14,9 @@
 //! the same list of `Block`s, so they cannot drift apart.
 
 use crate::bench::plot::{self, PlotKind};
-use crate::bench::summary::BenchReport;
-use crate::bench::table;
-use anyhow::{bail, Context, Result};
-use serde_json::Value;
+use anyhow::{Context, Result};
+use occlude_bench::summary::BenchReport;
+use occlude_bench::table;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
@@ -40,68 +39,6 @@ p.note { color: #555; font-size: 0.9em; }
 figure { margin: 0.5em 0; }
 figure svg { max-width: 100%; height: auto; }
 ";
-
-/// The largest bench JSON file read, bytes.
-pub const MAX_FILE_BYTES: u64 = 1 << 30;
-
-/// Reads the reports of one bench JSON file (a regular file of at most
-/// [`MAX_FILE_BYTES`]) as [`parse`] does.
-pub fn load(path: &Path) -> Result<Vec<BenchReport>> {
-    let text = occlude_core::input_file::read_text(path, MAX_FILE_BYTES)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    parse(&text, &path.display().to_string())
-}
-
-/// Parses the reports of one bench JSON document: one [`BenchReport`]
-/// object or a non-empty array of them (a leading byte-order mark is
-/// ignored), every figure finite and within
-/// ±[`crate::figures::MAX_FIGURE`]. Anything else is an error naming the
-/// file `name` and saying what is wrong (not JSON, not an object, a missing
-/// key, a figure out of range, ...).
-pub fn parse(text: &str, name: &str) -> Result<Vec<BenchReport>> {
-    let value: Value = serde_json::from_str(occlude_core::input_file::strip_bom(text))
-        .with_context(|| format!("{name} is not valid JSON"))?;
-    crate::figures::check_input(&value).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    let (items, in_array) = match value {
-        Value::Array(items) => (items, true),
-        Value::Object(mut tables) if tables.contains_key("tables") => match tables.remove("reports") {
-            Some(Value::Array(items)) => (items, true),
-            _ => bail!("{name}: a paper's tables without the array of their reports (\"reports\")"),
-        },
-        object @ Value::Object(_) => (vec![object], false),
-        other => {
-            bail!("{name}: expected a bench report (a JSON object) or an array of them, found {}", json_kind(&other))
-        }
-    };
-    if items.is_empty() {
-        bail!("{name}: the array holds no bench reports");
-    }
-    items
-        .into_iter()
-        .enumerate()
-        .map(|(i, item)| {
-            serde_json::from_value(item).with_context(|| {
-                if in_array {
-                    format!("{name}: item {i} of the array is not a bench report")
-                } else {
-                    format!("{name} is not a bench report")
-                }
-            })
-        })
-        .collect()
-}
-
-/// What kind of JSON value `v` is, for error messages.
-fn json_kind(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
 
 /// One piece of a report's section, rendered alike as HTML and Markdown. Text
 /// is plain (unescaped); each rendering escapes it.
@@ -129,8 +66,8 @@ fn plot_names(kind: PlotKind) -> (&'static str, &'static str) {
 
 /// The blocks of one report's section.
 fn section(report: &BenchReport) -> Vec<Block> {
-    let s = &report.scene_stats;
     let (headers, rows) = table::cells(report);
+    let (scene_headers, scene_row) = table::scene_cells(report);
     let mut blocks = vec![
         Block::Heading(
             2,
@@ -144,83 +81,21 @@ fn section(report: &BenchReport) -> Vec<Block> {
             report.frames, report.resolution[0], report.resolution[1], report.seed
         )),
         Block::Heading(3, "Scene statistics".into()),
-        Block::Table(
-            [
-                "triangles",
-                "unique triangles",
-                "instances",
-                "materials",
-                "nodes",
-                "leaves",
-                "depth",
-                "frames",
-                "build ms",
-            ]
-            .map(String::from)
-            .to_vec(),
-            vec![vec![
-                s.triangles.to_string(),
-                s.unique_triangles.to_string(),
-                s.instances.to_string(),
-                s.materials.to_string(),
-                s.nodes.to_string(),
-                s.leaves.to_string(),
-                s.depth.to_string(),
-                s.frames.to_string(),
-                format!("{:.1}", s.build_wall_ms),
-            ]],
-        ),
+        Block::Table(scene_headers, vec![scene_row]),
         Block::Heading(3, "Comparison".into()),
         Block::Table(headers.to_vec(), rows.into_iter().map(Vec::from).collect()),
         Block::Note(table::note(report)),
     ];
-    if let Some((headers, rows)) = gpu_driven_table(report) {
+    if let Some((headers, rows)) = table::gpu_driven_cells(report) {
         blocks.push(Block::Heading(3, "GPU-driven culling passes".into()));
         blocks.push(Block::Table(headers, rows));
-        blocks.push(Block::Note(
-            "per frame means, GPU ms; cull = occlusion tests and their compute passes, render = drawing; for a \
-             depth pyramid (hiz), early = before its build, pyramid = the build, late = after it (box tests, \
-             the late draw)"
-                .into(),
-        ));
+        blocks.push(Block::Note(table::GPU_DRIVEN_NOTE.into()));
     }
     for kind in [PlotKind::FrameTime, PlotKind::QueriesAndStateChanges] {
         blocks.push(Block::Heading(3, plot_names(kind).0.into()));
         blocks.push(Block::Plot(kind));
     }
     blocks
-}
-
-/// The culling passes of the methods that dispatch compute work (the
-/// GPU-driven ones), or `None` when no method does.
-fn gpu_driven_table(report: &BenchReport) -> Option<(Vec<String>, Vec<Vec<String>>)> {
-    let sim = if report.backend == "soft" { "sim " } else { "" };
-    let headers = ["method", "dispatches", "indirect draws", "cull", "render", "early", "pyramid", "late"]
-        .iter()
-        .enumerate()
-        .map(|(i, h)| if i < 3 { h.to_string() } else { format!("{sim}{h} ms") })
-        .collect();
-    let ms = |v: f64| format!("{v:.3}");
-    let rows: Vec<Vec<String>> = report
-        .methods
-        .iter()
-        .filter(|m| m.dispatches_per_frame > 0.0)
-        .map(|m| {
-            let pyramid = m.pyramid_ms_per_frame > 0.0 || m.late_ms_per_frame > 0.0;
-            let phase = |v: f64| if pyramid { ms(v) } else { "-".into() };
-            vec![
-                m.name.clone(),
-                format!("{:.1}", m.dispatches_per_frame),
-                format!("{:.1}", m.indirect_draws_per_frame),
-                ms(m.cull_ms_per_frame),
-                ms(m.render_ms_per_frame),
-                phase(m.gpu_ms_per_frame - m.pyramid_ms_per_frame - m.late_ms_per_frame),
-                phase(m.pyramid_ms_per_frame),
-                phase(m.late_ms_per_frame),
-            ]
-        })
-        .collect();
-    (!rows.is_empty()).then_some((headers, rows))
 }
 
 /// `s` with the characters HTML gives a meaning escaped.
@@ -362,7 +237,8 @@ pub fn write_markdown(reports: &[BenchReport], path: &Path) -> Result<Vec<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::summary::{MethodSummary, SceneStats};
+    use occlude_bench::output::load;
+    use occlude_bench::summary::{MethodSummary, SceneStats};
     use occlude_core::FrameStats;
     use std::collections::BTreeMap;
 
@@ -544,7 +420,7 @@ mod tests {
         let error = |name: &str, text: &str| {
             let path = dir.join(name);
             std::fs::write(&path, text).unwrap();
-            format!("{:#}", load(&path).unwrap_err())
+            format!("{:#}", anyhow::Error::from(load(&path).unwrap_err()))
         };
         let e = error("missing.json", r#"{"scene": "city"}"#);
         assert!(e.contains("missing.json is not a bench report") && e.contains("missing field `size`"), "{e}");
@@ -556,7 +432,7 @@ mod tests {
         let e = error("number.json", "42");
         assert!(e.contains("number.json: expected a bench report") && e.contains("found a number"), "{e}");
         let tables = dir.join("tables.json");
-        let paper: crate::bench::paper_tables::PaperTables = crate::bench::paper_tables::PaperTables {
+        let paper: occlude_bench::paper_tables::PaperTables = occlude_bench::paper_tables::PaperTables {
             paper: "chc".into(),
             tables: Vec::new(),
             reports: vec![report("city"), report("plant")],
@@ -569,7 +445,7 @@ mod tests {
         assert!(e.contains("empty.json: the array holds no bench reports"), "{e}");
         let e = error("text.json", "scene: city");
         assert!(e.contains("text.json is not valid JSON"), "{e}");
-        let e = format!("{:#}", load(&dir.join("absent.json")).unwrap_err());
+        let e = format!("{:#}", anyhow::Error::from(load(&dir.join("absent.json")).unwrap_err()));
         assert!(e.contains("cannot read") && e.contains("absent.json"), "{e}");
     }
 }

@@ -6,10 +6,9 @@
 
 mod common;
 
-use indicatif::ProgressBar;
-use occlude_cli::bench::ideal::IDEALS;
-use occlude_cli::bench::runner::{cameras, load_scene, run_moving_scene, run_scene, run_scene_with_variants, Variant};
-use occlude_cli::bench::{BenchConfig, BenchReport};
+use occlude_bench::ideal::IDEALS;
+use occlude_bench::runner::{cameras, load_scene, run_moving_scene, run_scene, run_scene_with_variants, Variant};
+use occlude_bench::{BenchConfig, BenchReport};
 use occlude_core::methods::{create, DrawnSet, MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, FrameContext, FrameStats, Hierarchy, HierarchyKind, Instruments, Scene, UpdatePolicy};
 use occlude_scenes::import::{import, Imported, ModelFormat};
@@ -56,7 +55,7 @@ fn conservative_methods_match_vfc_on_every_frame() {
             cfg.methods.extend(IDEALS.map(String::from));
             let leaves =
                 Variant { method: "opt".into(), options: MethodOptions::parse(&["opt.granularity=node"]).unwrap() };
-            let run = run_scene_with_variants(&scene, &cfg, &[leaves], &ProgressBar::hidden()).unwrap();
+            let run = run_scene_with_variants(&scene, &cfg, &[leaves], &()).unwrap();
             assert_eq!(run.methods.last().map(|m| m.name.as_str()), IDEALS.last().copied());
             for m in run.methods.iter().chain(&run.variants) {
                 for (f, stats) in m.frames.iter().enumerate() {
@@ -157,8 +156,8 @@ fn opt_draws_exactly_what_the_oracle_sees_and_sw_draws_it_too() {
 }
 
 /// Runs `methods` with `options` and checks every frame against vfc.
-fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude_cli::bench::BenchRun {
-    let run = run_scene(scene, cfg, &ProgressBar::hidden()).unwrap();
+fn exact_run(scene: &Scene, cfg: &BenchConfig) -> occlude_bench::BenchRun {
+    let run = run_scene(scene, cfg, &()).unwrap();
     for m in &run.methods {
         for (f, stats) in m.frames.iter().enumerate() {
             assert_eq!(stats.missing_pixels, 0, "{}/{}: frame {f} differs from vfc", scene.name, m.name);
@@ -177,8 +176,7 @@ fn chc_options_save_queries_and_keep_the_image_exact() {
                 options: MethodOptions::parse(opts).unwrap(),
                 ..config(name, hierarchy)
             };
-            let queries =
-                |run: &occlude_cli::bench::BenchRun| run.methods[0].frames.iter().map(|f| f.queries).sum::<u64>();
+            let queries = |run: &occlude_bench::BenchRun| run.methods[0].frames.iter().map(|f| f.queries).sum::<u64>();
             let plain = queries(&exact_run(&scene, &with(&[])));
             let tav = queries(&exact_run(&scene, &with(&["chc.tav=3"])));
             exact_run(&scene, &with(&["chc.spec=2000", "chc.tav=1"]));
@@ -334,7 +332,7 @@ fn approximate_chc_reports_its_missing_pixels() {
         options: MethodOptions::parse(&["chc.nvp=200"]).unwrap(),
         ..config("city", HierarchyKind::Bvh)
     };
-    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    let run = run_scene(&scene, &cfg, &()).unwrap();
     let missing: u64 = run.methods[0].frames.iter().map(|f| f.missing_pixels).sum();
     assert!(missing > 0, "a 200-pixel threshold should cull something visible on the city walkthrough");
 }
@@ -377,12 +375,12 @@ fn node_seen_from_inside_its_box_is_never_culled() {
 fn simulated_figures_are_identical_between_runs() {
     let cfg = BenchConfig { frames: 20, resolution: (320, 240), ..config("city", HierarchyKind::Bvh) };
     let scene = small("city");
-    let a = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
-    let b = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap().report(&cfg);
+    let a = run_scene(&scene, &cfg, &()).unwrap().report(&cfg);
+    let b = run_scene(&scene, &cfg, &()).unwrap().report(&cfg);
     assert_eq!(simulated(a), simulated(b));
     let moving = BenchConfig { motion: 0.2, ..cfg };
-    let a = run_scene(&scene, &moving, &ProgressBar::hidden()).unwrap().report(&moving);
-    let b = run_scene(&scene, &moving, &ProgressBar::hidden()).unwrap().report(&moving);
+    let a = run_scene(&scene, &moving, &()).unwrap().report(&moving);
+    let b = run_scene(&scene, &moving, &()).unwrap().report(&moving);
     assert_eq!(simulated(a), simulated(b), "a moving scene's figures differ between runs");
 }
 
@@ -414,13 +412,13 @@ fn a_variant_lane_gives_the_figures_of_a_run_of_its_own() {
     };
     let items = ["chc.tav=2", "chc.nvp=25"];
     let variant = Variant { method: "chc".into(), options: MethodOptions::parse(&items).unwrap() };
-    let run = run_scene_with_variants(&scene, &cfg, &[variant], &ProgressBar::hidden()).unwrap();
+    let run = run_scene_with_variants(&scene, &cfg, &[variant], &()).unwrap();
     assert_eq!(run.variants.len(), 1);
     let lane = BenchReport::with_methods(&run, &run.variants, &cfg);
 
     let own =
         BenchConfig { methods: vec!["chc".into()], options: MethodOptions::parse(&items).unwrap(), ..cfg.clone() };
-    let alone = run_scene(&scene, &own, &ProgressBar::hidden()).unwrap().report(&own);
+    let alone = run_scene(&scene, &own, &()).unwrap().report(&own);
     assert_eq!(lane.methods[0].params.get("tav").map(String::as_str), Some("2"), "{:?}", lane.methods[0].params);
     // The variant's frames differ from the defaults', so the comparison
     // below could fail.
@@ -467,7 +465,7 @@ fn query_methods_with_hib_counts_match_vfc_and_hardware_queries() {
                 queries,
                 ..config(name, HierarchyKind::Bvh)
             };
-            run_scene_with_variants(&scene, &cfg, std::slice::from_ref(&nvp), &ProgressBar::hidden()).unwrap()
+            run_scene_with_variants(&scene, &cfg, std::slice::from_ref(&nvp), &()).unwrap()
         };
         let (hardware, hib) = (run(QueryMode::Hardware), run(QueryMode::Hib));
         let culled = |f: &FrameStats| (f.queries, f.query_boxes, f.draw_calls, f.triangles);
@@ -516,7 +514,7 @@ fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
         cfg.methods.extend(IDEALS.map(String::from));
         cfg.frames = 40;
         cfg.motion = 0.3;
-        let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+        let run = run_scene(&scene, &cfg, &()).unwrap();
         for m in &run.methods {
             for (f, stats) in m.frames.iter().enumerate() {
                 assert_eq!(stats.missing_pixels, 0, "{name}/{}: frame {f} differs from vfc", m.name);
@@ -525,8 +523,8 @@ fn conservative_methods_match_vfc_on_every_frame_of_moving_scenes() {
         }
         common::assert_opt_is_a_lower_bound(&run, &format!("{name} in motion"));
         let still = BenchConfig { motion: 0.0, methods: vec!["vfc".into()], ..cfg };
-        let still = run_scene(&scene, &still, &ProgressBar::hidden()).unwrap();
-        let tris = |r: &occlude_cli::bench::BenchRun| r.reference.iter().map(|f| f.triangles).collect::<Vec<_>>();
+        let still = run_scene(&scene, &still, &()).unwrap();
+        let tris = |r: &occlude_bench::BenchRun| r.reference.iter().map(|f| f.triangles).collect::<Vec<_>>();
         assert_ne!(tris(&run), tris(&still), "{name}: motion changed nothing vfc draws");
     }
 }
@@ -544,7 +542,7 @@ fn every_method_matches_vfc_on_the_scenes_that_move_by_themselves() {
         cfg.size = Size::Small;
         let (scene, own) = load_scene(&cfg).unwrap();
         assert!(own.is_some(), "{name} does not move");
-        let run = run_moving_scene(&scene, own.as_ref(), &cfg, &[], &ProgressBar::hidden()).unwrap();
+        let run = run_moving_scene(&scene, own.as_ref(), &cfg, &[], &()).unwrap();
         for m in &run.methods {
             for (f, stats) in m.frames.iter().enumerate() {
                 assert_eq!(stats.missing_pixels, 0, "{name}/{}: frame {f} differs from vfc", m.name);

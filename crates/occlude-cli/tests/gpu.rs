@@ -5,10 +5,9 @@
 
 mod common;
 
-use indicatif::ProgressBar;
-use occlude_cli::bench::config::{BackendKind, ALL_FRAMES};
-use occlude_cli::bench::runner::{cameras, run_scene};
-use occlude_cli::bench::BenchConfig;
+use occlude_bench::config::{BackendKind, ALL_FRAMES};
+use occlude_bench::runner::{cameras, run_scene};
+use occlude_bench::BenchConfig;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::{Backend, HierarchyKind, Instruments, Scene, UpdatePolicy};
 use occlude_scenes::{generate, Size, PAPER_SCENES};
@@ -47,7 +46,7 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame() {
         // plant's 130 s have `roc` draw more than `vfc`).
         let cfg = BenchConfig { fps: Some(2.5), ..config(name, hierarchy, ALL_FRAMES) };
         let frames = cameras(&scene, &cfg).unwrap().len();
-        let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+        let run = run_scene(&scene, &cfg, &()).unwrap();
         assert_eq!(run.aborted, None);
         assert!(run.adapter.is_some());
         for m in &run.methods {
@@ -86,7 +85,7 @@ fn hiz_matches_vfc_on_the_gpu_on_every_frame_of_the_swarm() {
     let scene = small("swarm");
     let cfg =
         BenchConfig { methods: vec!["vfc".into(), "hiz".into()], fps: None, ..config("swarm", HierarchyKind::Bvh, 60) };
-    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    let run = run_scene(&scene, &cfg, &()).unwrap();
     assert_eq!(run.aborted, None);
     let hiz = &run.methods[1];
     assert_eq!(hiz.frames.len(), 60, "frames lost");
@@ -149,7 +148,7 @@ fn assert_hiz_exact_on_the_gpu(scene: &Scene, name: &str, resolution: (u32, u32)
         resolution,
         ..config(name, HierarchyKind::Bvh, 6)
     };
-    let run = run_scene(scene, &cfg, &ProgressBar::hidden()).unwrap();
+    let run = run_scene(scene, &cfg, &()).unwrap();
     assert_eq!(run.aborted, None, "{what}");
     assert_eq!(run.methods.len(), 2, "{what}: a method did not run");
     for m in &run.methods {
@@ -331,7 +330,7 @@ fn query_methods_with_hib_counts_match_vfc_on_the_gpu() {
             queries: occlude_core::QueryMode::Hib,
             ..config(name, HierarchyKind::Bvh, 90)
         };
-        let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+        let run = run_scene(&scene, &cfg, &()).unwrap();
         assert_eq!(run.aborted, None);
         for m in &run.methods {
             assert_eq!(m.frames.len(), 90, "{name}/{}: frames lost", m.name);
@@ -420,7 +419,7 @@ fn every_method_matches_vfc_on_the_gpu_on_every_frame_of_a_moving_city() {
     }
     let scene = small("city");
     let cfg = BenchConfig { motion: 0.3, ..config("city", HierarchyKind::Bvh, 30) };
-    let run = run_scene(&scene, &cfg, &ProgressBar::hidden()).unwrap();
+    let run = run_scene(&scene, &cfg, &()).unwrap();
     assert_eq!(run.aborted, None);
     for m in &run.methods {
         for (f, stats) in m.frames.iter().enumerate() {

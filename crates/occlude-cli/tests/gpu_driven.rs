@@ -9,10 +9,9 @@
 //! statistics of a GPU-driven frame, and the depth options' errors and
 //! warnings. `tests/gpu.rs` runs the same methods on the wgpu backend.
 
-use indicatif::ProgressBar;
-use occlude_cli::bench::config::ALL_FRAMES;
-use occlude_cli::bench::runner::{run_scene, BenchRun};
-use occlude_cli::bench::BenchConfig;
+use occlude_bench::config::ALL_FRAMES;
+use occlude_bench::runner::{run_scene, BenchRun};
+use occlude_bench::BenchConfig;
 use occlude_core::depth_pyramid::level_sizes;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
@@ -43,7 +42,7 @@ fn whole_walkthrough(cfg: BenchConfig) -> BenchConfig {
 }
 
 fn run(scene: &Scene, cfg: &BenchConfig) -> BenchRun {
-    run_scene(scene, cfg, &ProgressBar::hidden()).unwrap()
+    run_scene(scene, cfg, &()).unwrap()
 }
 
 fn assert_exact(run: &BenchRun, what: &str) {
@@ -223,6 +222,6 @@ fn ioc_depths_past_the_tree_are_clamped_with_a_warning() {
     assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
     assert!(r.warnings[0].contains("ioc.bottom = 400 is past the hierarchy's depth"), "{}", r.warnings[0]);
     let cfg = config("teapots", HierarchyKind::Bvh, &["ioc"], &["ioc.start=7", "ioc.bottom=5"]);
-    let err = run_scene(&scene, &cfg, &ProgressBar::hidden()).err().expect("start below bottom is an error");
+    let err = run_scene(&scene, &cfg, &()).err().expect("start below bottom is an error");
     assert!(err.to_string().contains("ioc.bottom = 5"), "{err:#}");
 }

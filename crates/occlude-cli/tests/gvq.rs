@@ -4,8 +4,8 @@
 //! the exact counts are the oracle's; and on the wgpu backend (lavapipe
 //! with `OCCLUDE_REQUIRE_GPU=1`) the same plans count the same.
 
-use occlude_cli::bench::config::NEAR_PLANE;
-use occlude_cli::bench::runner::far_plane;
+use occlude_bench::config::NEAR_PLANE;
+use occlude_bench::runner::far_plane;
 use occlude_core::gvq::{RegionMode, SatConfig, SummedAreaTable};
 use occlude_core::{Camera, Instruments, Sampling, Scene};
 use occlude_scenes::{generate, Size};

@@ -6,9 +6,9 @@
 //! image and its depth-equal occlusion queries (the oracle pass), and on the
 //! soft backend every pixel's owner found fragment by fragment.
 
-use occlude_cli::bench::config::BackendKind;
-use occlude_cli::bench::runner::cameras;
-use occlude_cli::bench::BenchConfig;
+use occlude_bench::config::BackendKind;
+use occlude_bench::runner::cameras;
+use occlude_bench::BenchConfig;
 use occlude_core::{Backend, Camera, Instruments, ItemCounts, ItemLayout, OracleView, Scene};
 use occlude_scenes::{generate, Size, PAPER_SCENES};
 use occlude_soft::raster::Fragments;

@@ -2,9 +2,8 @@
 //! Straßer) against the correctness rule of `docs/design.md`, and against
 //! stop-and-wait for the queries its first stage saves.
 
-use indicatif::ProgressBar;
-use occlude_cli::bench::runner::run_scene;
-use occlude_cli::bench::{BenchConfig, BenchRun};
+use occlude_bench::runner::run_scene;
+use occlude_bench::{BenchConfig, BenchRun};
 use occlude_core::methods::{MethodOptions, NodeClass};
 use occlude_core::{FrameStats, HierarchyKind, Scene};
 use occlude_scenes::{generate, Size, PAPER_SCENES};
@@ -30,7 +29,7 @@ fn small(scene: &str) -> Scene {
 }
 
 fn run(scene: &Scene, cfg: &BenchConfig) -> BenchRun {
-    run_scene(scene, cfg, &ProgressBar::hidden()).unwrap()
+    run_scene(scene, cfg, &()).unwrap()
 }
 
 fn total(frames: &[FrameStats], field: fn(&FrameStats) -> u64) -> u64 {

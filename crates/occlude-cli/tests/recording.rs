@@ -2,7 +2,7 @@
 //! over a real scene: it records what the methods asked and changes nothing
 //! they draw.
 
-use occlude_cli::bench::config::NEAR_PLANE;
+use occlude_bench::config::NEAR_PLANE;
 use occlude_core::methods::{create, DrawnSet, MethodOptions};
 use occlude_core::recording::{QueryOutcome, RecordedBoxTest, RecordingBackend};
 use occlude_core::{render_frame, Hierarchy, HierarchyKind, Instruments};

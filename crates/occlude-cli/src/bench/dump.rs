@@ -7,25 +7,11 @@
 
 use super::plot::{register_font, FONT};
 use anyhow::{ensure, Context, Result};
-use occlude_core::methods::{DebugView, NdcRect, NodeClass};
+use occlude_bench::runner::FrameDump;
+use occlude_core::methods::{NdcRect, NodeClass};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
-
-/// One method's decisions in one frame, with the frame's depth image.
-#[derive(Clone, Debug)]
-pub struct FrameDump {
-    /// Method name.
-    pub method: String,
-    /// Frame number, 0-based.
-    pub frame: usize,
-    /// Image size in pixels.
-    pub resolution: (u32, u32),
-    /// The frame's depth image, row by row (1.0 where nothing was drawn).
-    pub depth: Vec<f32>,
-    /// What the method decided.
-    pub view: DebugView,
-}
 
 /// Colour of a covered occupancy-map cell.
 const COVERED: RGBColor = RGBColor(45, 45, 60);
@@ -144,6 +130,7 @@ fn draw_nodes(dump: &FrameDump, root: &DrawingArea<BitMapBackend<'_>, Shift>) ->
 mod tests {
     use super::*;
     use glam::Vec2;
+    use occlude_core::methods::DebugView;
 
     /// A 400x300 frame, drawn in its bottom third, with a 4x2 map (its left
     /// column covered) and one node of each class side by side below the

@@ -11,9 +11,9 @@
 //! paper's Figure 7 (the city; the paper plots frame rates) and the IOC
 //! poster's Figure 4.
 
-use super::paper::{check_walkthroughs, PaperResult};
 use super::plot::{write_styled_plot, PlotKind, PlotStyle, TimeScale};
 use anyhow::{Context, Result};
+use occlude_bench::paper::{check_walkthroughs, PaperResult};
 use std::path::{Path, PathBuf};
 
 /// One scene's figures in a paper.
@@ -175,7 +175,7 @@ mod tests {
         assert_eq!(none.time_scale, TimeScale::Auto);
         // Every figure's paper is one `--paper` runs.
         for f in FIGURES {
-            assert!(super::super::paper::PAPERS.contains(&f.paper), "{}", f.paper);
+            assert!(occlude_bench::paper::PAPERS.contains(&f.paper), "{}", f.paper);
         }
     }
 

@@ -7,8 +7,8 @@
 //! Text in PNGs is drawn with the DejaVu Sans font that the `dejavu` crate
 //! embeds, so no system font library or installed font is needed.
 
-use super::summary::{BenchReport, MethodSummary};
 use anyhow::{bail, ensure, Context};
+use occlude_bench::summary::{BenchReport, MethodSummary};
 use occlude_core::FrameStats;
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordusize;
@@ -243,11 +243,11 @@ enum YAxis {
 /// no positive value gets the linear range 0 to 1. The axis is finite
 /// whatever the values: it spans at most [`MAX_DECADES`] powers of ten below
 /// the largest value, and values near `f64::MAX` are cut at
-/// [`crate::figures::MAX_FIGURE`], so that no axis has infinitely many ticks.
+/// [`occlude_bench::figures::MAX_FIGURE`], so that no axis has infinitely many ticks.
 fn y_axis(values: impl Iterator<Item = f64>, scale: TimeScale) -> YAxis {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .map(|v| v.min(crate::figures::MAX_FIGURE))
+        .map(|v| v.min(occlude_bench::figures::MAX_FIGURE))
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let lo = lo.max(hi / 10f64.powi(MAX_DECADES));
     if hi <= 0.0 {
@@ -345,7 +345,7 @@ fn count_label(v: &f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::summary::SceneStats;
+    use occlude_bench::summary::SceneStats;
     use std::collections::BTreeMap;
 
     /// A method whose frames have the given frame times, queries and state changes.

@@ -23,8 +23,8 @@ mod overlay;
 mod path_recorder;
 mod present;
 
-use crate::bench::BenchConfig;
 use anyhow::{bail, Result};
+use occlude_bench::BenchConfig;
 use occlude_core::methods::{create, METHOD_NAMES};
 use std::path::PathBuf;
 

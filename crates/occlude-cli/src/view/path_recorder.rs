@@ -59,8 +59,8 @@ pub fn write(path: &CameraPath, file: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_path::load as load_camera_path;
     use glam::Vec3;
+    use occlude_bench::camera_path::load as load_camera_path;
     use occlude_core::Keyframe;
 
     #[test]

@@ -2,8 +2,8 @@
 //! files, so that both backends are held to the same rule by the same code.
 
 use glam::{Mat4, Quat, Vec3};
-use occlude_cli::bench::runner::{cameras, far_plane};
-use occlude_cli::bench::{BenchConfig, BenchRun};
+use occlude_bench::runner::{cameras, far_plane};
+use occlude_bench::{BenchConfig, BenchRun};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{check_support, create, DrawnSet, MethodOptions};
 use occlude_core::{

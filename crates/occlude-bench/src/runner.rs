@@ -6,14 +6,12 @@
 //! ([`BenchConfig::parallel_lanes`]), and are then checked and recorded in
 //! report order, so the results are those of rendering them one by one.
 
-use super::config::{BackendKind, BenchConfig, NEAR_PLANE};
-use super::dump::FrameDump;
-use super::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL, IDEALS};
-use super::summary::{BenchReport, SceneStats};
-use crate::progress::stage;
-use anyhow::{Context, Result};
-use indicatif::ProgressBar;
-use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, MethodOptions};
+use crate::config::{BackendKind, BenchConfig, NEAR_PLANE};
+use crate::error::{Error, Result, ResultExt};
+use crate::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL, IDEALS};
+use crate::progress::{stage, Progress};
+use crate::summary::{BenchReport, SceneStats};
+use occlude_core::methods::{check_support, create, BuiltMethod, DebugView, DrawnSet, MethodOptions};
 use occlude_core::{
     differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, UpdatePolicy, Upkeep,
 };
@@ -45,8 +43,24 @@ pub struct BenchRun {
     /// the frames kept are those every method finished.
     pub aborted: Option<String>,
     /// Warnings the methods gave about their parameters on this scene
-    /// (printed above the progress bar as they come).
+    /// (shown through [`Progress::println`] as they come).
     pub warnings: Vec<String>,
+}
+
+/// One method's decisions in one frame, with the frame's depth image
+/// ([`BenchConfig::dump_frame`]).
+#[derive(Clone, Debug)]
+pub struct FrameDump {
+    /// Method name.
+    pub method: String,
+    /// Frame number, 0-based.
+    pub frame: usize,
+    /// Image size in pixels.
+    pub resolution: (u32, u32),
+    /// The frame's depth image, row by row (1.0 where nothing was drawn).
+    pub depth: Vec<f32>,
+    /// What the method decided.
+    pub view: DebugView,
 }
 
 /// Makes each method's backend: the soft rasterizer (its backends sharing
@@ -337,18 +351,18 @@ pub fn far_plane(scene: &Scene) -> f32 {
 pub fn cameras(scene: &Scene, config: &BenchConfig) -> Result<Vec<Camera>> {
     let (w, h) = config.resolution;
     crate::camera_path::cameras(&scene.path, config.sampling(), w as f32 / h as f32, NEAR_PLANE, far_plane(scene))
-        .with_context(|| format!("scene '{}'", scene.name))
+        .context(|| format!("scene '{}'", scene.name))
 }
 
-/// Generates or imports the scene (an import error stays an
-/// [`occlude_scenes::LoadError`] inside the returned error, so that the
-/// command line can tell it from a failure of the run), replaces its
+/// Generates or imports the scene (an import error is an
+/// [`Error::Load`], so that the command line can tell it from a failure of
+/// the run), replaces its
 /// walkthrough with the configured camera path if any, builds the hierarchy
 /// and runs every method over the walkthrough, playing the scene's own
 /// motion if it has one (a model's animation, a generated scene's script);
 /// `progress` names the loading and building stages and then
 /// advances once per frame.
-pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+pub fn run(config: &BenchConfig, progress: &dyn Progress) -> Result<BenchRun> {
     config.validate()?;
     let (scene, own) = stage(progress, &format!("loading {}", config.scene), || load_scene(config))?;
     run_moving_scene(&scene, own.as_ref(), config, &[], progress)
@@ -357,14 +371,13 @@ pub fn run(config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
 /// The configured scene, generated or imported, with the configured camera
 /// path in place of its own walkthrough if one is given, validated, and
 /// its own motion if it has one (a model's animation, a generated scene's
-/// script). An import error stays an
-/// [`occlude_scenes::LoadError`] inside the returned error.
+/// script). An import error is an [`Error::Load`].
 pub fn load_scene(config: &BenchConfig) -> Result<(Scene, Option<OwnMotion>)> {
     let (mut scene, own) = occlude_scenes::load_moving(&config.scene, config.size, config.seed, &config.import)?;
     if let Some(path) = &config.camera_path {
         scene.path = path.clone();
     }
-    scene.validate().with_context(|| format!("scene '{}' is not usable", config.scene))?;
+    scene.validate().context(|| format!("scene '{}' is not usable", config.scene))?;
     Ok((scene, own))
 }
 
@@ -376,7 +389,7 @@ pub fn load_scene(config: &BenchConfig) -> Result<(Scene, Option<OwnMotion>)> {
 /// makes them, where from outside a pool each call is handed to the pool's
 /// threads and the caller woken when they finish, and between calls their
 /// spinning competes with the traversal for the cores.
-pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &ProgressBar) -> Result<BenchRun> {
+pub fn run_scene(scene: &Scene, config: &BenchConfig, progress: &dyn Progress) -> Result<BenchRun> {
     run_scene_with_variants(scene, config, &[], progress)
 }
 
@@ -386,7 +399,7 @@ pub fn run_scene_with_variants(
     scene: &Scene,
     config: &BenchConfig,
     variants: &[Variant],
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Result<BenchRun> {
     run_moving_scene(scene, None, config, variants, progress)
 }
@@ -399,12 +412,12 @@ pub fn run_moving_scene(
     own: Option<&OwnMotion>,
     config: &BenchConfig,
     variants: &[Variant],
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Result<BenchRun> {
     if rayon::current_thread_index().is_some() {
         return run_scene_here(scene, own, config, variants, progress);
     }
-    let pool = rayon::ThreadPoolBuilder::new().build().context("cannot start the thread pool")?;
+    let pool = rayon::ThreadPoolBuilder::new().build().map_err(Error::ThreadPool)?;
     pool.install(|| run_scene_here(scene, own, config, variants, progress))
 }
 
@@ -414,7 +427,7 @@ fn run_scene_here(
     own: Option<&OwnMotion>,
     config: &BenchConfig,
     variants: &[Variant],
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Result<BenchRun> {
     config.validate()?;
     let variant_methods = variants.iter().map(Variant::create).collect::<Result<Vec<_>>>()?;
@@ -422,7 +435,9 @@ fn run_scene_here(
         Hierarchy::build(scene, config.hierarchy, config.build)
     });
     let cameras = cameras(scene, config)?;
-    anyhow::ensure!(!cameras.is_empty(), "scene '{}' has no camera path", scene.name);
+    if cameras.is_empty() {
+        return Err(Error::Invalid(format!("scene '{}' has no camera path", scene.name)));
+    }
     let times = scene.path.frame_times(config.sampling());
     let motion = Motion::new(scene, own.cloned(), config.motion, config.seed);
     // The scene as it moves, frame by frame; the caller's stays as built.
@@ -433,8 +448,7 @@ fn run_scene_here(
     let mut lanes = build_lanes(scene, config, variant_methods, &renderer)?;
     let mut warnings = Vec::new();
 
-    progress.set_length(cameras.len() as u64);
-    progress.set_position(0);
+    progress.start(cameras.len() as u64);
     let mut dumps = Vec::new();
     let mut aborted = None;
     for (k, camera) in cameras.iter().enumerate() {
@@ -464,7 +478,7 @@ fn run_scene_here(
             lane.frames.push(stats);
             for w in lane.built.method.take_warnings() {
                 let w = format!("{}: {w}", lane.built.method.name());
-                crate::progress::println(progress, &format!("warning: {w}"));
+                progress.println(&format!("warning: {w}"));
                 warnings.push(w);
             }
             if let Some(view) = lane.built.method.debug_view().filter(|_| dump) {
@@ -474,7 +488,7 @@ fn run_scene_here(
             }
         }
         lanes.get_mut(0).image = expected;
-        progress.inc(1);
+        progress.advance(1);
     }
     let mut lanes = lanes.into_vec();
     // Keep only the frames every lane finished (all of them unless aborted).
@@ -539,9 +553,7 @@ fn build_lanes(scene: &Scene, config: &BenchConfig, variants: Vec<BuiltMethod>, 
     for i in 1..lanes.len() {
         let lane = lanes.get_mut(i);
         let method = lane.built.method.as_ref();
-        if let Err(e) = check_support(method, lane.backend.as_mut()) {
-            return Err(anyhow::Error::new(e).context(format!("method {} cannot run", method.name())));
-        }
+        check_support(method, lane.backend.as_mut()).context(|| format!("method {} cannot run", method.name()))?;
     }
     Ok(lanes)
 }
@@ -549,7 +561,8 @@ fn build_lanes(scene: &Scene, config: &BenchConfig, variants: Vec<BuiltMethod>, 
 /// The depth image of `backend`'s last frame, for the correctness rule;
 /// an error for a backend without [`occlude_core::Instruments`].
 fn depth_image(backend: &mut dyn Backend, out: &mut Vec<f32>) -> Result<()> {
-    let instruments = backend.instruments().context("the backend has no depth image to check")?;
+    let instruments =
+        backend.instruments().ok_or_else(|| Error::Backend("the backend has no depth image to check".into()))?;
     instruments.depth_image(out);
     Ok(())
 }
@@ -689,7 +702,7 @@ mod tests {
         let (scene, _) = load_scene(&config).unwrap();
         let run = |parallel_lanes: bool| {
             let config = BenchConfig { parallel_lanes, ..config.clone() };
-            run_scene_with_variants(&scene, &config, &variants, &ProgressBar::hidden()).unwrap()
+            run_scene_with_variants(&scene, &config, &variants, &()).unwrap()
         };
         let one_by_one = run(false);
         // Every method is conservative; the variant (`nvp=25`) need not be.

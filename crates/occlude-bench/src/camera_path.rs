@@ -4,8 +4,8 @@
 //! imported models may use, a target apart from the position and a field of
 //! view that is neither a sliver nor a half-space.
 
+use crate::error::{invalid, Error, Result};
 use crate::limits::MAX_FRAMES;
-use anyhow::{bail, Context, Result};
 use occlude_core::{Camera, CameraPath, Keyframe, Sampling};
 use occlude_scenes::import::MAX_COORDINATE;
 use std::path::Path;
@@ -35,7 +35,7 @@ pub struct UnusableWalkthrough(String);
 /// only a regular file of at most [`MAX_FILE_BYTES`] is read.
 pub fn load(path: &Path) -> Result<CameraPath> {
     let text = occlude_core::input_file::read_text(path, MAX_FILE_BYTES)
-        .with_context(|| format!("cannot read camera path {}", path.display()))?;
+        .map_err(|source| Error::Io { context: format!("cannot read camera path {}", path.display()), source })?;
     parse(&text, &path.display().to_string())
 }
 
@@ -46,15 +46,18 @@ pub fn load(path: &Path) -> Result<CameraPath> {
 /// each as [`check_keyframe`] asks, times strictly increasing. `name` names
 /// the file in errors.
 pub fn parse(text: &str, name: &str) -> Result<CameraPath> {
-    let camera_path: CameraPath = serde_json::from_str(occlude_core::input_file::strip_bom(text))
-        .with_context(|| format!("{name} is not a camera path (JSON of keyframes)"))?;
+    let camera_path: CameraPath =
+        serde_json::from_str(occlude_core::input_file::strip_bom(text)).map_err(|source| Error::Json {
+            context: format!("{name} is not a camera path (JSON of keyframes)"),
+            source,
+        })?;
     if camera_path.keyframes.is_empty() {
-        bail!("camera path {name} has no keyframes");
+        invalid!("camera path {name} has no keyframes");
     }
     for (i, k) in camera_path.keyframes.iter().enumerate() {
-        check_keyframe(k).map_err(|e| anyhow::anyhow!("camera path {name}: keyframe {i}: {e}"))?;
+        check_keyframe(k).map_err(|e| Error::Invalid(format!("camera path {name}: keyframe {i}: {e}")))?;
         if i > 0 && k.time <= camera_path.keyframes[i - 1].time {
-            bail!(
+            invalid!(
                 "camera path {name}: keyframe {i} (time {}) is not later than the one before (times are read as \
                  32-bit floats, about 7 significant digits)",
                 k.time

@@ -1,9 +1,9 @@
 //! `occlude bench --paper gvq`: the granular-visibility-queries paper's
 //! Tables 1 to 3. Table 1 (section 4.1, shadow-volume culling) is
-//! [`super::gvq_shadows`]'s and Table 3 (section 4.2, culling parts of one
-//! heavy object) [`super::gvq_parts`]'s, both on the soft backend's
+//! [`crate::gvq_shadows`]'s and Table 3 (section 4.2, culling parts of one
+//! heavy object) [`crate::gvq_parts`]'s, both on the soft backend's
 //! simulated clock (with `--backend wgpu`, both run on the GPU and are
-//! timed there, [`super::gvq_shadows_gpu`] and [`super::gvq_parts_gpu`]),
+//! timed there, [`crate::gvq_shadows_gpu`] and [`crate::gvq_parts_gpu`]),
 //! printed and written after Table 2. Table 2
 //! (section 4.1): summed-area-table queries of 100 to 500 randomly
 //! placed objects of 606 triangles (`occlude_scenes::scattered`), the CPU
@@ -18,15 +18,15 @@
 //! otherwise, over the walkthrough circling the objects; both region modes
 //! are run (the paper's Table 2 does not say which it used).
 
-use super::config::{BackendKind, BenchConfig};
-use super::gvq_parts::{self, PartsRow};
-use super::gvq_parts_gpu;
-use super::gvq_shadows::{self, ShadowRow};
-use super::gvq_shadows_gpu;
-use super::paper_tables::{PaperTables, Table};
-use super::published::{self, PublishedTable};
-use anyhow::Result;
-use indicatif::ProgressBar;
+use crate::config::{BackendKind, BenchConfig};
+use crate::error::{Error, Result};
+use crate::gvq_parts::{self, PartsRow};
+use crate::gvq_parts_gpu;
+use crate::gvq_shadows::{self, ShadowRow};
+use crate::gvq_shadows_gpu;
+use crate::paper_tables::{PaperTables, Table};
+use crate::progress::Progress;
+use crate::published::{self, PublishedTable};
 use occlude_core::gvq::{RegionMode, SatConfig};
 use occlude_core::{Camera, Scene};
 use occlude_scenes::scattered::scattered;
@@ -197,7 +197,7 @@ impl Counter {
         let differing_from_soft = match self {
             Self::Soft => 0,
             Self::Wgpu(gpu) => {
-                let counts = gpu.query(scene, camera, &frame.plan).map_err(anyhow::Error::msg)?.counts;
+                let counts = gpu.query(scene, camera, &frame.plan).map_err(Error::Backend)?.counts;
                 summary.errors = frame.errors_of(&counts);
                 counts.iter().zip(&frame.counts).filter(|(g, s)| g != s).count() as u32
             }
@@ -212,9 +212,9 @@ impl Counter {
 /// seed, resolution and GPU model (or on its backend's GPU) on at most
 /// [`gvq_shadows::FRAMES`] of its frames (module documentation); returns
 /// the printed tables and their JSON, in that order.
-pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTables)> {
+pub fn run(base: &BenchConfig, progress: &dyn Progress) -> Result<(String, GvqTables)> {
     let (mut text, table_2) = table_2(base, &OBJECTS, progress)?;
-    progress.set_message("gvq: Table 3");
+    progress.message("gvq: Table 3");
     let (w, h) = base.resolution;
     let published = published::table("gvq", "Table 3");
     let ctx = match base.backend {
@@ -247,7 +247,7 @@ pub fn run(base: &BenchConfig, progress: &ProgressBar) -> Result<(String, GvqTab
 }
 
 /// Table 2 over scenes of `counts` objects: the printed table and its rows.
-fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result<(String, GvqTable)> {
+fn table_2(base: &BenchConfig, counts: &[u32], progress: &dyn Progress) -> Result<(String, GvqTable)> {
     let published = published::table("gvq", "Table 2");
     let configs =
         [RegionMode::Conservative, RegionMode::Approximate].map(|mode| SatConfig { mode, ..SatConfig::default() });
@@ -264,9 +264,9 @@ fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result
     let mut rows = Vec::new();
     for &objects in counts {
         let scene = scattered(objects, base.seed);
-        let cameras = super::runner::cameras(&scene, base)?;
-        progress.set_message(format!("gvq: {objects} objects"));
-        progress.inc_length(cameras.len() as u64);
+        let cameras = crate::runner::cameras(&scene, base)?;
+        progress.message(&format!("gvq: {objects} objects"));
+        progress.add_steps(cameras.len() as u64);
         let mut sat = SoftSat::new(w, h);
         let mut counted = vec![Vec::with_capacity(cameras.len()); configs.len()];
         for camera in &cameras {
@@ -274,7 +274,7 @@ fn table_2(base: &BenchConfig, counts: &[u32], progress: &ProgressBar) -> Result
             for ((into, counter), frame) in counted.iter_mut().zip(&counters).zip(&frames) {
                 into.push(counter.count(&scene, camera, frame)?);
             }
-            progress.inc(1);
+            progress.advance(1);
         }
         for (config, frames) in configs.iter().zip(&counted) {
             let row = GvqRow::new(objects, config, backend, frames, published);
@@ -322,7 +322,7 @@ mod tests {
     #[test]
     fn tables_2_and_3_have_their_rows_beside_the_papers_figures() {
         let base = BenchConfig { frames: 2, resolution: (64, 64), ..BenchConfig::default() };
-        let (text, tables) = run(&base, &ProgressBar::hidden()).unwrap();
+        let (text, tables) = run(&base, &()).unwrap();
         let rows = rows_2(&tables.tables[0]);
         assert_eq!(rows.len(), 10);
         let row500 = rows.iter().find(|r| r.objects == 500 && r.mode == RegionMode::Conservative).unwrap();
@@ -364,8 +364,8 @@ mod tests {
         }
         let soft = BenchConfig { frames: 3, resolution: (64, 48), ..BenchConfig::default() };
         let wgpu = BenchConfig { backend: BackendKind::Wgpu, ..soft.clone() };
-        let (_, on_soft) = table_2(&soft, &[150], &ProgressBar::hidden()).unwrap();
-        let (text, on_gpu) = table_2(&wgpu, &[150], &ProgressBar::hidden()).unwrap();
+        let (_, on_soft) = table_2(&soft, &[150], &()).unwrap();
+        let (text, on_gpu) = table_2(&wgpu, &[150], &()).unwrap();
         assert!(text.contains("wgpu backend"));
         let (soft_rows, gpu_rows) = (rows_2(&on_soft), rows_2(&on_gpu));
         assert_eq!(gpu_rows.len(), 2);

@@ -2,11 +2,11 @@
 //! teapots, city and plant scenes (`paper` size unless told otherwise, the
 //! whole walkthrough at the frame rate), printed in the shape of its tables,
 //! each of our rows beside the published figures (`published.toml`) with
-//! whether the order of the methods agrees ([`super::paper_tables`]).
+//! whether the order of the methods agrees ([`crate::paper_tables`]).
 //!
 //! - `chc` (Bittner et al. 2004, section 6): kD-tree, `gpu-2004`; Table 1
 //!   (VFC, S&W, CHC and the paper's ideal, `ideal`: S&W's draws replayed
-//!   without queries ([`super::ideal`]), with `opt`, the per-instance lower
+//!   without queries ([`crate::ideal`]), with `opt`, the per-instance lower
 //!   bound, beside them) and Table 2 (CHC with `tav` = 2, and with `tav` =
 //!   2 and `nvp` = 25).
 //! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
@@ -30,22 +30,22 @@
 //!   ideal set; the poster gives that one as a chart, without figures, and
 //!   its NOCULL has no method here).
 //! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
-//!   to 3, in [`super::gvq`], [`super::gvq_shadows`] and
-//!   [`super::gvq_parts`].
+//!   to 3, in [`crate::gvq`], [`crate::gvq_shadows`] and
+//!   [`crate::gvq_parts`].
 //!
 //! A run can be restricted to some of a paper's scenes (`--scene city,plant`,
 //! [`check_scenes`]): a whole paper-size run of `chcpp` takes hours on two
 //! cores, and a simulated table's rows do not depend on which other scenes
 //! ran, so scenes run apart give the same rows as one whole run.
 
-use super::config::BenchConfig;
-use super::ideal::{IDEAL, IDEAL_SORTED};
-use super::paper_tables::{PaperTables, Row, Table};
-use super::published;
-use super::runner::{run_scene, run_scene_with_variants, Variant};
-use super::summary::BenchReport;
-use anyhow::Result;
-use indicatif::ProgressBar;
+use crate::config::BenchConfig;
+use crate::error::{invalid, Result};
+use crate::ideal::{IDEAL, IDEAL_SORTED};
+use crate::paper_tables::{PaperTables, Row, Table};
+use crate::progress::Progress;
+use crate::published;
+use crate::runner::{run_scene, run_scene_with_variants, Variant};
+use crate::summary::BenchReport;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
@@ -185,10 +185,10 @@ pub struct PaperResult {
     pub tables: PaperTables,
     /// `--paper gvq`'s tables, whose rows have columns of their own;
     /// `--json` writes them instead of `tables` (which is then empty).
-    pub gvq: Option<PaperTables<super::gvq::GvqRows>>,
+    pub gvq: Option<PaperTables<crate::gvq::GvqRows>>,
     /// Indices into `tables.reports` of each scene's run of the compared
     /// methods (not of a table's variants), in scene order: what
-    /// [`super::paper_figures`] plots.
+    /// the command line's `--plot` draws (`occlude_cli::bench::paper_figures`).
     pub compared_runs: Vec<usize>,
 }
 
@@ -201,7 +201,7 @@ pub const NO_WALKTHROUGHS: [&str; 1] = ["gvq"];
 /// An error unless `paper`'s runs have walkthroughs for `option` to write.
 pub fn check_walkthroughs(paper: &str, option: &str) -> Result<()> {
     if NO_WALKTHROUGHS.contains(&paper) {
-        anyhow::bail!("{option} cannot be combined with --paper {paper}: its tables have no walkthrough runs");
+        invalid!("{option} cannot be combined with --paper {paper}: its tables have no walkthrough runs");
     }
     Ok(())
 }
@@ -231,14 +231,14 @@ pub fn paper_scenes(paper: &str) -> Option<Vec<&'static str>> {
 /// (and `paper` has scenes to choose from).
 pub fn check_scenes(paper: &str, only: &[String]) -> Result<()> {
     let Some(scenes) = paper_scenes(paper) else {
-        anyhow::bail!("--scene cannot be combined with --paper {paper}: its tables generate their own scenes");
+        invalid!("--scene cannot be combined with --paper {paper}: its tables generate their own scenes");
     };
     if only.is_empty() {
-        anyhow::bail!("--scene names no scene: --paper {paper}'s are {}", scenes.join(", "));
+        invalid!("--scene names no scene: --paper {paper}'s are {}", scenes.join(", "));
     }
     for scene in only {
         if !scenes.contains(&scene.as_str()) {
-            anyhow::bail!("--paper {paper} has no scene '{scene}': its scenes are {}", scenes.join(", "));
+            invalid!("--paper {paper} has no scene '{scene}': its scenes are {}", scenes.join(", "));
         }
     }
     Ok(())
@@ -260,7 +260,7 @@ pub const DEFAULT_SIZE: Size = Size::Paper;
 pub fn default_resolution(paper: &str) -> Option<(u32, u32)> {
     match paper {
         "om" => Some((800, 600)),
-        "gvq" => Some(super::gvq::RESOLUTION),
+        "gvq" => Some(crate::gvq::RESOLUTION),
         _ => None,
     }
 }
@@ -269,7 +269,7 @@ pub fn default_resolution(paper: &str) -> Option<(u32, u32)> {
 /// resolution of `base`; scenes, methods, hierarchy and GPU model are the
 /// paper's. `only` names the paper's scenes to run (empty: all of them; see
 /// [`check_scenes`]).
-pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
+pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Result<PaperResult> {
     if !only.is_empty() {
         check_scenes(paper, only)?;
     }
@@ -279,7 +279,7 @@ pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &Progress
     match paper {
         "ioc" => run_ioc(base, only, progress),
         "gvq" => {
-            let (text, gvq) = super::gvq::run(base, progress)?;
+            let (text, gvq) = crate::gvq::run(base, progress)?;
             Ok(PaperResult {
                 text,
                 tables: PaperTables { paper: "gvq".into(), ..PaperTables::default() },
@@ -287,11 +287,11 @@ pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &Progress
                 compared_runs: Vec::new(),
             })
         }
-        _ => anyhow::bail!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
+        _ => invalid!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
     }
 }
 
-fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
+fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Result<PaperResult> {
     let published = published::table(e.paper, e.compared);
     let mut compared = Vec::new();
     let mut varied: Vec<Vec<Row>> = e.variant_tables.iter().map(|_| Vec::new()).collect();
@@ -321,7 +321,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
             .iter()
             .map(|opts| Ok(Variant { method: e.varied.into(), options: MethodOptions::parse(opts)? }))
             .collect::<Result<Vec<_>>>()?;
-        progress.set_message(format!("{scene_name} {}: methods and {} variants", config.size, variants.len()));
+        progress.message(&format!("{scene_name} {}: methods and {} variants", config.size, variants.len()));
         let run = run_scene_with_variants(&scene, &config, &variants, progress)?;
         let report = run.report(&config);
         compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published)));
@@ -376,10 +376,10 @@ const IOC_TABLE_1: [[(f64, f64); 2]; 3] =
     [[(0.41, 0.40), (0.61, 0.40)], [(3.47, 3.50), (0.78, 3.58)], [(7.96, 7.81), (1.05, 8.04)]];
 
 /// `--paper ioc` (module documentation).
-fn run_ioc(base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Result<PaperResult> {
+fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Result<PaperResult> {
     let times = match base.backend {
-        super::config::BackendKind::Soft => format!("GPU model {}, times simulated", base.gpu_model.name),
-        super::config::BackendKind::Wgpu => "times measured".to_string(),
+        crate::config::BackendKind::Soft => format!("GPU model {}, times simulated", base.gpu_model.name),
+        crate::config::BackendKind::Wgpu => "times measured".to_string(),
     };
     let mut table = format!(
         "IOC poster (BVH, one object per leaf, {times}) — Table 1: GPU time per frame, ms\n\
@@ -446,8 +446,8 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &ProgressBar) -> Resul
     Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None, compared_runs })
 }
 
-fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &ProgressBar, label: &str) -> Result<BenchReport> {
-    progress.set_message(format!("{} {}: {label}", config.scene, config.size));
+fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &dyn Progress, label: &str) -> Result<BenchReport> {
+    progress.message(&format!("{} {}: {label}", config.scene, config.size));
     Ok(run_scene(scene, config, progress)?.report(config))
 }
 
@@ -458,7 +458,7 @@ mod tests {
     #[test]
     fn the_chc_tables_set_every_row_beside_the_papers_and_write_its_json_shape() {
         let base = BenchConfig { frames: 4, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("chc", &base, &[], &ProgressBar::hidden()).unwrap();
+        let result = run("chc", &base, &[], &()).unwrap();
         let [t1, t2] = &result.tables.tables[..] else { panic!("two tables: {:?}", result.tables.tables) };
         assert_eq!((t1.name.as_str(), t1.rows.len()), ("Table 1", 15), "3 scenes x vfc, sw, chc, ideal, opt");
         assert_eq!((t2.name.as_str(), t2.rows.len()), ("Table 2", 9), "3 scenes x the paper's 3 rows");
@@ -495,7 +495,7 @@ mod tests {
             assert!(t.source.as_deref().is_some_and(|s| s.contains(&t.name)), "{:?}", t.source);
         }
         // A scene run apart gives the whole run's rows for it.
-        let plant = run("chc", &base, &["plant".into()], &ProgressBar::hidden()).unwrap();
+        let plant = run("chc", &base, &["plant".into()], &()).unwrap();
         assert_eq!((plant.tables.reports.len(), &plant.compared_runs[..]), (3, &[0][..]));
         for (alone, whole) in plant.tables.tables.iter().zip(&result.tables.tables) {
             let whole: Vec<&Row> = whole.rows.iter().filter(|r| r.scene == "plant").collect();
@@ -521,7 +521,7 @@ mod tests {
     #[test]
     fn the_chcpp_tables_compare_nohc_and_add_the_optimisations_one_at_a_time() {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("chcpp", &base, &[], &ProgressBar::hidden()).unwrap();
+        let result = run("chcpp", &base, &[], &()).unwrap();
         let names: Vec<&str> = result.tables.tables.iter().map(|t| t.name.as_str()).collect();
         assert_eq!(names, ["methods compared", "ablation", "Figure 8"]);
         let [compared, ablation, figure8] = &result.tables.tables[..] else { unreachable!() };
@@ -566,7 +566,7 @@ mod tests {
     #[test]
     fn the_ioc_tables_set_every_scene_beside_the_posters_figures() {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
-        let result = run("ioc", &base, &[], &ProgressBar::hidden()).unwrap();
+        let result = run("ioc", &base, &[], &()).unwrap();
         assert_eq!(result.tables.reports.len(), 3);
         assert_eq!(result.compared_runs, [0, 1, 2]);
         for (report, (scene, label)) in result.tables.reports.iter().zip(IOC_SCENES) {

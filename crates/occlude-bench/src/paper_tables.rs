@@ -1,12 +1,12 @@
 //! The tables `occlude bench --paper` prints and writes as JSON (`--json`):
-//! each of our rows beside the published one ([`super::published`]), and
+//! each of our rows beside the published one ([`crate::published`]), and
 //! whether the order of the methods by frame time agrees with the paper's.
 //! One shape serves every paper: [`PaperTables`] and [`Table`] are generic
 //! over the rows, [`Row`] (the methods' frame times, the default) or a
-//! paper's own (`--paper gvq`'s, [`super::gvq::GvqRows`]).
+//! paper's own (`--paper gvq`'s, [`crate::gvq::GvqRows`]).
 
-use super::published::PublishedTable;
-use super::summary::{BenchReport, MethodSummary};
+use crate::published::PublishedTable;
+use crate::summary::{BenchReport, MethodSummary};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 

@@ -1,7 +1,7 @@
 //! What a benchmark run is asked to do, checked before any work starts.
 
-use super::ideal::{IDEALS, SOURCE};
-use anyhow::{bail, Result};
+use crate::error::{invalid, Error, Result};
+use crate::ideal::{IDEALS, SOURCE};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
 use occlude_core::{CameraPath, HierarchyKind, QueryMode, Sampling};
@@ -42,7 +42,7 @@ pub enum BackendKind {
 
 impl std::str::FromStr for BackendKind {
     type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
+    fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
         match s {
             "soft" => Ok(Self::Soft),
             "wgpu" => Ok(Self::Wgpu),
@@ -97,7 +97,7 @@ pub struct BenchConfig {
     /// A walkthrough replacing the scene's own (`--camera-path FILE`).
     pub camera_path: Option<CameraPath>,
     /// Frame (0-based) whose decisions the methods that can record them keep
-    /// for [`super::dump`] (`--dump-frame K`).
+    /// for [`crate::runner::FrameDump`] (`--dump-frame K`).
     pub dump_frame: Option<usize>,
     /// Whether the lanes of a frame (the `vfc` reference, each method and
     /// variant, each on its backend of its own) render side by side on the
@@ -140,7 +140,7 @@ impl BenchConfig {
     /// offending value.
     pub fn validate(&self) -> Result<()> {
         if self.methods.is_empty() {
-            bail!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
+            invalid!("no methods given: expected a comma-separated list of {}", METHOD_NAMES.join(", "));
         }
         for m in self.methods.iter().filter(|m| !IDEALS.contains(&m.as_str())) {
             create(m, &self.options)?;
@@ -148,30 +148,30 @@ impl BenchConfig {
         for ideal in IDEALS {
             if let Some(i) = self.methods.iter().position(|m| m == ideal) {
                 if !self.methods[..i].iter().any(|m| m == SOURCE) {
-                    bail!("method {ideal} renders {SOURCE}'s visible set without queries: list {SOURCE} before it (e.g. --methods vfc,{SOURCE},{ideal})");
+                    invalid!("method {ideal} renders {SOURCE}'s visible set without queries: list {SOURCE} before it (e.g. --methods vfc,{SOURCE},{ideal})");
                 }
                 self.options.for_method(ideal).finish()?;
             }
         }
         self.options.check_methods(&self.methods)?;
         if let Some(dup) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
-            bail!("method '{}' is listed twice", dup.1);
+            invalid!("method '{}' is listed twice", dup.1);
         }
         if self.frames != ALL_FRAMES {
-            crate::limits::check_frame_count(self.frames).map_err(|e| anyhow::anyhow!("--frames: {e}"))?;
+            crate::limits::check_frame_count(self.frames).map_err(|e| Error::Invalid(format!("--frames: {e}")))?;
         }
         if let Some(fps) = self.fps {
-            crate::limits::check_fps(fps).map_err(|e| anyhow::anyhow!("--fps: {e}"))?;
+            crate::limits::check_fps(fps).map_err(|e| Error::Invalid(format!("--fps: {e}")))?;
         }
         if let Some(k) = self.dump_frame.filter(|&k| k >= self.frames) {
-            bail!("--dump-frame {k} is past the last frame: frames are numbered 0 to {}", self.frames - 1);
+            invalid!("--dump-frame {k} is past the last frame: frames are numbered 0 to {}", self.frames - 1);
         }
-        crate::limits::check_resolution(self.resolution).map_err(anyhow::Error::msg)?;
+        crate::limits::check_resolution(self.resolution).map_err(Error::Invalid)?;
         if self.build.leaf_size == 0 {
-            bail!("--leaf-size must be at least 1");
+            invalid!("--leaf-size must be at least 1");
         }
         if !(0.0..=1.0).contains(&self.motion) {
-            bail!("--motion {} is out of range: expected a share of the instances from 0 to 1", self.motion);
+            invalid!("--motion {} is out of range: expected a share of the instances from 0 to 1", self.motion);
         }
         Ok(())
     }

@@ -36,8 +36,8 @@
 //! beyond `gpu_fragment_ns`, so the heavy object is only as heavy as its
 //! 12 triangles and their fragments per prism make it.
 
-use super::published::PublishedTable;
-use super::sim_gpu::SimFrame;
+use crate::published::PublishedTable;
+use crate::sim_gpu::SimFrame;
 use glam::{DVec2, Mat4, Vec3, Vec4};
 use occlude_core::depth_pyramid::{project_corner, PIXEL_MARGIN};
 use occlude_core::gvq::{plan, Lookup, PixelRect, SatConfig, Silhouette, SummedAreaTable, NO_CHANNEL};
@@ -71,7 +71,7 @@ pub struct PartsRow {
     /// `full`, `partial` or `occluded`.
     pub view: String,
     /// The backend that ran it: `soft` (simulated clock) or `wgpu`
-    /// (measured on the device, `super::gvq_parts_gpu`).
+    /// (measured on the device, `crate::gvq_parts_gpu`).
     #[serde(default)]
     pub backend: String,
     /// Frame time, ms: the soft backend's simulated clock, or the wgpu
@@ -476,7 +476,7 @@ pub fn print(rows: &[PartsRow], width: u32, height: u32, clock: &str) -> String 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::published;
+    use crate::published;
 
     #[test]
     fn every_culling_method_draws_every_prism_with_a_visible_fragment() {

@@ -16,11 +16,11 @@
 //! an adapter without GPU-resident culling the GPU-driven costs stay those
 //! of `modern`, and the TOML says so.
 
-use crate::bench::config::BackendKind;
-use crate::bench::{runner, BenchConfig};
-use anyhow::{Context, Result};
+use crate::config::BackendKind;
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::{runner, BenchConfig};
 use glam::{Mat4, Vec3};
-use indicatif::ProgressBar;
 use occlude_core::{
     Aabb, Backend, Camera, CameraPath, FrameStats, GpuCulling, GpuCullingUnsupported, Keyframe, Mesh, QueryHandle,
     QueryMode, Scene,
@@ -96,7 +96,7 @@ impl Calibration {
                 p.ratio()
             );
         }
-        text += &toml::to_string(&self.model).context("cannot write the GPU model as TOML")?;
+        text += &toml::to_string(&self.model).map_err(Error::Toml)?;
         Ok(text)
     }
 }
@@ -212,11 +212,12 @@ fn issue_queries(backend: &mut WgpuBackend, count: usize, query_box: Aabb) {
 /// Measures the cost model on `ctx`'s adapter, and why its GPU-driven costs
 /// could not be measured, if they could not.
 pub fn measure_model(ctx: Arc<GpuContext>, config: &CalibrateConfig) -> Result<(GpuModel, Option<String>)> {
-    anyhow::ensure!(
-        ctx.timestamps,
-        "GPU adapter '{}' has no timestamp queries: its GPU costs cannot be measured",
-        ctx.adapter_name()
-    );
+    if !ctx.timestamps {
+        return Err(Error::Backend(format!(
+            "GPU adapter '{}' has no timestamp queries: its GPU costs cannot be measured",
+            ctx.adapter_name()
+        )));
+    }
     let scene = synthetic_scene();
     let (w, h) = config.resolution;
     let gpu = Arc::new(GpuScene::new(Arc::clone(&ctx), &scene)?);
@@ -472,20 +473,21 @@ fn measure_latency(backend: &mut WgpuBackend, camera: &Camera, small_box: Aabb, 
 }
 
 /// Measures the model and, if asked, checks its predictions.
-pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Calibration> {
-    crate::limits::check_resolution(config.resolution).map_err(anyhow::Error::msg)?;
-    crate::limits::check_repeats(config.repeats).map_err(|e| anyhow::anyhow!("--repeats: {e}"))?;
+pub fn calibrate(config: &CalibrateConfig, progress: &dyn Progress) -> Result<Calibration> {
+    crate::limits::check_resolution(config.resolution).map_err(Error::Invalid)?;
+    crate::limits::check_repeats(config.repeats).map_err(|e| Error::Invalid(format!("--repeats: {e}")))?;
     let ctx = Arc::new(GpuContext::new()?);
     let adapter = ctx.adapter_name();
-    progress.set_message(format!("measuring {adapter}"));
+    progress.message(&format!("measuring {adapter}"));
     let (model, culling_unmeasured) = measure_model(ctx, config)?;
-    model.validate().map_err(|e| anyhow::anyhow!("the model measured on {adapter} is not usable: {e}"))?;
+    model.validate().map_err(|e| Error::Backend(format!("the model measured on {adapter} is not usable: {e}")))?;
     let gpu_costs = [model.gpu_draw_call_us, model.gpu_triangle_ns, model.gpu_fragment_ns, model.gpu_query_box_us];
-    anyhow::ensure!(
-        gpu_costs.iter().any(|&c| c > 0.0),
-        "{adapter} measured no GPU time for draws, triangles, fragments or query boxes: the measurement failed, \
-         no model is written"
-    );
+    if !gpu_costs.iter().any(|&c| c > 0.0) {
+        return Err(Error::Backend(format!(
+            "{adapter} measured no GPU time for draws, triangles, fragments or query boxes: the measurement \
+             failed, no model is written"
+        )));
+    }
     let predictions = match &config.check {
         Some(check) => predict(check, &model, progress)?,
         None => Vec::new(),
@@ -495,12 +497,12 @@ pub fn calibrate(config: &CalibrateConfig, progress: &ProgressBar) -> Result<Cal
 
 /// Runs `check` on the GPU and on the soft backend with `model`, and pairs
 /// the mean frame times per method.
-pub fn predict(check: &BenchConfig, model: &GpuModel, progress: &ProgressBar) -> Result<Vec<Prediction>> {
+pub fn predict(check: &BenchConfig, model: &GpuModel, progress: &dyn Progress) -> Result<Vec<Prediction>> {
     let measured = BenchConfig { backend: BackendKind::Wgpu, ..check.clone() };
     let predicted = BenchConfig { backend: BackendKind::Soft, gpu_model: model.clone(), ..check.clone() };
-    progress.set_message(format!("checking on {} (wgpu)", check.scene));
+    progress.message(&format!("checking on {} (wgpu)", check.scene));
     let on_gpu = runner::run(&measured, progress)?.report(&measured);
-    progress.set_message(format!("checking on {} (soft, calibrated)", check.scene));
+    progress.message(&format!("checking on {} (soft, calibrated)", check.scene));
     let on_soft = runner::run(&predicted, progress)?.report(&predicted);
     Ok(on_gpu
         .methods

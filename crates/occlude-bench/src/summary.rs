@@ -1,7 +1,7 @@
 //! Per-method averages over a walkthrough, in the JSON schema of `docs/design.md`.
 
-use super::config::{BackendKind, BenchConfig};
-use super::runner::{BenchRun, MethodRun};
+use crate::config::{BackendKind, BenchConfig};
+use crate::runner::{BenchRun, MethodRun};
 use occlude_core::{FrameStats, Hierarchy, Scene};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

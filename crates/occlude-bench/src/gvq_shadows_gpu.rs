@@ -1,5 +1,5 @@
 //! `occlude bench --paper gvq --backend wgpu`, Table 1 on the GPU: the
-//! shadow-volume culling of [`super::gvq_shadows`] decided by the wgpu
+//! shadow-volume culling of [`crate::gvq_shadows`] decided by the wgpu
 //! backend's own queries, and the kept volumes drawn and timed on the
 //! device.
 //!
@@ -32,11 +32,11 @@
 //! (`differing_from_soft`): the two rasterizers may cover a pixel on a
 //! triangle's edge differently.
 
-use super::config::BenchConfig;
-use super::gvq_shadows::{self, keep, FramePasses, Method, MethodFrame, ShadowRow, METHODS};
-use super::published::PublishedTable;
-use anyhow::{anyhow, bail, Result};
-use indicatif::ProgressBar;
+use crate::config::BenchConfig;
+use crate::error::{Error, Result};
+use crate::gvq_shadows::{self, keep, FramePasses, Method, MethodFrame, ShadowRow, METHODS};
+use crate::progress::Progress;
+use crate::published::PublishedTable;
 use occlude_core::gvq::RegionMode;
 use occlude_core::item_buffer::ItemLayout;
 use occlude_core::{Backend, Camera, Scene};
@@ -67,8 +67,8 @@ impl Device<'_, '_> {
     /// Every method of [`METHODS`] in the frame of `p` from the light's
     /// camera `light_cam` (module documentation).
     fn methods(&mut self, light_cam: &Camera, p: &FramePasses) -> Result<Vec<MethodFrame>> {
-        self.light.upload(&p.light_triangles).map_err(anyhow::Error::msg)?;
-        self.camera.upload(&p.camera_triangles).map_err(anyhow::Error::msg)?;
+        self.light.upload(&p.light_triangles).map_err(Error::Backend)?;
+        self.camera.upload(&p.camera_triangles).map_err(Error::Backend)?;
         if !self.warm {
             for &m in &METHODS {
                 self.frame(m, light_cam, p)?;
@@ -93,9 +93,9 @@ impl Device<'_, '_> {
         let drawn = self.cull(m, light_cam, p)?;
         let kept: Vec<_> = p.volume_ranges.iter().zip(&drawn).filter(|(_, &d)| d).map(|(r, _)| r.clone()).collect();
         let (w, h) = self.size;
-        self.camera.clear(w, h).map_err(anyhow::Error::msg)?;
-        self.camera.draw(p.camera_objects.clone()).map_err(anyhow::Error::msg)?;
-        self.camera.draw_tested(&kept).map_err(anyhow::Error::msg)?;
+        self.camera.clear(w, h).map_err(Error::Backend)?;
+        self.camera.draw(p.camera_objects.clone()).map_err(Error::Backend)?;
+        self.camera.draw_tested(&kept).map_err(Error::Backend)?;
         Ok(drawn)
     }
 
@@ -105,12 +105,12 @@ impl Device<'_, '_> {
             Method::None => vec![true; p.volume_ranges.len()],
             Method::Sat(mode) => {
                 let k = usize::from(mode == RegionMode::Approximate);
-                keep(&self.sats[k].query(self.scene, light_cam, &p.plans[k]).map_err(anyhow::Error::msg)?.counts)
+                keep(&self.sats[k].query(self.scene, light_cam, &p.plans[k]).map_err(Error::Backend)?.counts)
             }
             Method::Hib => {
-                let items = self.backend.item_buffer(light_cam, &self.layout).map_err(|e| anyhow!("{e}"))?;
+                let items = self.backend.item_buffer(light_cam, &self.layout)?;
                 if let Some(e) = self.backend.failure() {
-                    bail!("wgpu backend failed: {e}");
+                    return Err(Error::Backend(format!("wgpu backend failed: {e}")));
                 }
                 let mut counts = vec![0u64; p.volume_ranges.len()];
                 for (slot, &instance) in self.layout.slots().iter().enumerate() {
@@ -121,9 +121,9 @@ impl Device<'_, '_> {
             Method::Hardware => {
                 let (w, h) = self.size;
                 let all = 0..p.light_triangles.len() as u32;
-                self.light.clear(w, h).map_err(anyhow::Error::msg)?;
-                self.light.draw(all).map_err(anyhow::Error::msg)?;
-                keep(&self.light.queries_at_equal_depth(&p.light_ranges).map_err(anyhow::Error::msg)?)
+                self.light.clear(w, h).map_err(Error::Backend)?;
+                self.light.draw(all).map_err(Error::Backend)?;
+                keep(&self.light.queries_at_equal_depth(&p.light_ranges).map_err(Error::Backend)?)
             }
         })
     }
@@ -137,7 +137,7 @@ pub fn table_1(
     base: &BenchConfig,
     counts: &[u32],
     published: Option<&PublishedTable>,
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Result<Vec<ShadowRow>> {
     let (w, h) = base.resolution;
     let sats: Vec<GpuSat> =
@@ -176,7 +176,7 @@ mod tests {
             return;
         };
         let base = BenchConfig { frames: 2, resolution: (128, 128), ..BenchConfig::default() };
-        let rows = table_1(ctx, &base, &[100], None, &ProgressBar::hidden()).unwrap();
+        let rows = table_1(ctx, &base, &[100], None, &()).unwrap();
         assert_eq!(rows.len(), METHODS.len());
         for r in &rows {
             assert_eq!((r.backend.as_str(), r.frames), ("wgpu", 2), "{r:?}");

@@ -7,7 +7,7 @@
 //! Whole numbers (counts, seeds) are exact integers in JSON and are not
 //! bounded here.
 
-use anyhow::{bail, Result};
+use crate::error::{Error, Result};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -23,19 +23,17 @@ const NULLABLE: [&str; 1] = ["ratio_to_opt"];
 /// it will be written: serde writes a non-finite float as `null`, so a
 /// `null` where a figure belongs is one.
 pub fn check_output<T: Serialize + ?Sized>(report: &T) -> Result<()> {
-    let value = serde_json::to_value(report)?;
+    let value = serde_json::to_value(report)
+        .map_err(|source| Error::Json { context: "cannot read the run's figures".into(), source })?;
     if let Some(at) = first_bad(&value, "", &|key, v| v.is_null() && !NULLABLE.contains(&key) || out_of_range(v)) {
-        bail!(
-            "the run's figures are not finite numbers within ±{MAX_FIGURE:e} ({at} is not): a GPU model's costs or \
-             the walkthrough are out of proportion"
-        );
+        return Err(Error::Figures { at });
     }
     Ok(())
 }
 
 /// Checks every figure of a report read from a file, naming the first one
 /// out of range by its place in the document.
-pub fn check_input(value: &Value) -> Result<(), String> {
+pub fn check_input(value: &Value) -> std::result::Result<(), String> {
     match first_bad(value, "", &|_, v| out_of_range(v)) {
         Some(at) => Err(format!("{at} is not a figure within ±{MAX_FIGURE:e}")),
         None => Ok(()),

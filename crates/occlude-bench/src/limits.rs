@@ -2,7 +2,7 @@
 //! (threads, image sizes, frame counts, repeats, triangle counts, seconds,
 //! frame rates), each checked by one parser whose error names the value and
 //! its range. The command-line options parse with these (clap then names the
-//! option), and [`crate::bench::config::BenchConfig::validate`] checks a
+//! option), and [`crate::config::BenchConfig::validate`] checks a
 //! configuration built in code against the same bounds.
 //!
 //! The bounds keep every run's time and memory bounded by what was asked

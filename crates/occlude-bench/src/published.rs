@@ -1,7 +1,7 @@
 //! The papers' published figures (`published.toml`, each table citing its
 //! source), which `occlude bench --paper` prints beside its own.
 
-use super::paper_tables::Row;
+use crate::paper_tables::Row;
 use serde::Deserialize;
 use std::fmt::Write;
 use std::sync::OnceLock;

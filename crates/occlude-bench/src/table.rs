@@ -1,7 +1,9 @@
 //! The comparison table printed by `occlude bench`, shaped like Table 1 of the
-//! CHC paper. Times from the soft backend are simulated and labelled so.
+//! CHC paper, and the report's other tables as cells for the HTML and
+//! Markdown reports. Times from the soft backend are simulated and labelled
+//! so.
 
-use super::summary::BenchReport;
+use crate::summary::BenchReport;
 use std::fmt::Write;
 
 /// Renders the report as an aligned text table.
@@ -103,3 +105,60 @@ pub fn note(report: &BenchReport) -> String {
         if report.backend == "soft" { "; sim = simulated GPU clock, wall = real time on this machine" } else { "" }
     )
 }
+
+/// The scene statistics as header cells and a row.
+pub fn scene_cells(report: &BenchReport) -> (Vec<String>, Vec<String>) {
+    let s = &report.scene_stats;
+    let headers =
+        ["triangles", "unique triangles", "instances", "materials", "nodes", "leaves", "depth", "frames", "build ms"];
+    let row = vec![
+        s.triangles.to_string(),
+        s.unique_triangles.to_string(),
+        s.instances.to_string(),
+        s.materials.to_string(),
+        s.nodes.to_string(),
+        s.leaves.to_string(),
+        s.depth.to_string(),
+        s.frames.to_string(),
+        format!("{:.1}", s.build_wall_ms),
+    ];
+    (headers.map(String::from).to_vec(), row)
+}
+
+/// The culling passes of the methods that dispatch compute work (the
+/// GPU-driven ones) as header cells and one row per method, or `None` when
+/// no method does.
+pub fn gpu_driven_cells(report: &BenchReport) -> Option<(Vec<String>, Vec<Vec<String>>)> {
+    let sim = if report.backend == "soft" { "sim " } else { "" };
+    let headers = ["method", "dispatches", "indirect draws", "cull", "render", "early", "pyramid", "late"]
+        .iter()
+        .enumerate()
+        .map(|(i, h)| if i < 3 { h.to_string() } else { format!("{sim}{h} ms") })
+        .collect();
+    let ms = |v: f64| format!("{v:.3}");
+    let rows: Vec<Vec<String>> = report
+        .methods
+        .iter()
+        .filter(|m| m.dispatches_per_frame > 0.0)
+        .map(|m| {
+            let pyramid = m.pyramid_ms_per_frame > 0.0 || m.late_ms_per_frame > 0.0;
+            let phase = |v: f64| if pyramid { ms(v) } else { "-".into() };
+            vec![
+                m.name.clone(),
+                format!("{:.1}", m.dispatches_per_frame),
+                format!("{:.1}", m.indirect_draws_per_frame),
+                ms(m.cull_ms_per_frame),
+                ms(m.render_ms_per_frame),
+                phase(m.gpu_ms_per_frame - m.pyramid_ms_per_frame - m.late_ms_per_frame),
+                phase(m.pyramid_ms_per_frame),
+                phase(m.late_ms_per_frame),
+            ]
+        })
+        .collect();
+    (!rows.is_empty()).then_some((headers, rows))
+}
+
+/// What the columns of [`gpu_driven_cells`] are.
+pub const GPU_DRIVEN_NOTE: &str = "per frame means, GPU ms; cull = occlusion tests and their compute passes, render = \
+     drawing; for a depth pyramid (hiz), early = before its build, pyramid = the build, late = after it (box tests, \
+     the late draw)";

@@ -1,8 +1,8 @@
 //! A frame on the soft backend's simulated clock ([`SimClock`]) charged
 //! with a GPU model's costs, for the experiments that count their own
 //! triangles and fragments rather than run a culling method through a
-//! backend: `--paper gvq`'s Tables 1 ([`super::gvq_shadows`]) and 3
-//! ([`super::gvq_parts`]). The CPU issues each command at its cost; the GPU
+//! backend: `--paper gvq`'s Tables 1 ([`crate::gvq_shadows`]) and 3
+//! ([`crate::gvq_parts`]). The CPU issues each command at its cost; the GPU
 //! runs them in order (`SimClock::gpu_command`).
 
 use occlude_soft::clock::SimClock;

@@ -1,5 +1,5 @@
 //! `occlude bench --paper gvq --backend wgpu`, Table 3 on the GPU: the
-//! heavy object of [`super::gvq_parts`] culled per prism by the wgpu
+//! heavy object of [`crate::gvq_parts`] culled per prism by the wgpu
 //! backend's own passes, and each frame timed on the device.
 //!
 //! The scene uploaded is the wall (instance [`WALL`]), the conservatively
@@ -32,9 +32,9 @@
 //! (`differing_from_soft`): the two rasterizers may cover a pixel on a
 //! triangle's edge differently.
 
-use super::gvq_parts::{self, Heavy, PartsRow, ViewPasses};
-use super::published::PublishedTable;
-use anyhow::{bail, Result};
+use crate::error::{Error, Result};
+use crate::gvq_parts::{self, Heavy, PartsRow, ViewPasses};
+use crate::published::PublishedTable;
 use glam::{Mat4, Vec3};
 use occlude_core::gvq::{plan, SatConfig, SummedAreaTable};
 use occlude_core::item_buffer::ItemLayout;
@@ -112,7 +112,7 @@ fn draw_frame(backend: &mut WgpuBackend, camera: &Camera, drawn: &[bool]) -> Res
 fn end_frame(backend: &mut WgpuBackend) -> Result<()> {
     backend.end_frame();
     match backend.failure() {
-        Some(e) => bail!("wgpu backend failed: {e}"),
+        Some(e) => Err(Error::Backend(format!("wgpu backend failed: {e}"))),
         None => Ok(()),
     }
 }
@@ -199,7 +199,7 @@ impl GpuView<'_> {
             let slot = layout.slots().iter().position(|&i| i == PROXY).expect("the proxy has a slot") as u32;
             let tiles = layout.tiles_per_side();
             let (frame_ms, drawn) = timed(self.frames, || {
-                let counts = backend.item_buffer(camera, &layout).map_err(|e| anyhow::anyhow!("{e}"))?;
+                let counts = backend.item_buffer(camera, &layout)?;
                 let (drawn, _) = gvq_parts::cull_by_rect(passes, |r| {
                     let (t0, t1) = (layout.tile_of(r.x0, r.y0, w, h), layout.tile_of(r.x1 - 1, r.y1 - 1, w, h));
                     let seen = (t0 / tiles..=t1 / tiles).any(|ty| {
@@ -218,7 +218,7 @@ impl GpuView<'_> {
 
         let timing = timed(self.frames, || {
             let regions = plan(&[None, passes.silhouette], &SatConfig::default());
-            let frame = self.sat.query(self.sat_scene, camera, &regions).map_err(anyhow::Error::msg)?;
+            let frame = self.sat.query(self.sat_scene, camera, &regions).map_err(Error::Backend)?;
             let sat = SummedAreaTable::from_channel_image(w, h, regions.channels, &frame.channel_image);
             let drawn = gvq_parts::sat_drawn(passes, &regions.sets[PROXY as usize].lookups, &sat).0;
             draw_frame(backend, camera, &drawn)?;
@@ -265,7 +265,7 @@ pub fn table_3(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::gvq_parts::{DRAW_SIZES, VIEWS};
+    use crate::gvq_parts::{DRAW_SIZES, VIEWS};
 
     /// On the GPU every method runs in every view, the occluded sphere is
     /// culled whole by every culling method, and every prism's decision is

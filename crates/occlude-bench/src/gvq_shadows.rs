@@ -68,13 +68,13 @@
 //! The camera image is `--resolution` (the paper renders 1600 x 1050); the
 //! shadow volumes' fragments are counted by the soft rasterizer, exactly.
 
-use super::config::{BenchConfig, NEAR_PLANE};
-use super::published::PublishedTable;
-use super::runner::far_plane;
-use super::sim_gpu::SimFrame;
-use anyhow::Result;
+use crate::config::{BenchConfig, NEAR_PLANE};
+use crate::error::Result;
+use crate::progress::Progress;
+use crate::published::PublishedTable;
+use crate::runner::far_plane;
+use crate::sim_gpu::SimFrame;
 use glam::{Mat4, Vec3, Vec4};
-use indicatif::ProgressBar;
 use occlude_core::gvq::{RegionMode, RegionPlan, SatConfig};
 use occlude_core::{Camera, ItemLayout, Mesh, Sampling, Scene};
 use occlude_scenes::scattered::scattered;
@@ -144,7 +144,7 @@ pub struct ShadowRow {
     /// Culling method ([`METHODS`]).
     pub method: String,
     /// The backend that ran it: `soft` (simulated clock) or `wgpu`
-    /// (measured on the device, [`super::gvq_shadows_gpu`]).
+    /// (measured on the device, [`crate::gvq_shadows_gpu`]).
     #[serde(default)]
     pub backend: String,
     /// Frame time, ms: the soft backend's simulated clock, or the wgpu
@@ -296,7 +296,7 @@ fn object_triangles(scene: &Scene, vp: &Mat4) -> (Vec<[Vec4; 3]>, Vec<Range<u32>
 
 /// What one frame's passes found, from which every method's culling and
 /// cost follow, and the clip-space triangles they drew (which the wgpu
-/// backend's rows, [`super::gvq_shadows_gpu`], draw again on the device).
+/// backend's rows, [`crate::gvq_shadows_gpu`], draw again on the device).
 pub(super) struct FramePasses {
     /// Pixels of the light's view.
     light_pixels: u64,
@@ -553,7 +553,7 @@ pub fn table_1(
     base: &BenchConfig,
     counts: &[u32],
     published: Option<&PublishedTable>,
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Vec<ShadowRow> {
     let mut rows = Vec::new();
     for &objects in counts {
@@ -581,7 +581,7 @@ pub(super) fn scene_rows(
     scene: &Scene,
     backend: &str,
     published: Option<&PublishedTable>,
-    progress: &ProgressBar,
+    progress: &dyn Progress,
     mut methods: impl FnMut(&Camera, &FramePasses) -> Result<Vec<MethodFrame>>,
 ) -> Result<Vec<ShadowRow>> {
     let (w, h) = base.resolution;
@@ -589,8 +589,8 @@ pub(super) fn scene_rows(
     let objects = scene.instances.len() as u32;
     let cameras =
         scene.path.sample_with(Sampling::Spread(base.frames.min(FRAMES)), aspect, NEAR_PLANE, far_plane(scene));
-    progress.set_message(format!("gvq: Table 1, {objects} objects"));
-    progress.inc_length(cameras.len() as u64);
+    progress.message(&format!("gvq: Table 1, {objects} objects"));
+    progress.add_steps(cameras.len() as u64);
     let mut passes = Passes::new(scene, (w, h), (w, h), &base.gpu_model);
     let mut sums: Vec<Sums> = METHODS.iter().map(|_| Sums::default()).collect();
     for (k, camera) in cameras.iter().enumerate() {
@@ -613,7 +613,7 @@ pub(super) fn scene_rows(
                 }
             }
         }
-        progress.inc(1);
+        progress.advance(1);
     }
     let frames = cameras.len().max(1) as f64;
     Ok(METHODS
@@ -680,7 +680,7 @@ pub fn print(rows: &[ShadowRow], width: u32, height: u32, clock: &str) -> String
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::published;
+    use crate::published;
     use glam::DVec3;
     use occlude_core::Aabb;
 
@@ -871,7 +871,7 @@ mod tests {
     #[test]
     fn table_1_has_every_method_beside_the_papers_figures() {
         let base = BenchConfig { frames: 2, resolution: (48, 48), ..BenchConfig::default() };
-        let rows = table_1(&base, &[100, 500], published::table("gvq", "Table 1"), &ProgressBar::hidden());
+        let rows = table_1(&base, &[100, 500], published::table("gvq", "Table 1"), &());
         assert_eq!(rows.len(), 2 * METHODS.len());
         let find = |n: u32, m: &str| rows.iter().find(|r| r.objects == n && r.method == m).unwrap();
         assert_eq!(
