@@ -4,7 +4,7 @@ use crate::error::{invalid, Error, Result};
 use crate::ideal::{IDEALS, SOURCE};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{create, MethodOptions, METHOD_NAMES};
-use occlude_core::{CameraPath, HierarchyKind, QueryMode, Sampling};
+use occlude_core::{CameraPath, HierarchyKind, QueryMode, Sampling, UpdatePolicy};
 use occlude_scenes::{ImportOptions, Size};
 use occlude_soft::GpuModel;
 
@@ -108,6 +108,9 @@ pub struct BenchConfig {
     /// Share of the scene's instances that move (`--motion`, 0 to 1;
     /// `occlude_scenes::SceneMotion`): 0 is a still scene.
     pub motion: f64,
+    /// When a moving scene's hierarchy is rebuilt rather than refitted
+    /// (`--rebuild-ratio`).
+    pub update_policy: UpdatePolicy,
 }
 
 impl Default for BenchConfig {
@@ -131,6 +134,7 @@ impl Default for BenchConfig {
             dump_frame: None,
             parallel_lanes: true,
             motion: 0.0,
+            update_policy: UpdatePolicy::default(),
         }
     }
 }
@@ -172,6 +176,12 @@ impl BenchConfig {
         }
         if !(0.0..=1.0).contains(&self.motion) {
             invalid!("--motion {} is out of range: expected a share of the instances from 0 to 1", self.motion);
+        }
+        if !(self.update_policy.max_cost_ratio >= 1.0) {
+            invalid!(
+                "--rebuild-ratio {} is out of range: expected 1 or more (inf: never rebuild)",
+                self.update_policy.max_cost_ratio
+            );
         }
         Ok(())
     }

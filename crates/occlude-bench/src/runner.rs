@@ -13,7 +13,7 @@ use crate::progress::{stage, Progress};
 use crate::summary::{BenchReport, SceneStats};
 use occlude_core::methods::{check_support, create, BuiltMethod, DebugView, DrawnSet, MethodOptions};
 use occlude_core::{
-    differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, UpdatePolicy, Upkeep,
+    differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, Upkeep,
 };
 use occlude_scenes::{Motion, OwnMotion};
 use occlude_soft::{DrawReplay, SharedSetup, SoftBackend};
@@ -458,7 +458,7 @@ fn run_scene_here(
         }
         if let Some(motion) = &motion {
             let changed = moving.apply(&motion.changes_at(times[k]))?;
-            let upkeep = hierarchy.update(&moving, &changed, UpdatePolicy::default());
+            let upkeep = hierarchy.update(&moving, &changed, config.update_policy);
             let modelled = renderer.models_time().then(|| modelled_upkeep_ms(config, &upkeep, &hierarchy));
             lanes.update_instances(&moving, &changed, &upkeep, modelled);
         }

@@ -18,7 +18,7 @@ use occlude_cli::output_path::parse_output_path;
 use occlude_cli::stdout::print;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::{MethodOptions, METHOD_NAMES};
-use occlude_core::HierarchyKind;
+use occlude_core::{HierarchyKind, UpdatePolicy};
 use occlude_scenes::import::SceneSource;
 use occlude_scenes::{AutoPath, ImportOptions, Size};
 use occlude_soft::GpuModel;
@@ -103,6 +103,10 @@ struct SceneArgs {
     /// does not.
     #[arg(long, value_name = "FRACTION", default_value_t = 0.0)]
     motion: f64,
+    /// A moving scene's hierarchy is rebuilt when refits have made its SAH
+    /// cost this many times its cost when built (1 or more; inf: never).
+    #[arg(long, value_name = "RATIO", default_value_t = UpdatePolicy::default().max_cost_ratio)]
+    rebuild_ratio: f32,
 }
 
 impl SceneArgs {
@@ -143,6 +147,7 @@ impl SceneArgs {
                 .transpose()
                 .map_err(|e| usage(e.into()))?,
             motion: self.motion,
+            update_policy: UpdatePolicy { max_cost_ratio: self.rebuild_ratio },
             ..BenchConfig::default()
         })
     }

@@ -17,7 +17,7 @@ use occlude_bench::runner::{cameras, far_plane, load_scene};
 use occlude_bench::BenchConfig;
 use occlude_core::methods::{check_support, create, BuiltMethod, DrawnSet, METHOD_NAMES};
 use occlude_core::recording::{RecordedBoxTest, RecordingBackend};
-use occlude_core::{render_frame, UpdatePolicy};
+use occlude_core::render_frame;
 use occlude_core::{Backend, Camera, Hierarchy, HierarchyKind, Keyframe, Scene};
 use occlude_scenes::{Motion, OwnMotion};
 use occlude_wgpu::{best_adapter, GpuContext, GpuError, GpuScene, WgpuBackend, COLOR_FORMAT};
@@ -389,7 +389,7 @@ impl<'s> Viewer<'s> {
             // how fast the machine draws.
             self.motion_time += if self.config.screenshot.is_some() { 1.0 / DEFAULT_FPS } else { dt };
             let changed = self.scene.apply(&motion.changes_at(self.motion_time))?;
-            self.hierarchy.update(&self.scene, &changed, UpdatePolicy::default());
+            self.hierarchy.update(&self.scene, &changed, self.config.scene.update_policy);
             gpu.backend.update_instances(&self.scene, &changed);
         }
         let (w, h) = gpu.backend.inner().size();

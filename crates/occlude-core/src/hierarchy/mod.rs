@@ -94,6 +94,9 @@ pub struct Hierarchy {
     instance_count: usize,
     /// Its SAH cost right after the build ([`Hierarchy::sah_cost`]).
     built_cost: f64,
+    /// The weighted node areas [`Hierarchy::sah_cost`] sums, kept up to
+    /// date by refits so that checking the cost costs what the refit does.
+    area_sum: f64,
     version: Version,
     /// What the last refit changed.
     changes: Changes,
@@ -139,6 +142,7 @@ impl Hierarchy {
             options,
             instance_count: scene.instances.len(),
             built_cost: 0.0,
+            area_sum: 0.0,
             version: Version { build: refit::next_build(), refit: 0 },
             changes: Changes::default(),
             leaves_of: Default::default(),
@@ -151,6 +155,7 @@ impl Hierarchy {
             h.version.refit = 0;
             h.changes = Changes::default();
         }
+        h.area_sum = h.nodes.iter().map(refit::weighted_area).sum();
         h.built_cost = h.sah_cost();
         h.build_time = start.elapsed();
         h
