@@ -1,5 +1,5 @@
 //! The visibility-backend interface that hierarchical methods are written
-//! against (`docs/architecture.md`, "The backend interface").
+//! against: [`Backend`], with the benchmark's [`Instruments`] beside it.
 //!
 //! A backend owns the scene's geometry, a depth buffer and a clock. Methods
 //! issue draws and occlusion queries in order; the backend answers queries as a

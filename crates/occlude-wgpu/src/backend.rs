@@ -9,6 +9,12 @@
 //! are resolved into a buffer and mapped with `map_async`: "is it
 //! available?" polls the device without blocking, "give me the result"
 //! waits, and that wait is the frame's wait time (CHC paper, section 3).
+//!
+//! wgpu promises an occlusion query's count only as zero or not zero
+//! (Vulkan without the precise flag); lavapipe counts exactly. Only `chc`
+//! with `nvp` above 0, an approximate method, reads more than that.
+//! [`QueryMode::Hib`] counts exactly on any adapter that runs GPU-resident
+//! culling.
 
 use crate::context::GpuContext;
 use crate::culling::{CullOp, Culling, CullingScene};

@@ -10,6 +10,10 @@
 //! are re-queried every `nav` frames, the first time after a random delay
 //! (section 5.2); queries use tight bounding volumes and traversal stops at
 //! virtual leaves (section 6). Every component can be switched off.
+//!
+//! Query handles do not outlive a frame, so the v-queue left at the end of
+//! a frame is issued and read then. That read costs the last query's
+//! latency, which shows as wait time.
 
 pub mod multiquery;
 pub mod tight;
