@@ -12,9 +12,7 @@ use crate::ideal::{self, DrawCalls, DrawLog, Ideal, IDEAL, IDEALS};
 use crate::progress::{stage, Progress};
 use crate::summary::{BenchReport, SceneStats};
 use occlude_core::methods::{check_support, create, BuiltMethod, DebugView, DrawnSet, MethodOptions};
-use occlude_core::{
-    differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, Upkeep,
-};
+use occlude_core::{differing_pixels, render_frame, Backend, Camera, FrameStats, Hierarchy, QueryMode, Scene, Upkeep};
 use occlude_scenes::{Motion, OwnMotion};
 use occlude_soft::{DrawReplay, SharedSetup, SoftBackend};
 use occlude_wgpu::{GpuContext, GpuScene, WgpuBackend};

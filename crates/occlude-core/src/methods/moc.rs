@@ -14,9 +14,8 @@
 //!   after it is drawn. The walk is front to back, so everything drawn in
 //!   front of a node is in the buffer before the node is tested: the coarse
 //!   analogue of stop-and-wait's exact depth buffer, with no state between
-//!   frames and no first frame drawn without occlusion. It is the default
-//!   because it culls nearly what `sw` culls (docs/benchmarks.md), at the price
-//!   of rasterizing every drawn triangle on the CPU.
+//!   frames. It is the default because it culls nearly what `sw` culls, at
+//!   the price of rasterizing every drawn triangle on the CPU.
 //! - `last`: the objects drawn in the previous frame, rendered before the walk
 //!   (the paper's usage with last frame's visible set); nothing is added
 //!   during the walk. Fewer CPU triangles where much is drawn but little
@@ -25,19 +24,12 @@
 //!   largest from the eye (size over distance), rendered before the walk:
 //!   designated occluders without temporal state.
 //!
-//! With `moc.proxies=on` (default off), whichever occluders are chosen, an
-//! occluder whose mesh has [inner boxes](crate::inner_box) (boxes inside the
-//! mesh's closed parts, at most four; computed once per mesh, on first use,
-//! and not charged to the frame: it is scene preparation, like the
-//! hierarchy) is rendered as those boxes' 12 triangles each when the
-//! conditions of "Inner-box proxies" below hold for its instance this frame,
-//! and in full otherwise; a box too thin for its distance (its clearance
-//! below what snapping needs there) is left out, as it would cover next to
-//! no pixel. It is a switch beside `moc.occluders`, not a fourth value of
-//! it, because it changes how an occluder is rendered, not which objects
-//! occlude. The counters `proxy_occluders` (occluders rendered as boxes this
-//! frame) and `meshes_with_proxy` (meshes found to have a box so far)
-//! report its use.
+//! With `moc.proxies=on` (default off), an occluder whose mesh has [inner
+//! boxes](crate::inner_box) is rendered as those boxes (12 triangles each)
+//! where `occluder_proxies.rs` shows that this stays conservative for its
+//! instance this frame, and in full otherwise. It changes how an occluder is
+//! rendered, not which objects occlude. The counters `proxy_occluders` and
+//! `meshes_with_proxy` report its use.
 //!
 //! # Why it never culls a visible object
 //!
@@ -83,62 +75,6 @@
 //!   a pixel centre within 1/256 pixel of that vertex's outer edges can
 //!   differ: the one assumption left, for GPUs only (the depth bounds allow
 //!   for that step).
-//!
-//! ## Inner-box proxies
-//!
-//! An instance `X` is rendered as an inner box `Q` of its mesh's closed part
-//! `P` only when (checked each frame by `occluder_proxies::needed_clearance`):
-//! the instance and view transforms are affine; the projection's clip `z`
-//! and `w` do not depend on view `x` and `y` (perspective and orthographic
-//! projections); `X`'s world box is clear of the camera's near region, with
-//! every corner in front of the near plane (clip `z >= 1e-4 w`) and within
-//! 7900 pixels of the screen; and
-//! `Q`'s clearance `m` (mesh space: every triangle of `P` is at least `m`
-//! from `Q`), carried into view space as `m' = m / |M^-1|_F` (`M` the linear
-//! part of the mesh-to-view map; `1 / |M^-1|_F` is at most its smallest
-//! singular value, so no distance shrinks below that factor), exceeds `2 s`,
-//! where `s` is how far a point at the box's largest clip `w` moves in view
-//! space when its projection moves by 1/256 pixel on each axis at fixed depth
-//! (`s = w |L^-1|_F |(2/256W, 2/256H)|`, `L` the projection's upper-left 2x2).
-//! Then `Q` covers only pixels where `X` itself is drawn no farther than `Q`
-//! (below, `X` stands for the part `P` of it, whose triangles are `X`'s):
-//!
-//! - Snapping is a small motion. The buffer and the rasterizer draw the
-//!   triangles of `X` and of `Q` from snapped screen vertices, each within
-//!   1/512 pixel of its exact projection on each axis, plus the `f32` rounding
-//!   of clip coordinates (about `1e-4` pixel): within 1/256. Depth is not
-//!   snapped, and depth fixes clip `w`, so a vertex moved on screen at fixed
-//!   depth is a vertex moved in view space at fixed depth, by at most `s` (clip
-//!   `w` is affine, so no vertex of `X` lies deeper than the box's farthest
-//!   corner). Projection keeps triangles triangles in front of the eye, so
-//!   what is drawn is an exact picture of a moved mesh `X'` and a moved box
-//!   `Q'`, every point of each within `s` of where it was (a point of a
-//!   triangle is a convex combination of its corners). No triangle of either
-//!   is clipped (in front of the near plane, inside the guard band) or drawn
-//!   unsnapped by the buffer, so the buffer's coverage of `Q'` is the
-//!   rasterizer's.
-//! - Still inside. Along the straight motion of the vertices from `X`, `Q` to
-//!   `X'`, `Q'`, the box stays more than `m' - 2s > 0` from the surface, so it
-//!   never crosses it and stays inside by parity, as `Q` is inside `X`
-//!   ([`crate::inner_box`]). `X'` is closed as `X` is: welded vertices have
-//!   equal positions, so they project and snap alike.
-//! - An odd number of crossings. In screen space (pixel `x`, `y`, depth) take a
-//!   pixel centre `c` that the buffer covers with `Q'`, and the point `q` of
-//!   `Q'` over `c`. Every vertex of `X'` has depth `>= 0`, so the point over `c`
-//!   at depth `-1` is outside `X'`, and the segment from it to `q` crosses `X'`
-//!   an odd number of times: at least one triangle of `X'` covers `c` at a depth
-//!   at most `q`'s. (The top-left rule decides a centre on a shared edge for
-//!   exactly one of its triangles, as if the centre were moved off the edge
-//!   by an infinitesimal step, for `X'` and `Q'` alike, so the count holds
-//!   there too.) Objects are drawn two-sided, so that triangle is in `X`'s
-//!   image: `E(c) <= depth of Q' at c <=` the buffer's bound ("Depth
-//!   precision" above). An object visible at `c` is in front of `X` there,
-//!   so in front of the bound, and is tested visible. The `f32` rounding of
-//!   depth, which snapping does not move, is the rounding the tests allow
-//!   for above.
-//! - Where an instance's condition fails, it is rendered in full, as without
-//!   proxies; a box whose clearance falls short is left out. These conditions cost a few matrix products per occluder and
-//!   are not charged on the simulated clock.
 //!
 //! [`Camera::box_touches_near_region`]: crate::Camera::box_touches_near_region
 //! [`QUERY_DEPTH_BIAS`]: crate::query_box::QUERY_DEPTH_BIAS
