@@ -171,7 +171,7 @@ const OM: Experiment = Experiment {
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "om", "opt"],
-    compared: "methods compared",
+    compared: "Table 2",
     varied: "om",
     ideals: "opt (not in the paper): the per-instance lower bound, the instances owning a pixel, sorted by material",
     variant_tables: &[VariantTable { name: "variants", variants: &[("", &[]), ("", &["om.grouping=off"])] }],

@@ -162,6 +162,9 @@ mod tests {
         let t2 = table("chc", "Table 2").expect("CHC Table 2");
         assert_eq!(t2.row("teapots", "chc", "chc.tav=2 chc.nvp=25").unwrap().frame_ms, Some(55.90));
         assert!(table("chc", "Table 9").is_none() && table("om", "Table 1").is_none());
+        let om = table("om", "Table 2").expect("the occupancy-map paper's Table 2");
+        assert_eq!(om.row("city", "om", "").unwrap().frame_ms, Some(48.31));
+        assert_eq!(claims("om").next().map(|c| (c.slower.as_str(), c.ratio)), Some(("sw", Some(1.04))));
         let fig8 = table("chcpp", "Figure 8").expect("CHC++ Figure 8's source");
         assert!(fig8.source.contains("p. 229") && fig8.rows.is_empty(), "{}", fig8.source);
         let nohc = claims("chcpp").find(|c| c.slower == "nohc" && c.faster == "chcpp").expect("the 1.5x claim");
