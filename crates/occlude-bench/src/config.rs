@@ -177,11 +177,9 @@ impl BenchConfig {
         if !(0.0..=1.0).contains(&self.motion) {
             invalid!("--motion {} is out of range: expected a share of the instances from 0 to 1", self.motion);
         }
-        if !(self.update_policy.max_cost_ratio >= 1.0) {
-            invalid!(
-                "--rebuild-ratio {} is out of range: expected 1 or more (inf: never rebuild)",
-                self.update_policy.max_cost_ratio
-            );
+        let ratio = self.update_policy.max_cost_ratio;
+        if ratio.is_nan() || ratio < 1.0 {
+            invalid!("--rebuild-ratio {ratio} is out of range: expected 1 or more (inf: never rebuild)");
         }
         Ok(())
     }

@@ -162,6 +162,9 @@ pub struct Auto {
     /// Whether `fallback` is the backend's own model (a simulator's, whose
     /// bound on `vfc`'s time holds), not the default.
     modelled: bool,
+    /// Nodes the estimate of `vfc`'s time visited in `prepare`, charged to
+    /// the frame once it has begun.
+    estimate_steps: u64,
     /// Whether the fallback was announced.
     warned: bool,
     warnings: Vec<String>,
@@ -182,6 +185,7 @@ impl Auto {
             probing: false,
             fallback: CostModel::default(),
             modelled: false,
+            estimate_steps: 0,
             warned: false,
             warnings: Vec::new(),
         }
@@ -269,12 +273,13 @@ impl Auto {
     /// by the margin, the probe is put off as if it had lost at that time.
     /// This spares a frame of drawing everything in view where occlusion
     /// culling wins by far.
-    fn skip_hopeless_vfc_probe(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend) {
+    fn skip_hopeless_vfc_probe(&mut self, ctx: &FrameContext<'_>) {
         let (Some(probe), Some(mean)) = (&self.probe, self.mean) else { return };
         if !self.modelled || !self.choices[probe.choice].stateless {
             return;
         }
-        let bound = vfc_bound(ctx, backend, &self.fallback);
+        let (bound, steps) = vfc_bound(ctx, &self.fallback);
+        self.estimate_steps = steps;
         if bound >= mean * (1.0 - f64::from(self.params.margin)) {
             let choice = probe.choice;
             self.probe = None;
@@ -303,11 +308,10 @@ impl Auto {
 /// A lower bound of `vfc`'s frame time under `model`, ms: one draw call
 /// for each shown instance in the leaves in view, its triangles, the CPU's
 /// and the GPU's share overlapping (fragments and material switches left
-/// out). The walk is charged to `backend` as `vfc`'s is.
-fn vfc_bound(ctx: &FrameContext<'_>, backend: &mut dyn Backend, model: &CostModel) -> f64 {
+/// out); and the nodes its walk visited, to be charged as `vfc`'s walk is.
+fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel) -> (f64, u64) {
     let mut leaves = Vec::new();
     let visited = ctx.leaves_in_view(ctx.hierarchy.root(), &mut leaves);
-    backend.traverse(visited);
     let mut counted = vec![false; ctx.scene.instances.len()];
     let (mut draws, mut triangles) = (0u64, 0u64);
     for i in leaves.iter().flat_map(|&leaf| ctx.hierarchy.instances(leaf)) {
@@ -319,7 +323,7 @@ fn vfc_bound(ctx: &FrameContext<'_>, backend: &mut dyn Backend, model: &CostMode
     }
     let cpu = draws as f64 * model.cpu_draw_call_us;
     let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
-    cpu.max(gpu) * 1e-3
+    (cpu.max(gpu) * 1e-3, visited)
 }
 
 impl CullingMethod for Auto {
@@ -333,7 +337,7 @@ impl CullingMethod for Auto {
         }
         if self.probe.is_none() {
             self.probe = self.due().map(|choice| Probe { choice, times: Vec::new(), excess: 0.0 });
-            self.skip_hopeless_vfc_probe(ctx, backend);
+            self.skip_hopeless_vfc_probe(ctx);
         }
         self.probing = self.probe.is_some();
         self.running = self.probe.as_ref().map_or(self.current, |p| p.choice);
@@ -341,6 +345,10 @@ impl CullingMethod for Auto {
     }
 
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let steps = std::mem::take(&mut self.estimate_steps);
+        if steps > 0 {
+            backend.traverse(steps);
+        }
         self.choices[self.running].method.render(ctx, backend);
     }
 
