@@ -79,7 +79,8 @@
 //! # Limits
 //!
 //! - One colour attachment. A viewport is one rectangle of whole pixels;
-//!   no scissor. With MSAA a [`Culler`]'s frame may resolve several times
+//!   no scissor. The frame's first pass clears the whole views, not only
+//!   the viewport: draw other viewports of the same target after it. With MSAA a [`Culler`]'s frame may resolve several times
 //!   (each pass resolves when it ends).
 //! - [`GpuCuller`] runs the settings [`GpuCuller::check_method`] accepts,
 //!   and gives no statistics ([`GpuCuller::read_counts`] reads the lists'
