@@ -24,7 +24,7 @@ use occlude::methods::Method;
 use occlude::scenes::OwnMotion;
 use occlude::wgpu::embed::{AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, DRAW_FEATURES};
 use occlude::wgpu::embed::{VisibleList, RASTER_FEATURES};
-use occlude::{Camera, Keyframe, Scene};
+use occlude::{Camera, Instance, Keyframe, Scene};
 use std::error::Error;
 use wgpu::util::DeviceExt;
 
@@ -177,7 +177,11 @@ impl Renderer {
         let vertices = buffer("vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX);
         let indices = buffer("indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX);
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let instances = buffer("instances", bytemuck::cast_slice(&instance_data(&scene)), usage);
+        let instances = buffer(
+            "instances",
+            bytemuck::cast_slice(&scene.instances.iter().map(instance_data).collect::<Vec<_>>()),
+            usage,
+        );
         let uniforms = buffer("uniforms", &[0; 80], wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST);
         let [plain, listed] = layouts(&device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -267,10 +271,10 @@ impl Renderer {
         if changed.is_empty() {
             return Ok(());
         }
-        let data = instance_data(&self.scene);
         for &i in &changed {
             let row = std::mem::size_of::<InstanceData>() as u64 * u64::from(i);
-            self.queue.write_buffer(&self.draw.instances, row, bytemuck::bytes_of(&data[i as usize]));
+            let data = instance_data(&self.scene.instances[i as usize]);
+            self.queue.write_buffer(&self.draw.instances, row, bytemuck::bytes_of(&data));
         }
         if let Some(culling) = &mut self.culling {
             culling.update(&changes)?; // occlude: the frame's changes.
@@ -367,14 +371,10 @@ impl Renderer {
     }
 }
 
-/// The instances as the shader reads them: transforms, base colours and
-/// material ids.
-fn instance_data(scene: &Scene) -> Vec<InstanceData> {
-    scene
-        .instances
-        .iter()
-        .map(|i| InstanceData { transform: i.transform.to_cols_array(), color: material_color(i.material) })
-        .collect()
+/// An instance as the shader reads it: its transform, base colour and
+/// material id.
+fn instance_data(i: &Instance) -> InstanceData {
+    InstanceData { transform: i.transform.to_cols_array(), color: material_color(i.material) }
 }
 
 /// The base colour of material `m` (a hash of its id, light and
