@@ -157,11 +157,10 @@ pub struct Auto {
     frame: u64,
     /// Whether this frame runs a probe.
     probing: bool,
-    /// How the frame time is found when the backend reports none.
-    fallback: CostModel,
-    /// Whether `fallback` is the backend's own model (a simulator's, whose
-    /// bound on `vfc`'s time holds), not the default.
-    modelled: bool,
+    /// The backend's own cost model (a simulator's), if it has one: it
+    /// charges frames the backend reports no time for (else the default
+    /// model), and bounds `vfc`'s time.
+    model: Option<CostModel>,
     /// Nodes the estimate of `vfc`'s time visited in `prepare`, charged to
     /// the frame once it has begun.
     estimate_steps: u64,
@@ -183,8 +182,7 @@ impl Auto {
             last_ran: None,
             frame: 0,
             probing: false,
-            fallback: CostModel::default(),
-            modelled: false,
+            model: None,
             estimate_steps: 0,
             warned: false,
             warnings: Vec::new(),
@@ -218,8 +216,7 @@ impl Auto {
                 frames: 0,
             })
             .collect();
-        self.modelled = backend.cost_model().is_some();
-        self.fallback = backend.cost_model().unwrap_or_default();
+        self.model = backend.cost_model();
     }
 
     /// The frame's time in ms: the backend's, or modelled from its counts.
@@ -234,7 +231,7 @@ impl Auto {
                     .to_string(),
             );
         }
-        let m = self.fallback;
+        let m = self.model.unwrap_or_default();
         let render = m.render_us(stats.draw_calls, stats.triangles, stats.fragments as f64);
         let queries = stats.queries as f64 * m.cpu_query_us + stats.query_boxes as f64 * m.gpu_query_box_us;
         (render + queries) * 1e-3
@@ -275,10 +272,11 @@ impl Auto {
     /// culling wins by far.
     fn skip_hopeless_vfc_probe(&mut self, ctx: &FrameContext<'_>) {
         let (Some(probe), Some(mean)) = (&self.probe, self.mean) else { return };
-        if !self.modelled || !self.choices[probe.choice].stateless {
+        let Some(model) = &self.model else { return };
+        if !self.choices[probe.choice].stateless {
             return;
         }
-        let (bound, steps) = vfc_bound(ctx, &self.fallback);
+        let (bound, steps) = vfc_bound(ctx, model);
         self.estimate_steps = steps;
         if bound >= mean * (1.0 - f64::from(self.params.margin)) {
             let choice = probe.choice;
