@@ -260,7 +260,7 @@ impl DrawTables {
             packed,
             group_counts,
             groups: self.groups.clone(),
-            indexed: self.stride == 5,
+            stride: self.stride,
             buckets: self.buckets,
             count_draws: self.count_draws,
             passes: [sort, pack],
@@ -326,7 +326,8 @@ pub struct VisibleList {
     group_counts: wgpu::Buffer,
     /// Per group: its first bucket and its number of buckets.
     groups: Arc<[(u32, u32)]>,
-    indexed: bool,
+    /// Words per command: 5 for indexed draws, 4 for others.
+    stride: u32,
     buckets: u32,
     count_draws: bool,
     /// The sort's and the pack's bind groups.
@@ -390,7 +391,7 @@ impl VisibleList {
         }
         let offset = self.offset(first);
         let count_offset = 4 * u64::from(group);
-        if self.indexed {
+        if self.indexed() {
             pass.multi_draw_indexed_indirect_count(&self.packed, offset, &self.group_counts, count_offset, buckets);
         } else {
             pass.multi_draw_indirect_count(&self.packed, offset, &self.group_counts, count_offset, buckets);
@@ -406,7 +407,7 @@ impl VisibleList {
     /// One multi-draw of `count` bucket commands from bucket `first`.
     fn multi_draw(&self, pass: &mut wgpu::RenderPass<'_>, first: u32, count: u32) {
         let offset = self.offset(first);
-        match (self.indexed, count) {
+        match (self.indexed(), count) {
             (true, 1) => pass.draw_indexed_indirect(&self.commands, offset),
             (false, 1) => pass.draw_indirect(&self.commands, offset),
             (true, _) => pass.multi_draw_indexed_indirect(&self.commands, offset, count),
@@ -414,9 +415,14 @@ impl VisibleList {
         }
     }
 
+    /// Whether the commands are `DrawIndexedIndirectArgs`.
+    fn indexed(&self) -> bool {
+        self.stride == 5
+    }
+
     /// The byte offset of bucket `bucket`'s command.
     fn offset(&self, bucket: u32) -> u64 {
-        u64::from(bucket) * if self.indexed { 20 } else { 16 }
+        4 * u64::from(bucket * self.stride)
     }
 }
 
