@@ -33,9 +33,9 @@ pub struct QueryHandle(pub u32);
 ///
 /// A backend that wraps another (a decorator) must forward every call,
 /// the defaulted ones too: a default it forgets silently drops work.
-/// [`crate::mock::assert_forwards_every_call`] checks a decorator, and
-/// [`crate::mock::MockBackend`] logs every call of this trait: a method
-/// added here is added there too.
+/// With feature `mock`, `mock::assert_forwards_every_call` checks a
+/// decorator, and `mock::MockBackend` logs every call of this trait: a
+/// method added here is added there too.
 pub trait Backend {
     /// Starts a frame seen by `camera`: clears depth and statistics.
     fn begin_frame(&mut self, camera: &Camera);

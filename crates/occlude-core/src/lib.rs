@@ -9,7 +9,8 @@
 //! A method decides what to draw; a [`Backend`] draws and answers
 //! occlusion queries. Implement [`Backend`] for your renderer (frames,
 //! draws, queries and the image size are required; everything else has a
-//! default), or try a method on the [`mock::MockBackend`] as below: three
+//! default), or try a method on `mock::MockBackend` (feature `mock`, a
+//! backend without pixels that answers queries as scripted) as below: three
 //! boxes in a row, the middle one scripted hidden, culled by CHC++ seen
 //! through a reverse-Z camera.
 //!
@@ -67,6 +68,7 @@ pub mod inner_box;
 pub mod input_file;
 pub mod item_buffer;
 pub mod methods;
+#[cfg(feature = "mock")]
 pub mod mock;
 pub mod motion;
 pub mod path;

@@ -14,6 +14,7 @@
 //! | `soft` | yes | `occlude::soft`: a deterministic software GPU with a simulated clock |
 //! | `wgpu` | yes | `occlude::wgpu`: the wgpu backend (Vulkan, Metal, DX12) |
 //! | `scenes` | no | `occlude::scenes`: generated test scenes, glTF and OBJ importers |
+//! | `mock` | no | `occlude::mock`: a backend without pixels, answering queries as scripted, for tests |
 //!
 //! [`moc`] (the masked software occlusion buffer) and [`glam`] (the math types
 //! of the interface) are always there. With `default-features = false` the
@@ -79,9 +80,11 @@
 #![warn(missing_docs)]
 
 pub use glam;
-// The core's modules a user meets, and its main types at the root. Its test
-// and tool support (`mock`, `recording`, `rng`, `host_culling`,
-// `input_file`) stays in `occlude-core`.
+// The core's modules a user meets, and its main types at the root. Its
+// tool support (`recording`, `rng`, `host_culling`, `input_file`) stays in
+// `occlude-core`; its test backend comes with feature `mock`.
+#[cfg(feature = "mock")]
+pub use occlude_core::mock;
 pub use occlude_core::{
     backend, camera, cost_model, depth_pyramid, frame, geometry, gpu_culling, gvq, hierarchy, item_buffer, methods,
     motion, path, query_box, scene, stats,
