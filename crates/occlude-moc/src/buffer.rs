@@ -1,4 +1,15 @@
-//! The buffer: per-subtile coverage masks and two depth layers, and their update.
+//! The buffer: per-subtile coverage masks and two depth layers, and their
+//! update.
+//!
+//! A merge of a triangle (mask `C`, depth `t`) into the working layer (mask
+//! `M`, depth `w`) gives `M | C` the depth `max(w, t)`, which bounds both; the
+//! working layer is only discarded (its pixels falling back to the reference
+//! depth) while `w <= reference`, and a triangle at or beyond the reference
+//! depth is ignored, so the invariant `w <= reference` holds. A full mask moves
+//! the working depth into the reference layer.
+//!
+//! Pixels outside the screen (padding of the last tiles) count as covered by
+//! every triangle touching their subtile; tests never read them.
 
 /// How a subtile takes in a triangle's coverage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -1,4 +1,9 @@
 //! Near-plane clipping in clip space (wgpu: visible `0 <= z <= w`).
+//!
+//! Triangles are clipped to `z >= 0` in clip space before the divide, so no
+//! vertex behind the eye is projected; a clipped polygon with a vertex at
+//! `w <= 0` or beyond `10^9` pixels is not drawn (an occluder left out only
+//! makes the buffer cull less).
 
 use glam::Vec4;
 

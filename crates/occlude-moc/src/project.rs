@@ -1,6 +1,34 @@
 //! From clip space to the screen: near-plane clipping, the perspective divide,
 //! and the snapping of vertices to the rasterizer's sub-pixel grid that makes
-//! the buffer's coverage a subset of a rasterizer's (the crate doc, "Coverage").
+//! the buffer's coverage the rasterizer's.
+//!
+//! # Coverage
+//! A triangle's mask holds exactly the pixels the rasterizer covers with it,
+//! whatever the scene. Its vertices are projected as the rasterizer projects
+//! them (`f64` divide of the `f32` clip coordinates) and snapped to the same
+//! grid, the nearest multiple of `1 / 2^bits` pixel (halves away from zero); a
+//! pixel is covered when its centre passes the three edge functions of the
+//! snapped vertices, with the top-left rule on an edge (exactly one of two
+//! triangles sharing an edge takes a centre on it). With coordinates below
+//! `2^15` pixels and at most [`crate::MAX_SUBPIXEL_BITS`] bits every such edge
+//! function needs at most 49 significant bits, so `f64` evaluates it exactly:
+//! the buffer's test is the rasterizer's, decided identically. This holds for
+//! triangles in front of the near plane with their vertices within 8000 pixels
+//! of the screen (inside the soft backend's guard band, so that it does not
+//! clip them either). Any other triangle (crossing the near plane, or reaching
+//! farther out) is drawn unsnapped with its edges moved inward by 1/32 pixel,
+//! more than a rasterizer's own clipping and snapping move its edges on screen,
+//! so its mask lies within the rasterizer's coverage of its clipped polygon; it
+//! is rare (geometry at the camera) and its few cracks cost little culling.
+//!
+//! What a GPU must share for this: its vertices on the same grid points. A GPU
+//! computes clip coordinates and the projection in its own `f32` arithmetic, a
+//! few units in the last place (about `1e-4` pixel) from the buffer's; where
+//! that straddles a rounding tie of the grid, it snaps the vertex to the
+//! neighbouring point, and pixel centres within 1/256 pixel of that vertex's
+//! outer edges can then differ. The depth bounds below allow for such a step;
+//! coverage there is the one thing this argument assumes of a GPU rather than
+//! proves.
 
 use crate::clip::clip_near;
 use crate::raster::{CullMode, ScreenTriangle, Tolerance};

@@ -1,19 +1,48 @@
-//! Occluder rasterization, in MOC's 32x8-pixel tiles (HPG 2016 section 4):
-//! per tile row (two subtile rows), each edge's x-intercepts on the eight
-//! pixel rows, then per tile in reach the coverage masks of its eight
-//! subtiles by shifts of the rows' spans and their depth bounds from the
-//! triangle's plane, all eight at once ([`lanes`], in AVX2 where the CPU has
-//! it: [`avx2`]), loaded from and stored to the buffer's [`Tile`] in one go.
-//! With AVX2, triangles are set up four at a time ([`setup`]).
+//! Occluder rasterization, in MOC's 32x8-pixel tiles (HPG 2016 section 4): per
+//! tile row (two subtile rows), each edge's x-intercepts on the eight pixel
+//! rows, then per tile in reach the coverage masks of its eight subtiles by
+//! shifts of the rows' spans and their depth bounds from the triangle's plane,
+//! all eight at once ([`lanes`], in AVX2 where the CPU has it: [`avx2`]),
+//! loaded from and stored to the buffer's [`Tile`] in one go. With AVX2,
+//! triangles are set up four at a time ([`setup`]).
 //!
 //! Coverage is defined pixel by pixel by [`Edge::covers`] (the sign of an `f64`
 //! edge function at the pixel centre, with the top-left rule on the edge; of
-//! the snapped vertices, `crate::project`, exact). Along a row that
-//! function is monotone in `x` (every rounded operation is), so an edge's
-//! covered pixels are a half-line; its end is found from the intercept, and only
-//! the pixel centres within the intercept's proven error band ([`Edge::band`])
-//! are decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
+//! the snapped vertices, `crate::project`, exact). Along a row that function is
+//! monotone in `x` (every rounded operation is), so an edge's covered pixels
+//! are a half-line; its end is found from the intercept, and only the pixel
+//! centres within the intercept's proven error band ([`Edge::band`]) are
+//! decided by evaluating [`Edge::covers`] itself. Masks are therefore exactly
 //! what the pixel-by-pixel definition gives.
+//!
+//! # Depth bounds
+//! The depth plane is the one through the snapped vertices, raised by
+//! `(|dz/dx| + |dz/dy|) s` for a vertex displacement `s` of one grid step
+//! (1/32 pixel unsnapped). A rasterizer whose vertices lie within `s` of the buffer's
+//! interpolates, at a pixel `p` inside its triangle, the buffer's plane at the
+//! point whose barycentric weights in the buffer's triangle are `p`'s in its
+//! own (a convex combination of the vertex displacements away from `p`, so
+//! within `s` in x and in y): at most the raised plane at `p`. Over a subtile
+//! that is bounded by the raised plane's largest value at the subtile's four
+//! corners, capped by the farthest vertex (the depth is a convex combination of
+//! the vertices'). The buffer takes that bound for every subtile of a
+//! triangle's subtile row from one anchor, the first subtile of the triangle's
+//! window: the plane at the anchor's corner in `f64`, nudged farther by `2^-22`
+//! of itself (more than its rounding to the nearest `f32` can take back), plus,
+//! for the subtile `m` places to the right, `m` steps of an `f32` step never
+//! less than the plane's rise `8 dz/dx` from one corner to the next, with as
+//! many low significand bits zero as make `m` steps exact for every `m` on the
+//! screen (8 on a 1920-pixel-wide screen); that sum is rounded to `f32` and
+//! nudged farther by `2^-22` of itself, more than the sum's rounding took, and
+//! capped by the farthest vertex, itself rounded far.
+//!
+//! # Threads
+//! Inside a rayon pool of several threads, large triangle sets are binned by
+//! their vertices' rows to bands of tile rows (four bands a thread), in
+//! parallel chunks keeping only triangle indices. The bands are then set up and
+//! drawn in parallel, each taking its triangles in order; a triangle touching
+//! two bands is set up in both. The buffer and the work counted are the same
+//! whatever the threads.
 
 use crate::buffer::{MaskedBuffer, MergeMode, Tile};
 use crate::project::{screen_triangles, to_screen};
@@ -198,7 +227,7 @@ impl DepthPlane {
     /// The plane through `t`, raised by `(|zx| + |zy|) slack`: at every point at
     /// least the plane's value anywhere within `slack` pixels (in x and in y),
     /// so also the depth a rasterizer interpolates from vertices it placed up to
-    /// `slack` away from `t`'s (the crate doc, "Depth per subtile"), on a
+    /// `slack` away from `t`'s (the module doc, "Depth bounds"), on a
     /// screen `width` pixels wide.
     fn new(t: &[DVec3; 3], slack: f64, width: u32) -> Self {
         let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
@@ -276,8 +305,8 @@ impl DepthPlane {
     /// (exact) in `f32` ([`far_sum`]), capped by [`Self::far_max`]. The
     /// subtile's corner lies `8 m` to the right of the anchor's, so this is
     /// never nearer than the plane's largest value at its corners, nor than the
-    /// farthest vertex where that is nearer (the crate doc, "Depth per
-    /// subtile"). The rasterizer keeps the anchor's value for a tile row and
+    /// farthest vertex where that is nearer (the module doc, "Depth
+    /// bounds"). The rasterizer keeps the anchor's value for a tile row and
     /// adds the steps tile by tile ([`lanes::tile_lanes`]).
     #[inline]
     pub(crate) fn subtile_bound(&self, anchor: u32, tx: u32, by: f64, l: usize) -> f32 {
@@ -878,7 +907,7 @@ impl Bins {
 impl MaskedBuffer {
     /// Renders indexed occluder triangles, `model_to_clip` taking `positions` to
     /// clip space (wgpu conventions). Vertices are snapped to the sub-pixel
-    /// grid of [`set_subpixel_bits`](Self::set_subpixel_bits) (the crate doc,
+    /// grid of [`set_subpixel_bits`](Self::set_subpixel_bits) (`crate::project`,
     /// "Coverage"); triangles crossing the near plane are clipped; index
     /// triples with an out-of-range index, NaN vertices and zero-area
     /// triangles are skipped. Cost: per triangle, its pixel rows and the

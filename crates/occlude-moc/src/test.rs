@@ -1,11 +1,15 @@
 //! Occlusion tests against the buffer: screen rectangles and boxes.
 //!
+//! A rectangle's pixels are rounded outward, and it is visible when its nearest
+//! depth is strictly less than any bound it overlaps. If an exact buffer shows
+//! a pixel, `nearest < E(p) <= B(p)`, so the test says visible.
+//!
 //! A rectangle is read a tile row (two subtile rows) at a time straight from
-//! the tile storage, eight subtiles (one [`Tile`]) per step, compared in
-//! lanes (in AVX2 where the CPU has it, detected at run time: the `avx2`
-//! module), and the test stops at the first tile holding a subtile of the
-//! rectangle that may show it. The count of subtiles read is what a test's
-//! cost follows (`*_counted`).
+//! the tile storage, eight subtiles (one [`Tile`]) per step, compared in lanes
+//! (in AVX2 where the CPU has it, detected at run time: the `avx2` module), and
+//! the test stops at the first tile holding a subtile of the rectangle that may
+//! show it. The count of subtiles read is what a test's cost follows
+//! (`*_counted`).
 
 mod avx2;
 

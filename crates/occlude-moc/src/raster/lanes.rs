@@ -275,7 +275,7 @@ pub(crate) fn outside((width, height): (u32, u32), tx: u32, ty: u32) -> [u32; LA
 
 /// Adds the padding pixels `outside` (per lane: the pixels of its subtile
 /// beyond the screen) to the lanes of `cover` that cover something: padding
-/// counts as covered by every triangle touching its subtile (the crate doc).
+/// counts as covered by every triangle touching its subtile (`crate::buffer`).
 #[inline]
 pub(crate) fn add_outside(cover: &mut [u32; LANES], outside: &[u32; LANES]) {
     for (c, &o) in cover.iter_mut().zip(outside) {
