@@ -27,8 +27,9 @@
 //! the GPU", and in stage 2 it only chooses which queries share a round. Any
 //! error in the map therefore costs time (a needless query, a needless draw,
 //! a redundant query result), never a pixel. The correctness rule of
-//! `docs/design.md` holds by this argument, and `crates/occlude-cli/tests/om.rs` checks
-//! it on every frame of every small scene.
+//! `docs/design.md` holds by this argument, and
+//! `crates/occlude-bench/tests/om.rs` checks it on every frame of every small
+//! scene.
 //!
 //! # Marking rule (stage 1)
 //!
