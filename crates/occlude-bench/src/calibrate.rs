@@ -76,11 +76,11 @@ pub struct Calibration {
 }
 
 impl Calibration {
-    /// The model as a TOML file `--gpu-model` loads, with the adapter and the
-    /// check's ratios as comments.
+    /// The model as a TOML file `GpuModel::load` reads, with the adapter and
+    /// the check's ratios as comments.
     pub fn to_toml(&self) -> Result<String> {
         let mut text = format!(
-            "# GPU model measured by `occlude calibrate --backend wgpu` on {}.\n\
+            "# GPU model calibrated on the wgpu backend, adapter {}.\n\
              # cpu_node_us is not measured (CPU traversal cost): kept from the `modern` preset.\n",
             self.adapter
         );
