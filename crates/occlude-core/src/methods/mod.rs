@@ -29,7 +29,7 @@ mod tracked;
 pub mod vfc;
 
 pub use debug::{DebugView, NdcRect, NodeClass};
-pub use front_to_back::FrontToBack;
+pub use front_to_back::{FrontToBack, SortKey};
 pub use method::Method;
 pub use options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
 

@@ -11,8 +11,10 @@
 //! **Stage 2** queries the pending nodes in rounds of multiple occlusion
 //! queries (section 3.2): each round clears the map and walks the pending
 //! nodes front to back, taking a node into the round's test list when its
-//! rectangle overlaps no box already in the list and deferring it otherwise;
-//! all of a round's queries are issued before the first result is read.
+//! rectangle overlaps no box already in the list (with `om.overlap`, as the
+//! paper does: when it reaches a cell no box in the list covers) and
+//! deferring it otherwise; all of a round's queries are issued before the
+//! first result is read.
 //! Visible leaves are drawn, visible interior nodes' children become pending.
 //! After `n` such grouped rounds the remaining nodes are queried by brute
 //! force, every pending node in one round, and `n` for the next frame is
@@ -46,11 +48,15 @@
 //!
 //! # Deviations, stated
 //!
+//! Two defaults differ from the paper; `om.overlap` and `om.corner` restore
+//! its rule and order (`--paper om` runs with both, and beside ours).
 //! - Stage 2 takes a node into a round only when its rectangle overlaps *no*
 //!   marked cell, so no two boxes of a round overlap on screen and no query
 //!   of a round can be answered "visible" merely because a box in front of it
 //!   was not drawn yet. The paper admits a box when *any* of its cells is
 //!   clear, accepting partial overlaps.
+//! - Queues sort by the distance to a box's nearest point, which puts a box
+//!   around the eye first. The paper sorts by the box's nearest corner.
 //! - The paper does not state the map's resolution (section 3.1 promises it
 //!   "below" and never gives it). The default is one 64-bit word per row, 64
 //!   columns, with rows following the camera's aspect ratio (48 at 4:3).
@@ -61,6 +67,7 @@ pub mod occupancy;
 
 use super::{
     CullingMethod, DebugView, FrameContext, FrontToBack, MethodParams, NdcRect, NodeClass, OptionError, ParamVisitor,
+    SortKey,
 };
 use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
@@ -92,12 +99,21 @@ pub struct OmParams {
     /// `decay`: the factor of `n_{frame+1} = decay · m_frame` (section 4.2;
     /// the paper's 7/10).
     pub decay: f32,
+    /// `overlap`: a grouped round admits a box that reaches any cell no box
+    /// of the round covers, as the paper does (section 4.2); off, only a
+    /// box overlapping none of them, so a round's boxes never overlap.
+    pub overlap: bool,
+    /// `corner`: queues sort nodes by their box's nearest corner to the
+    /// eye, as the paper does (section 4.2); off, by the box's nearest
+    /// point.
+    pub corner: bool,
 }
 
-/// The paper's values.
+/// The paper's values, but for stage 2's rule and the queues' order
+/// (`overlap` and `corner` off; see the module documentation).
 impl Default for OmParams {
     fn default() -> Self {
-        Self { map_columns: 64, grouping: true, first_rounds: 5, decay: 0.7 }
+        Self { map_columns: 64, grouping: true, first_rounds: 5, decay: 0.7, overlap: false, corner: false }
     }
 }
 
@@ -108,7 +124,9 @@ impl MethodParams for OmParams {
         v.value("map", &mut self.map_columns, columns, |c| (1..=MAX_MAP_CELLS).contains(c))?;
         v.flag("grouping", &mut self.grouping)?;
         v.value("rounds", &mut self.first_rounds, "an integer from 0 to 10000 (rounds)", |&r| r <= 10_000)?;
-        v.value("decay", &mut self.decay, "a number from 0 to 1", |d| (0.0..=1.0).contains(d))
+        v.value("decay", &mut self.decay, "a number from 0 to 1", |d| (0.0..=1.0).contains(d))?;
+        v.flag("overlap", &mut self.overlap)?;
+        v.flag("corner", &mut self.corner)
     }
 }
 
@@ -197,8 +215,9 @@ impl CullingMethod for OccupancyMap {
         let mut view = self.debug.then(DebugView::default);
 
         // Stage 1: draw what reaches uncovered screen space, without queries.
-        let mut queue = FrontToBack::new();
-        let mut pending = FrontToBack::new();
+        let key = if self.params.corner { SortKey::NearestCorner } else { SortKey::NearestPoint };
+        let mut queue = FrontToBack::by(key);
+        let mut pending = FrontToBack::by(key);
         ctx.push_in_frustum(&[h.root()], &mut queue);
         let mut stage1_no_query = 0u64;
         while let Some(node) = queue.pop() {
@@ -227,7 +246,7 @@ impl CullingMethod for OccupancyMap {
         // first `n` rounds, then brute force.
         let allowed = if self.params.grouping { self.grouped_rounds } else { 0 };
         let mut rounds = 0u32;
-        let mut next = FrontToBack::new();
+        let mut next = FrontToBack::by(key);
         while !pending.is_empty() {
             let grouped = rounds < allowed;
             if grouped {
@@ -237,7 +256,14 @@ impl CullingMethod for OccupancyMap {
                 backend.traverse(1);
                 if grouped {
                     let rect = self.map.rect_of(&vp, h.bounds(node));
-                    if self.map.is_any_set(rect) {
+                    // A rectangle of no cells (nothing on screen) is admitted
+                    // by either rule: no box of the round can overlap it.
+                    let admitted = if self.params.overlap {
+                        rect.is_empty() || self.map.is_any_clear(rect)
+                    } else {
+                        !self.map.is_any_set(rect)
+                    };
+                    if !admitted {
                         next.push_node(h, node, ctx.camera.position);
                         continue;
                     }
@@ -289,6 +315,7 @@ mod tests {
     use super::*;
     use crate::methods::{create, MethodOptions};
     use crate::mock::Call;
+    use glam::Vec3;
 
     fn read(opts: &[&str]) -> Result<OmParams, OptionError> {
         let opts = MethodOptions::parse(opts).unwrap();
@@ -297,9 +324,16 @@ mod tests {
 
     #[test]
     fn parameters_have_the_paper_defaults_and_checked_ranges() {
-        assert_eq!(read(&[]), Ok(OmParams { map_columns: 64, grouping: true, first_rounds: 5, decay: 0.7 }));
-        let p = read(&["om.map=128", "om.grouping=off", "om.rounds=0", "om.decay=0.5"]).unwrap();
-        assert_eq!(p, OmParams { map_columns: 128, grouping: false, first_rounds: 0, decay: 0.5 });
+        let defaults =
+            OmParams { map_columns: 64, grouping: true, first_rounds: 5, decay: 0.7, overlap: false, corner: false };
+        assert_eq!(read(&[]), Ok(defaults));
+        let p =
+            read(&["om.map=128", "om.grouping=off", "om.rounds=0", "om.decay=0.5", "om.overlap=on", "om.corner=on"]);
+        let p = p.unwrap();
+        assert_eq!(
+            p,
+            OmParams { map_columns: 128, grouping: false, first_rounds: 0, decay: 0.5, overlap: true, corner: true }
+        );
         for (bad, range) in [
             ("om.map=0", "om.map = 0: expected an integer from 1 to 1024"),
             ("om.map=1025", "om.map = 1025: expected an integer from 1 to 1024"),
@@ -342,5 +376,29 @@ mod tests {
         let first_query = calls.iter().position(|c| matches!(c, Call::IssueQuery { .. })).unwrap();
         let wall_drawn = calls.iter().position(|c| matches!(c, Call::Draw(i) if i.contains(&WALL))).unwrap();
         assert!(wall_drawn < first_query, "the wall is drawn before the query behind it");
+    }
+
+    /// Two cubes behind a wall, overlapping on screen by half, the nearer
+    /// one visible through a hole: their parent is queried first (one
+    /// round), then our rule queries them in two rounds (the second
+    /// overlaps the first), the paper's (`om.overlap`) in one (the second
+    /// reaches cells the first leaves clear). Both draw the same.
+    #[test]
+    fn the_papers_rule_admits_partly_overlapping_boxes_to_one_round() {
+        let wall = Aabb::new(Vec3::new(-3.0, -3.0, 1.5), Vec3::new(3.0, 3.0, 2.5));
+        let a = Aabb::new(Vec3::new(-1.0, -0.5, -3.5), Vec3::new(0.0, 0.5, -2.5));
+        let b = Aabb::new(Vec3::new(-0.5, -0.5, -6.5), Vec3::new(0.5, 0.5, -5.5));
+        let rig = Rig::new(&[wall, a, b], 1);
+        let rounds = |options: &[&str]| {
+            let mut mock = rig.mock();
+            mock.set_visible(2, false);
+            let mut om = method("om", options);
+            let calls = &rig.run(&mut om, &mut mock, 1)[0];
+            assert_draws_exactly(calls, &[0, 1]);
+            let counters = om.method.counters();
+            counters.iter().find(|(k, _)| *k == "stage2_rounds").map(|&(_, v)| v).unwrap()
+        };
+        assert_eq!(rounds(&[]), 3.0);
+        assert_eq!(rounds(&["om.overlap=on"]), 2.0);
     }
 }
