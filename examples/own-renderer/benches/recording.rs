@@ -1,8 +1,10 @@
 //! The CPU time a `GpuCuller` (`hiz`) adds to a frame: recording its two
 //! phases into the renderer's encoder, for 1,000, 100,000 and 1,000,000
-//! static instances of 50 meshes. The submission and the GPU's work are
-//! waited for outside the timed part. Needs a GPU adapter (lavapipe will do); without
-//! one it says so and measures nothing.
+//! static instances of 50 meshes. `submitted`: each frame is submitted and
+//! the GPU's work waited for outside the timed part, as in a renderer.
+//! `alone`: nothing is submitted, so the recording runs without the GPU's
+//! work before it (on lavapipe that work runs on the same CPU). Needs a GPU
+//! adapter (lavapipe will do); without one it says so and measures nothing.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use occlude::glam::{Mat4, Vec3};
@@ -60,23 +62,28 @@ fn recording(c: &mut Criterion) {
         let draws = Draws::Meshes { meshes: meshes.collect(), instances };
         let hiz: Method = "hiz".parse().expect("a method");
         let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &hiz, draws).expect("a culler");
-        group.bench_function(BenchmarkId::from_parameter(n), |b| {
-            b.iter_custom(|iterations| {
-                let mut spent = Duration::ZERO;
-                for _ in 0..iterations {
-                    let start = Instant::now();
-                    let mut encoder = device.create_command_encoder(&Default::default());
-                    let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
-                    culler.encode_early(&mut encoder, &camera, &target).expect("early phase");
-                    culler.encode_late(&mut encoder, &target).expect("late phase");
-                    let commands = encoder.finish();
-                    spent += start.elapsed();
-                    queue.submit([commands]);
-                    device.poll(wgpu::PollType::wait_indefinitely()).expect("the GPU finishes");
-                }
-                spent
-            })
-        });
+        for submitted in [true, false] {
+            let id = BenchmarkId::new(if submitted { "submitted" } else { "alone" }, n);
+            group.bench_function(id, |b| {
+                b.iter_custom(|iterations| {
+                    let mut spent = Duration::ZERO;
+                    for _ in 0..iterations {
+                        let start = Instant::now();
+                        let mut encoder = device.create_command_encoder(&Default::default());
+                        let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
+                        culler.encode_early(&mut encoder, &camera, &target).expect("early phase");
+                        culler.encode_late(&mut encoder, &target).expect("late phase");
+                        let commands = encoder.finish();
+                        spent += start.elapsed();
+                        if submitted {
+                            queue.submit([commands]);
+                            device.poll(wgpu::PollType::wait_indefinitely()).expect("the GPU finishes");
+                        }
+                    }
+                    spent
+                })
+            });
+        }
     }
     group.finish();
 }

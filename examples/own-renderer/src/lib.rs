@@ -14,14 +14,18 @@
 //! The lines that integrate occlude are marked `occlude:` (counted in
 //! the README).
 
+mod timer;
+
 use glam::{Mat4, Vec3};
 use occlude::methods::Method;
 use occlude::wgpu::embed::{
-    AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, Viewport, VisibleList, DRAW_FEATURES,
-    RASTER_FEATURES,
+    AnyCuller, Attachments, Draws, FrameTarget, IndirectDraw, InstanceDraw, PassCounts, Viewport, VisibleList,
+    DRAW_FEATURES, RASTER_FEATURES,
 };
 use occlude::{Aabb, Camera};
 use std::error::Error;
+use timer::Timer;
+pub use timer::{GpuTimes, TIMER_FEATURES};
 use wgpu::util::DeviceExt;
 
 /// Colour format of the off-screen image.
@@ -91,6 +95,9 @@ pub struct Renderer {
     depth: wgpu::Texture,
     /// occlude: the culling method, when culling is on.
     culling: Option<AnyCuller>,
+    /// Timestamps around a GPU-driven frame's passes, when asked for
+    /// ([`Renderer::time_gpu`]).
+    timer: Option<Timer>,
 }
 
 /// What the renderer draws with: pipelines, bind groups, buffers, and each
@@ -145,11 +152,11 @@ impl DrawState {
 }
 
 /// A device and queue on the first adapter wgpu finds (`WGPU_BACKEND` and
-/// `WGPU_ADAPTER_NAME` narrow the choice), with the features occlude uses
-/// where the adapter has them.
+/// `WGPU_ADAPTER_NAME` narrow the choice), with the features occlude and
+/// the GPU timer use where the adapter has them.
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue), Box<dyn Error>> {
     // occlude: the features `roc` and `ioc` need (forced early depth tests), and those of multi-mesh draws.
-    open_device_with(RASTER_FEATURES | DRAW_FEATURES)
+    open_device_with(RASTER_FEATURES | DRAW_FEATURES | TIMER_FEATURES)
 }
 
 /// A device and queue as [`open_device`], with those of `wanted` that the
@@ -229,6 +236,7 @@ impl Renderer {
             resolved,
             depth,
             culling: None,
+            timer: None,
         }
     }
 
@@ -243,6 +251,33 @@ impl Renderer {
             wgpu::CompareFunction::GreaterEqual
         } else {
             wgpu::CompareFunction::Less
+        }
+    }
+
+    /// Times each GPU-driven frame's culling passes and drawing passes on
+    /// the GPU from now on ([`Renderer::gpu_times`]), or stops. A device
+    /// without [`TIMER_FEATURES`] is an error.
+    pub fn time_gpu(&mut self, on: bool) -> Result<(), Box<dyn Error>> {
+        self.timer = if on {
+            Some(Timer::new(&self.device, &self.queue).ok_or("the device lacks timestamp queries between passes")?)
+        } else {
+            None
+        };
+        Ok(())
+    }
+
+    /// The last GPU-driven frame's GPU times (blocking), when timed
+    /// ([`Renderer::time_gpu`]).
+    pub fn gpu_times(&self) -> Result<Option<GpuTimes>, Box<dyn Error>> {
+        self.timer.as_ref().map(|t| t.read(&self.device)).transpose()
+    }
+
+    /// The passes and dispatches the last frame's GPU-driven culling
+    /// recorded; `None` with culling off or query-driven.
+    pub fn pass_counts(&self) -> Option<PassCounts> {
+        match &self.culling {
+            Some(AnyCuller::Gpu(culler)) => Some(culler.pass_counts()),
+            _ => None,
         }
     }
 
@@ -280,32 +315,13 @@ impl Renderer {
         let color = self.color.create_view(&Default::default());
         let resolve = self.resolved.as_ref().map(|t| t.create_view(&Default::default()));
         let depth = self.depth.create_view(&Default::default());
+        let views = Views { color: &color, resolve: resolve.as_ref(), depth: &depth };
         let Some(culling) = self.culling.as_mut() else {
             // Culling off: one pass, every instance drawn.
             let mut encoder = self.device.create_command_encoder(&Default::default());
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color,
-                    depth_slice: None,
-                    resolve_target: resolve.as_ref(),
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(CLEAR_COLOR), store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(if self.options.reverse_z { 0.0 } else { 1.0 }),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
-            if let Some(v) = self.options.viewport {
-                pass.set_viewport(v.x as f32, v.y as f32, v.width as f32, v.height as f32, 0.0, 1.0);
-            }
             let n = self.instance_count();
-            self.draw.instances(&mut pass, &(0..n).collect::<Vec<_>>());
-            drop(pass);
+            let all: Vec<u32> = (0..n).collect();
+            self.draw.instances(&mut begin_pass(&mut encoder, &views, self.options, true), &all);
             self.queue.submit([encoder.finish()]);
             return Ok(u64::from(n));
         };
@@ -317,20 +333,37 @@ impl Renderer {
             viewport: self.options.viewport,
             ..FrameTarget::new(Some(&color), CLEAR_COLOR, &depth)
         };
-        let mut drawn = 0u64;
-        // A query-driven method draws lists of instances, a GPU-driven one
-        // lists on the GPU with one multi-draw per pipeline.
         let draw = &self.draw;
-        let draw_instances = |pass: &mut wgpu::RenderPass<'_>, instances: &[u32]| {
-            draw.instances(pass, instances);
-            drawn += instances.len() as u64;
+        let culler = match culling {
+            // A query-driven method draws lists of instances in its passes.
+            AnyCuller::Queries(culler) => {
+                let mut drawn = 0u64;
+                culler.render(&camera, target, |pass, instances| {
+                    draw.instances(pass, instances);
+                    drawn += instances.len() as u64;
+                })?;
+                return Ok(drawn);
+            }
+            AnyCuller::Gpu(culler) => culler,
         };
-        culling.render(&camera, target, draw_instances, |pass, list| draw.list(pass, list))?;
-        if let AnyCuller::Gpu(culler) = culling {
-            // The lists' lengths, read back for the printout and the test
-            // (the frame itself reads nothing back).
-            drawn = culler.read_counts()?.iter().map(|&n| u64::from(n)).sum();
-        }
+        // A GPU-driven one records its two phases into this renderer's
+        // encoder, around the passes drawing its lists with one multi-draw
+        // per pipeline; timestamps between them when timed.
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        let stamp = |encoder: &mut wgpu::CommandEncoder, k| self.timer.iter().for_each(|t| t.stamp(encoder, k));
+        stamp(&mut encoder, 0);
+        culler.encode_early(&mut encoder, &camera, &target)?;
+        stamp(&mut encoder, 1);
+        draw.list(&mut begin_pass(&mut encoder, &views, self.options, true), &culler.lists()[0]);
+        stamp(&mut encoder, 2);
+        culler.encode_late(&mut encoder, &target)?;
+        stamp(&mut encoder, 3);
+        draw.list(&mut begin_pass(&mut encoder, &views, self.options, false), &culler.lists()[1]);
+        stamp(&mut encoder, 4);
+        self.queue.submit([encoder.finish()]);
+        // The lists' lengths, read back for the printout and the test (the
+        // frame itself reads nothing back).
+        let drawn = culler.read_counts()?.iter().map(|&n| u64::from(n)).sum();
         // occlude: end.
         Ok(drawn)
     }
@@ -412,6 +445,48 @@ impl Renderer {
         let bytes = buffer.slice(..).get_mapped_range()?.to_vec();
         Ok(bytes.chunks_exact(padded as usize).flat_map(|r| &r[..row as usize]).copied().collect())
     }
+}
+
+/// The views a frame draws into.
+struct Views<'a> {
+    color: &'a wgpu::TextureView,
+    /// With MSAA, the single-sample view the colour resolves into.
+    resolve: Option<&'a wgpu::TextureView>,
+    depth: &'a wgpu::TextureView,
+}
+
+/// A render pass on `views`, clearing them (`clear`) or loading what is
+/// there, in the viewport of `options`.
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    views: &Views<'_>,
+    options: Options,
+    clear: bool,
+) -> wgpu::RenderPass<'e> {
+    let far = if options.reverse_z { 0.0 } else { 1.0 };
+    let (color_load, depth_load) = if clear {
+        (wgpu::LoadOp::Clear(CLEAR_COLOR), wgpu::LoadOp::Clear(far))
+    } else {
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+    };
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: views.color,
+            depth_slice: None,
+            resolve_target: views.resolve,
+            ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: views.depth,
+            depth_ops: Some(wgpu::Operations { load: depth_load, store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    });
+    if let Some(v) = options.viewport {
+        pass.set_viewport(v.x as f32, v.y as f32, v.width as f32, v.height as f32, 0.0, 1.0);
+    }
+    pass
 }
 
 /// The mesh vertex buffer's layout (position, normal).

@@ -2,10 +2,12 @@
 //! or with occlude methods (several in one run, one after the other:
 //! query-driven or GPU-driven),
 //! printing what each frame drew and how long it took until the GPU was
-//! idle, and writes the last frame as a PNG.
+//! idle (with `--gpu-time`, a GPU-driven method's culling passes and
+//! drawing passes timed on the GPU), and writes the last frame as a PNG.
 //!
 //! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc]
-//! [--frames N] [--grid N] [--meshes N] [--msaa SAMPLES] [--viewport X,Y,W,H] [--size PIXELS] [--reverse-z] [--depth24] [--out FILE.png]`
+//! [--frames N] [--grid N] [--meshes N] [--msaa SAMPLES] [--viewport X,Y,W,H] [--size PIXELS] [--reverse-z] [--depth24]
+//! [--gpu-time] [--out FILE.png]`
 
 use occlude::wgpu::embed::Viewport;
 use own_renderer::{open_device, Options, Renderer};
@@ -25,6 +27,7 @@ fn run() -> Result<(), Box<dyn Error>> {
     let mut options =
         Options { size: 512, grid: 60, reverse_z: false, depth_format, meshes: 4, samples: 1, viewport: None };
     let (mut culling, mut frames, mut out) = (String::from("chcpp"), 8u32, PathBuf::from("own-renderer.png"));
+    let mut gpu_time = false;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         let mut value = || args.next().ok_or_else(|| format!("{arg} needs a value"));
@@ -39,6 +42,7 @@ fn run() -> Result<(), Box<dyn Error>> {
             "--out" => out = value()?.into(),
             "--reverse-z" => options.reverse_z = true,
             "--depth24" => options.depth_format = wgpu::TextureFormat::Depth24Plus,
+            "--gpu-time" => gpu_time = true,
             _ => return Err(format!("unknown argument '{arg}' (see the README)").into()),
         }
     }
@@ -50,9 +54,10 @@ fn run() -> Result<(), Box<dyn Error>> {
     }
     let (device, queue) = open_device()?;
     let mut renderer = Renderer::new(device, queue, options);
+    renderer.time_gpu(gpu_time)?;
     for mode in culling.split(',') {
         renderer.set_culling((mode != "off").then(|| mode.parse()).transpose()?)?;
-        let (mut total_ms, mut total_drawn) = (0.0, 0);
+        let (mut total_ms, mut total_drawn, mut total_gpu) = (0.0, 0, (0.0, 0.0));
         for frame in 0..frames {
             let t = if frames > 1 { frame as f32 / (frames - 1) as f32 } else { 0.0 };
             let start = Instant::now();
@@ -62,13 +67,28 @@ fn run() -> Result<(), Box<dyn Error>> {
             total_ms += ms;
             total_drawn += drawn;
             let n = renderer.instance_count();
-            println!("frame {frame}: culling {mode}, drew {drawn} of {n} instances in {ms:.2} ms");
+            let mut line = format!("frame {frame}: culling {mode}, drew {drawn} of {n} instances in {ms:.2} ms");
+            if let Some(p) = renderer.pass_counts() {
+                let (compute, render, dispatches) = (p.compute_passes, p.render_passes, p.dispatches);
+                line += &format!("; {compute} compute and {render} render passes, {dispatches} dispatches");
+                if let Some(gpu) = renderer.gpu_times()? {
+                    line += &format!("; GPU: culling {:.2} ms, drawing {:.2} ms", gpu.culling_ms, gpu.drawing_ms);
+                    total_gpu = (total_gpu.0 + gpu.culling_ms, total_gpu.1 + gpu.drawing_ms);
+                }
+            }
+            println!("{line}");
         }
         let drawn = total_drawn as f64 / f64::from(frames);
-        println!(
+        let mut line = format!(
             "culling {mode}: {drawn:.0} instances drawn and {:.2} ms per frame on average",
             total_ms / f64::from(frames)
         );
+        if total_gpu.0 > 0.0 {
+            let per_frame = |ms: f64| ms / f64::from(frames);
+            line +=
+                &format!("; GPU: culling {:.2} ms, drawing {:.2} ms", per_frame(total_gpu.0), per_frame(total_gpu.1));
+        }
+        println!("{line}");
     }
     renderer.save_png(&out)?;
     println!("wrote {}", out.display());

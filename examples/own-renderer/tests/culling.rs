@@ -140,6 +140,43 @@ fn culling_keeps_the_image_of_two_hundred_meshes() {
     culling_keeps_the_image_on(&device, &queue, options);
 }
 
+/// The culling passes and dispatches of every frame of the walk are the
+/// same for one mesh and for two hundred, over the same instances, for
+/// `hiz`, `roc` and `ioc`, and the same on every frame; and there are some
+/// (render passes for the box tests of `roc` and `ioc`).
+#[test]
+fn culling_passes_are_the_same_for_one_mesh_and_two_hundred() {
+    let Some((device, queue)) = device("culling_passes_are_the_same_for_one_mesh_and_two_hundred") else { return };
+    for method in GPU_METHODS {
+        let [one, many] = [1, 200].map(|meshes| {
+            let options = Options {
+                size: 256,
+                grid: 24,
+                reverse_z: false,
+                depth_format: DEPTH,
+                meshes,
+                samples: 1,
+                viewport: None,
+            };
+            let mut renderer = Renderer::new(device.clone(), queue.clone(), options);
+            renderer.set_culling(Some(method.parse().unwrap())).unwrap();
+            (0..FRAMES)
+                .map(|frame| {
+                    renderer.render(frame as f32 / (FRAMES - 1) as f32).unwrap();
+                    renderer.pass_counts().unwrap()
+                })
+                .collect::<Vec<_>>()
+        });
+        assert_eq!(one, many, "{method}: the passes of 1 mesh, then of 200");
+        // Counted per frame: the same on every frame of a static scene.
+        assert!(one.windows(2).all(|w| w[0] == w[1]), "{method}: {one:?}");
+        for counts in &one {
+            assert!(counts.compute_passes > 0 && counts.dispatches >= counts.compute_passes, "{method}: {counts:?}");
+            assert_eq!(counts.render_passes > 0, method != "hiz", "{method}: {counts:?}");
+        }
+    }
+}
+
 /// Without `MULTI_DRAW_INDIRECT_COUNT` each group's multi-draw runs over
 /// all its meshes' commands, those without visible instances empty: the
 /// images are still those of culling off.

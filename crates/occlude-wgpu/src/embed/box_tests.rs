@@ -11,10 +11,11 @@
 //! the renderer's compare function, each fragment that passes setting its
 //! box's flag.
 
-use super::backend::{begin_pass, write_query_camera, PassStart};
+use super::backend::{write_query_camera, PassStart};
+use super::passes::Tally;
 use super::{Attachments, FrameTarget};
 use crate::context::GpuContext;
-use crate::culling::{bind_group, storage_init, workgroups};
+use crate::culling::{bind_group, storage_init};
 use crate::pipelines::{build_pipeline, compute_pipeline, Targets, Variant, QUERY};
 use crate::query_boxes::{box_index_buffer, camera_buffer, BOX_BYTES, BOX_INDEX_COUNT};
 use occlude_core::Camera;
@@ -132,24 +133,19 @@ impl BoxTests {
 
     /// Records `test` against the depth of `target` as everything recorded
     /// before leaves it: the append dispatch, then the boxes' draw in a
-    /// pass of its own.
+    /// pass of its own; both passes counted in `tally`.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        tally: &Tally,
         target: &FrameTarget<'_>,
         attachments: &Attachments,
         test: &BoxTest,
     ) {
         // Zero the draw's instance count, which the append counts up.
         encoder.clear_buffer(&self.draw, 4, Some(4));
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.append);
-            pass.set_bind_group(0, &test.append, &[]);
-            let (x, y) = workgroups(test.capacity);
-            pass.dispatch_workgroups(x, y, 1);
-        }
-        let mut pass = begin_pass(encoder, target, attachments, PassStart::TestDepth, None);
+        tally.compute_pass(encoder).dispatch(&self.append, &test.append, test.capacity);
+        let mut pass = tally.render_pass(encoder, target, attachments, PassStart::TestDepth);
         pass.set_pipeline(&self.raster);
         pass.set_bind_group(0, &self.draw_group, &[]);
         pass.set_bind_group(1, &test.flags, &[]);

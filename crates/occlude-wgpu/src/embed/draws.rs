@@ -4,9 +4,10 @@
 //! (`draws.wgsl`). A group is drawn with one multi-draw, whatever the
 //! number of meshes; the culling passes do not grow with it either.
 
+use super::passes::ComputePass;
 use super::EmbedError;
 use crate::context::GpuContext;
-use crate::culling::{bind_group, storage_init, workgroups};
+use crate::culling::{bind_group, storage_init};
 use crate::pipelines::compute_pipeline;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -279,17 +280,11 @@ impl DrawTables {
     /// Records `list`'s commands into `pass`, after its compaction: the
     /// list's `n` possible entries sorted into buckets, then (with counts)
     /// the non-empty buckets packed.
-    pub(super) fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, list: &VisibleList, n: u32) {
+    pub(super) fn dispatch(&self, pass: &mut ComputePass<'_>, list: &VisibleList, n: u32) {
         let [sort, pack] = &list.passes;
-        pass.set_pipeline(&self.sort);
-        pass.set_bind_group(0, sort, &[]);
-        let (x, y) = workgroups(n);
-        pass.dispatch_workgroups(x, y, 1);
+        pass.dispatch(&self.sort, sort, n);
         if self.count_draws {
-            pass.set_pipeline(&self.pack);
-            pass.set_bind_group(0, pack, &[]);
-            let (x, y) = workgroups(self.buckets);
-            pass.dispatch_workgroups(x, y, 1);
+            pass.dispatch(&self.pack, pack, self.buckets);
         }
     }
 }

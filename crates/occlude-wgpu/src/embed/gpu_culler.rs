@@ -43,11 +43,12 @@ use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
 use super::draws::{DrawTables, Draws, VisibleList};
 use super::node_levels::{NodeLevels, WalkInputs};
+use super::passes::{PassCounts, Tally};
 use super::{Attachments, EmbedError, FrameTarget};
 use crate::context::GpuContext;
 use crate::culling::{
-    bind_group, box_set_buffer, cull_camera_buffer, cull_module, dispatch_reductions, param_buffer, storage_init,
-    workgroups, write_boxes, write_cull_camera, PyramidBuffers,
+    bind_group, box_set_buffer, cull_camera_buffer, cull_module, param_buffer, storage_init, write_boxes,
+    write_cull_camera, PyramidBuffers,
 };
 use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
@@ -194,6 +195,8 @@ pub struct GpuCuller {
     /// The camera of a frame whose early phase is recorded and late phase
     /// not yet.
     frame_camera: Option<Camera>,
+    /// The passes and dispatches recorded since the last early phase.
+    tally: Tally,
 }
 
 impl GpuCuller {
@@ -351,6 +354,7 @@ impl GpuCuller {
             }),
             ctx,
             frame_camera: None,
+            tally: Tally::default(),
         })
     }
 
@@ -490,10 +494,12 @@ impl GpuCuller {
             self.draws.reset(encoder, list);
         }
         encoder.clear_buffer(&self.flags[now], 0, None);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[now], self.instance_count());
-        dispatch(&mut pass, &self.compact_early.0, &self.compact_early.1[now], self.instance_count());
-        self.draws.dispatch(&mut pass, &self.lists[0], self.instance_count());
+        self.tally.reset();
+        let n = self.instance_count();
+        let mut pass = self.tally.compute_pass(encoder);
+        pass.dispatch(&self.drop_outside.0, &self.drop_outside.1[now], n);
+        pass.dispatch(&self.compact_early.0, &self.compact_early.1[now], n);
+        self.draws.dispatch(&mut pass, &self.lists[0], n);
         drop(pass);
         self.frame_camera = Some(*camera);
         Ok(())
@@ -521,24 +527,24 @@ impl GpuCuller {
             LateTest::Pyramid(_) => self.encode_pyramid_test(encoder, target, now),
             LateTest::Every(tests, every) => {
                 tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
-                tests.encode(encoder, target, &self.attachments, &every[now]);
+                tests.encode(encoder, &self.tally, target, &self.attachments, &every[now]);
             }
             LateTest::Nodes(tests, levels, _) => {
                 tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
-                levels.encode(encoder, tests, target, &self.attachments, now);
+                levels.encode(encoder, &self.tally, tests, target, &self.attachments, now);
             }
         }
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            if matches!(self.late, LateTest::Nodes(..)) {
-                // `ioc.frustum`: the instances below a visible node that lie
-                // outside the frustum (the drop's groups of parity `before`
-                // clear this frame's flags).
-                dispatch(&mut pass, &self.drop_outside.0, &self.drop_outside.1[before], self.instance_count());
-            }
-            dispatch(&mut pass, &self.compact_late.0, &self.compact_late.1[now], self.instance_count());
-            self.draws.dispatch(&mut pass, &self.lists[1], self.instance_count());
+        let n = self.instance_count();
+        let mut pass = self.tally.compute_pass(encoder);
+        if matches!(self.late, LateTest::Nodes(..)) {
+            // `ioc.frustum`: the instances below a visible node that lie
+            // outside the frustum (the drop's groups of parity `before`
+            // clear this frame's flags).
+            pass.dispatch(&self.drop_outside.0, &self.drop_outside.1[before], n);
         }
+        pass.dispatch(&self.compact_late.0, &self.compact_late.1[now], n);
+        self.draws.dispatch(&mut pass, &self.lists[1], n);
+        drop(pass);
         self.parity = before;
         Ok(())
     }
@@ -578,6 +584,15 @@ impl GpuCuller {
         let bytes = take_bytes(&self.counts_staging, 8).map_err(EmbedError::Device)?;
         let word = |k: usize| u32::from_le_bytes([bytes[4 * k], bytes[4 * k + 1], bytes[4 * k + 2], bytes[4 * k + 3]]);
         Ok([word(0), word(1)])
+    }
+
+    /// The compute passes, render passes and dispatches the last frame
+    /// recorded (counted from [`GpuCuller::encode_early`] on). An
+    /// instrument, for tests and printouts. They do not grow with the
+    /// number of meshes or draw groups; `hiz`'s grow with the pyramid's
+    /// levels, `ioc`'s with the levels of its BVH.
+    pub fn pass_counts(&self) -> PassCounts {
+        self.tally.counts()
     }
 
     /// Instances culled: one per box given.
@@ -640,10 +655,12 @@ impl GpuCuller {
                 },
             ],
         });
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        dispatch(&mut pass, &p.base, &base, pyramid.buffers.counts[0]);
-        dispatch_reductions(&mut pass, &p.reduce, &pyramid.reductions, &pyramid.buffers.counts);
-        dispatch(&mut pass, &p.test, &pyramid.tests[now], n);
+        let mut pass = self.tally.compute_pass(encoder);
+        pass.dispatch(&p.base, &base, pyramid.buffers.counts[0]);
+        for (group, &texels) in pyramid.reductions.iter().zip(&pyramid.buffers.counts[1..]) {
+            pass.dispatch(&p.reduce, group, texels);
+        }
+        pass.dispatch(&p.test, &pyramid.tests[now], n);
     }
 }
 
@@ -655,14 +672,6 @@ fn parity_groups<'a>(
     entries: impl Fn(usize) -> Vec<(u32, &'a wgpu::Buffer)>,
 ) -> [wgpu::BindGroup; 2] {
     [0, 1].map(|p| bind_group(ctx, "hiz", &pipeline.get_bind_group_layout(0), &entries(p)))
-}
-
-/// One dispatch of `pipeline` with `group` over `threads` threads.
-fn dispatch(pass: &mut wgpu::ComputePass<'_>, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, threads: u32) {
-    pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, group, &[]);
-    let (x, y) = workgroups(threads);
-    pass.dispatch_workgroups(x, y, 1);
 }
 
 /// Whether `device` can run the culling passes: compute shaders with

@@ -84,7 +84,8 @@
 //!   (each pass resolves when it ends).
 //! - [`GpuCuller`] runs the settings [`GpuCuller::check_method`] accepts,
 //!   and gives no statistics ([`GpuCuller::read_counts`] reads the lists'
-//!   lengths back, for tests).
+//!   lengths back, for tests; [`GpuCuller::pass_counts`] counts the passes
+//!   and dispatches it recorded).
 //! - A [`Culler`] counts 12 triangles per instance in its statistics and
 //!   cost estimates unless given real counts ([`Culler::for_scene`]).
 //! - Errors of your device go to your handlers; [`Backend::failure`](occlude_core::Backend::failure)
@@ -103,12 +104,14 @@ mod culler;
 mod draws;
 mod gpu_culler;
 mod node_levels;
+mod passes;
 
 pub use any_culler::AnyCuller;
 pub use backend::{Attachments, EmbeddedFrame, FrameTarget, QueryBackend, Viewport};
 pub use culler::{Culler, QUERY_METHODS};
 pub use draws::{Draws, IndirectDraw, InstanceDraw, VisibleList, DRAW_FEATURES};
 pub use gpu_culler::{GpuCuller, GPU_METHODS, RASTER_FEATURES};
+pub use passes::PassCounts;
 
 use occlude_core::methods::MethodError;
 use occlude_core::SceneError;

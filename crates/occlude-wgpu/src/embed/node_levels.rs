@@ -9,9 +9,10 @@
 //! `ioc` uploads on the wgpu backend; the shaders are `cull.wgsl`'s.
 
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
+use super::passes::Tally;
 use super::{Attachments, FrameTarget};
 use crate::context::GpuContext;
-use crate::culling::{bind_group, box_set_buffer, storage_init, workgroups, write_boxes, TableBuffers};
+use crate::culling::{bind_group, box_set_buffer, storage_init, write_boxes, TableBuffers};
 use crate::pipelines::compute_pipeline;
 use occlude_core::methods::ioc::IocWalk;
 use occlude_core::{Aabb, Hierarchy, NodeId};
@@ -135,32 +136,25 @@ impl NodeLevels {
 
     /// Records the walk against the depth of `target` as everything
     /// recorded before leaves it, setting instance flag buffer `now` (which
-    /// it does not clear).
+    /// it does not clear); its passes counted in `tally`.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        tally: &Tally,
         tests: &BoxTests,
         target: &FrameTarget<'_>,
         attachments: &Attachments,
         now: usize,
     ) {
         encoder.clear_buffer(&self.node_flags, 0, None);
-        let (x, y) = workgroups(self.nodes);
         for level in &self.levels {
-            tests.encode(encoder, target, attachments, &level.test);
+            tests.encode(encoder, tally, target, attachments, &level.test);
             let Some((marks, next, children)) = &level.below else { continue };
             encoder.clear_buffer(next, 0, Some(4));
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.expand_flags);
-            pass.set_bind_group(0, &marks[now], &[]);
-            pass.dispatch_workgroups(x, y, 1);
-            pass.set_pipeline(&self.expand_list);
-            pass.set_bind_group(0, children, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            let mut pass = tally.compute_pass(encoder);
+            pass.dispatch(&self.expand_flags, &marks[now], self.nodes);
+            pass.dispatch(&self.expand_list, children, self.nodes);
         }
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.expand_flags);
-        pass.set_bind_group(0, &self.bottom[now], &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        tally.compute_pass(encoder).dispatch(&self.expand_flags, &self.bottom[now], self.nodes);
     }
 }
