@@ -26,9 +26,9 @@
 //!   `occlude calibrate` measures); Table 1 (the
 //!   occlusion test's and the occludees' GPU time of ROC and IOC, each beside
 //!   the poster's figure, and of two-phase Hi-Z, `hiz`, which the poster does
-//!   not have) and Figure 4 (frame time of VFC, ROC, IOC, `hiz` and the
-//!   ideal set; the poster gives that one as a chart, without figures, and
-//!   its NOCULL has no method here).
+//!   not have) and Figure 4 (frame time of NOCULL, VFC, ROC, IOC, `hiz`
+//!   and the ideal set; the poster gives that one as a chart, without
+//!   figures).
 //! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
 //!   to 3, in [`crate::gvq`], [`crate::gvq_shadows`] and
 //!   [`crate::gvq_parts`].
@@ -132,10 +132,20 @@ const CHC: Experiment = Experiment {
     ideals: "ideal: the CHC paper's (section 6.2), S&W's draws replayed without queries, in S&W's order; \
              opt (not in the paper): the per-instance lower bound, the instances owning a pixel, sorted by material",
     options: &[],
-    variant_tables: &[VariantTable {
-        name: "Table 2",
-        variants: &[("", &[]), ("", &["chc.tav=2"]), ("", &["chc.tav=2", "chc.nvp=25"])],
-    }],
+    variant_tables: &[
+        VariantTable {
+            name: "Table 2",
+            variants: &[("", &[]), ("", &["chc.tav=2"]), ("", &["chc.tav=2", "chc.nvp=25"])],
+        },
+        // Section 5.3, speculative rendering, for which the paper gives no
+        // figure ("We did not find constants that could produce additional
+        // speedup"): the cheapest waiting node drawn while a query is out,
+        // up to three triangle counts a decade apart.
+        VariantTable {
+            name: "section 5.3",
+            variants: &[("", &[]), ("", &["chc.spec=1000"]), ("", &["chc.spec=10000"]), ("", &["chc.spec=100000"])],
+        },
+    ],
 };
 
 const CHCPP: Experiment = Experiment {
@@ -416,7 +426,7 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Resu
     for (&(scene_name, label), published) in scenes {
         let config = BenchConfig {
             scene: scene_name.into(),
-            methods: ["vfc", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
+            methods: ["vfc", "nocull", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions { leaf_size: 1, ..base.build },
             // The user's model (default `modern`): the poster's result hangs
@@ -427,7 +437,7 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Resu
         };
         config.validate()?;
         let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
-        let report = run_labelled(&scene, &config, progress, "vfc, roc, ioc, hiz, opt")?;
+        let report = run_labelled(&scene, &config, progress, "vfc, nocull, roc, ioc, hiz, opt")?;
         let method = |name: &str| report.methods.iter().find(|m| m.name == name);
         let roc_test = method("roc").map_or(0.0, |m| m.cull_ms_per_frame);
         let shown = format!("{scene_name} ({label})");
@@ -479,9 +489,11 @@ mod tests {
     fn the_chc_tables_set_every_row_beside_the_papers_and_write_its_json_shape() {
         let base = BenchConfig { frames: 4, resolution: (96, 64), ..BenchConfig::default() };
         let result = run("chc", &base, &[], &()).unwrap();
-        let [t1, t2] = &result.tables.tables[..] else { panic!("two tables: {:?}", result.tables.tables) };
+        let [t1, t2, t3] = &result.tables.tables[..] else { panic!("three tables: {:?}", result.tables.tables) };
         assert_eq!((t1.name.as_str(), t1.rows.len()), ("Table 1", 15), "3 scenes x vfc, sw, chc, ideal, opt");
         assert_eq!((t2.name.as_str(), t2.rows.len()), ("Table 2", 9), "3 scenes x the paper's 3 rows");
+        assert_eq!((t3.name.as_str(), t3.rows.len()), ("section 5.3", 12), "3 scenes x spec off and 3 constants");
+        assert!(t3.rows.iter().all(|r| r.missing_pixels == 0), "speculation draws more, never less");
         // Each of the paper's rows has its figure beside ours; opt has none.
         for r in &t1.rows {
             assert_eq!(r.published_frame_ms.is_some(), r.method != "opt", "{r:?}");
@@ -502,9 +514,9 @@ mod tests {
         assert_eq!((combined.published_queries, combined.published_frame_ms), (Some(181.0), Some(6.11)));
         // The defaults' row of Table 2 is Table 1's CHC, not a second run.
         assert_eq!(t2.rows[0].frame_ms, row(t1, "teapots", "chc").unwrap().frame_ms);
-        assert_eq!(result.tables.reports.len(), 3 * 3);
+        assert_eq!(result.tables.reports.len(), 3 * 6);
         // The plotted runs are each scene's run of Table 1's methods, not a lane.
-        assert_eq!(result.compared_runs, [0, 3, 6]);
+        assert_eq!(result.compared_runs, [0, 6, 12]);
         for (&i, scene) in result.compared_runs.iter().zip(CHC_SCENES) {
             let report = &result.tables.reports[i];
             let names: Vec<&str> = report.methods.iter().map(|m| m.name.as_str()).collect();
@@ -516,7 +528,7 @@ mod tests {
         }
         // A scene run apart gives the whole run's rows for it.
         let plant = run("chc", &base, &["plant".into()], &()).unwrap();
-        assert_eq!((plant.tables.reports.len(), &plant.compared_runs[..]), (3, &[0][..]));
+        assert_eq!((plant.tables.reports.len(), &plant.compared_runs[..]), (6, &[0][..]));
         for (alone, whole) in plant.tables.tables.iter().zip(&result.tables.tables) {
             let whole: Vec<&Row> = whole.rows.iter().filter(|r| r.scene == "plant").collect();
             assert_eq!(format!("{:?}", alone.rows.iter().collect::<Vec<_>>()), format!("{whole:?}"), "{}", alone.name);
@@ -603,6 +615,17 @@ mod tests {
                 let lines = result.text.lines().filter(|l| l.starts_with(&row) && l.contains(method)).count();
                 assert_eq!(lines, 2, "{scene}/{method}: a Table 1 row and a Figure 4 row\n{}", result.text);
             }
+            // NOCULL draws every instance, so at least what `vfc` draws.
+            let triangles = |name: &str| report.methods.iter().find(|m| m.name == name).unwrap().triangles_per_frame;
+            assert!(triangles("nocull") >= triangles("vfc"), "{scene}");
+            assert_eq!(
+                result
+                    .text
+                    .lines()
+                    .filter(|l| l.starts_with(&format!("{scene} ({label})")) && l.contains("nocull"))
+                    .count(),
+                1
+            );
         }
         // The poster's figures stand beside ours: DT's test times and ratio.
         assert!(

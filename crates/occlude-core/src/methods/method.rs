@@ -8,6 +8,7 @@ use super::chcpp::{Chcpp, ChcppParams};
 use super::hiz::{HizParams, TwoPhaseHiZ};
 use super::ioc::{IocParams, IterativeOcclusion};
 use super::moc::{MaskedOcclusion, MocParams};
+use super::nocull::NoCulling;
 use super::nohc::{Estimate, Nohc};
 use super::om::{OccupancyMap, OmParams};
 use super::opt::{OptParams, Optimal};
@@ -52,6 +53,9 @@ pub enum Method {
     /// `auto`: `roc`, `hiz`, `chcpp` or `vfc` per frame, whichever its
     /// frames measure fastest ([`Auto`]); the method to start with.
     Auto(AutoParams),
+    /// `nocull`: every instance drawn, not even the frustum tested (the IOC
+    /// poster's NOCULL baseline).
+    NoCull,
 }
 
 impl Method {
@@ -71,6 +75,7 @@ impl Method {
             Method::Nohc => "nohc",
             Method::NohcOpt => "nohc-opt",
             Method::Auto(_) => "auto",
+            Method::NoCull => "nocull",
         }
     }
 
@@ -90,6 +95,7 @@ impl Method {
             "nohc" => Method::Nohc,
             "nohc-opt" => Method::NohcOpt,
             "auto" => Method::Auto(AutoParams::default()),
+            "nocull" => Method::NoCull,
             _ => return Err(MethodError::Unknown(name.to_string())),
         })
     }
@@ -132,6 +138,7 @@ impl Method {
             Method::Nohc => Box::new(Nohc::new(Estimate::Model)),
             Method::NohcOpt => Box::new(Nohc::new(Estimate::Oracle)),
             Method::Auto(p) => Box::new(Auto::new(p)),
+            Method::NoCull => Box::new(NoCulling),
         })
     }
 
@@ -147,7 +154,7 @@ impl Method {
             Method::Moc(p) => p.visit(v),
             Method::Opt(p) => p.visit(v),
             Method::Auto(p) => p.visit(v),
-            Method::Vfc | Method::Sw | Method::Nohc | Method::NohcOpt => Ok(()),
+            Method::Vfc | Method::Sw | Method::Nohc | Method::NohcOpt | Method::NoCull => Ok(()),
         }
     }
 }

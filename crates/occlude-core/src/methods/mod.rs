@@ -15,6 +15,7 @@ pub mod hiz;
 pub mod ioc;
 mod method;
 pub mod moc;
+pub mod nocull;
 mod node_walk;
 pub mod nohc;
 mod occluder_proxies;
@@ -42,8 +43,8 @@ use crate::stats::FrameStats;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
-pub const METHOD_NAMES: [&str; 13] =
-    ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt", "nohc", "nohc-opt", "auto"];
+pub const METHOD_NAMES: [&str; 14] =
+    ["vfc", "sw", "chc", "chcpp", "om", "roc", "ioc", "hiz", "moc", "opt", "nohc", "nohc-opt", "auto", "nocull"];
 
 /// Why [`create`] could not build a method.
 #[derive(Debug, Error, PartialEq)]
