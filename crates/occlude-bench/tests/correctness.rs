@@ -190,9 +190,10 @@ fn chc_options_save_queries_and_keep_the_image_exact() {
 /// hierarchies.
 #[test]
 fn chcpp_is_exact_with_every_component_on_and_off() {
-    let variants: [&[&str]; 8] = [
+    let variants: [&[&str]; 9] = [
         &[],
         &["chcpp.multiquery=off"],
+        &["chcpp.pkeep=measured"],
         &["chcpp.vqueue=off"],
         &["chcpp.sort=off"],
         &["chcpp.random=off"],

@@ -27,6 +27,7 @@ use crate::backend::{Backend, QueryHandle};
 use crate::geometry::Aabb;
 use crate::hierarchy::{NodeId, Since};
 use crate::rng::mix64;
+use multiquery::{KeepCounts, KeepEstimate};
 use std::collections::VecDeque;
 
 /// The CHC++ parameters; the switches exist for ablation studies.
@@ -44,6 +45,9 @@ pub struct ChcppParams {
     pub virtual_leaf_triangles: u64,
     /// `multiquery`: group i-queue nodes into multiqueries (section 5.1).
     pub multiquery: bool,
+    /// `pkeep`: the multiqueries' estimate of a node keeping its
+    /// classification, `fit` (Eq. 2) or `measured` (Eq. 1).
+    pub pkeep: KeepEstimate,
     /// `vqueue`: delay visible-leaf queries to fill wait time (section 4.2).
     pub vqueue: bool,
     /// `sort`: render through a material-sorted render queue (section 4.3).
@@ -64,6 +68,7 @@ impl Default for ChcppParams {
             smax: 1.4,
             virtual_leaf_triangles: 0,
             multiquery: true,
+            pkeep: KeepEstimate::Fit,
             vqueue: true,
             sort: true,
             random: true,
@@ -81,6 +86,7 @@ impl MethodParams for ChcppParams {
         v.value("smax", &mut self.smax, "a number from 1 to 100", |s| (1.0..=100.0).contains(s))?;
         v.value("vleaf", &mut self.virtual_leaf_triangles, "an integer >= 0 (triangles)", |_| true)?;
         v.flag("multiquery", &mut self.multiquery)?;
+        v.value("pkeep", &mut self.pkeep, "fit or measured", |_| true)?;
         v.flag("vqueue", &mut self.vqueue)?;
         v.flag("sort", &mut self.sort)?;
         v.flag("random", &mut self.random)?;
@@ -141,6 +147,8 @@ pub struct Chcpp {
     nodes: Vec<NodeState>,
     is_leaf: Vec<bool>,
     boxes: Vec<Option<Vec<Aabb>>>,
+    /// Eq. 1's counts over the walkthrough, kept with `pkeep=measured`.
+    keep: KeepCounts,
 }
 
 /// A deterministic pseudo-random integer in `1..=n` for (node, frame).
@@ -159,6 +167,7 @@ impl Chcpp {
             nodes: Vec::new(),
             is_leaf: Vec::new(),
             boxes: Vec::new(),
+            keep: KeepCounts::default(),
         }
     }
 
@@ -250,9 +259,16 @@ impl Chcpp {
         let frame = self.frame;
         let persistence = |n: NodeId| frame - self.nodes[n as usize].changed_at;
         let sizes = if self.params.multiquery {
-            nodes.sort_by_key(|&n| (std::cmp::Reverse(persistence(n)), n));
-            let p: Vec<u32> = nodes.iter().map(|&n| persistence(n)).collect();
-            multiquery::group_sizes(&p)
+            let keep = |n: NodeId| match self.params.pkeep {
+                KeepEstimate::Fit => multiquery::p_keep(persistence(n)),
+                KeepEstimate::Measured => self.keep.p_keep(persistence(n)),
+            };
+            // Likeliest to stay invisible first (section 5.1); the fit
+            // grows with persistence, so for it this is persistence order.
+            let mut keyed: Vec<(f64, u32, NodeId)> = nodes.iter().map(|&n| (keep(n), persistence(n), n)).collect();
+            keyed.sort_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)).then(a.2.cmp(&b.2)));
+            nodes = keyed.iter().map(|&(_, _, n)| n).collect();
+            multiquery::group_sizes(&keyed.iter().map(|&(p, _, _)| p).collect::<Vec<_>>())
         } else {
             vec![1; nodes.len()]
         };
@@ -271,10 +287,30 @@ impl Chcpp {
         }
     }
 
+    /// Eq. 1's counts of a returned query: a single node kept its
+    /// classification if the result says what it was; a multiquery that
+    /// found nothing kept every node's (one that found something is
+    /// counted through its nodes' own queries).
+    fn count_kept(&mut self, done: &Pending, visible: bool) {
+        let persistence = |n: NodeId| self.frame - self.nodes[n as usize].changed_at;
+        match done {
+            Pending::Node { node, was_visible, .. } => self.keep.record(persistence(*node), visible == *was_visible),
+            Pending::Multi { nodes, .. } if !visible => {
+                for &n in nodes {
+                    self.keep.record(persistence(n), true);
+                }
+            }
+            Pending::Multi { .. } => {}
+        }
+    }
+
     /// Figure 6, `HandleReturnedQuery`.
     fn handle(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend, q: &mut Queues, done: Pending) {
         let visible = backend.result(done.query()) > 0;
         let frame = self.frame;
+        if self.params.pkeep == KeepEstimate::Measured {
+            self.count_kept(&done, visible);
+        }
         match done {
             Pending::Multi { nodes, .. } => {
                 if visible {
@@ -386,7 +422,9 @@ impl CullingMethod for Chcpp {
 #[cfg(test)]
 mod tests {
     use super::super::test_rig::{assert_draws_exactly, method, queried_alone, Rig};
+    use super::*;
     use crate::mock::Call;
+    use glam::Vec3;
 
     /// Without the random delay, a visible leaf goes `nav` frames without a
     /// query between two queries.
@@ -428,5 +466,39 @@ mod tests {
             }
         }
         assert!(grouped_and_empty > 0, "no multiquery of hidden nodes");
+    }
+
+    /// A grid of 64 cubes, every other one hidden, seen for 12 frames: the
+    /// fit's p_keep (0.99 at most) caps a multiquery near 10 nodes; Eq. 1's
+    /// measured estimate learns that every hidden node stayed hidden
+    /// (p_keep 1) and puts each batch of them into one query.
+    #[test]
+    fn measured_keep_estimates_learn_that_hidden_nodes_stay_hidden() {
+        let boxes: Vec<Aabb> = (0..64)
+            .map(|k| {
+                let at = Vec3::new((k % 8) as f32 - 3.5, (k / 8) as f32 - 3.5, 0.0);
+                Aabb::new(at - 0.3, at + 0.3)
+            })
+            .collect();
+        let rig = Rig::new(&boxes, 1);
+        // The last frame's multiqueries: how many, and the most boxes in one.
+        let multiqueries = |options: &[&str]| {
+            let mut mock = rig.mock();
+            for hidden in (1..64).step_by(2) {
+                mock.set_visible(hidden, false);
+            }
+            let frames = rig.run(&mut method("chcpp", options), &mut mock, 12);
+            let sizes: Vec<usize> = frames[11]
+                .iter()
+                .filter_map(|c| if let Call::IssueQuery { boxes, .. } = c { Some(boxes.len()) } else { None })
+                .filter(|&n| n > 1)
+                .collect();
+            (sizes.len(), sizes.iter().copied().max().unwrap_or(0))
+        };
+        let (fit_count, fit_largest) = multiqueries(&["chcpp.tight=off"]);
+        let (measured_count, measured_largest) = multiqueries(&["chcpp.tight=off", "chcpp.pkeep=measured"]);
+        assert!((2..=12).contains(&fit_largest), "{fit_largest}");
+        assert!(measured_largest > fit_largest, "measured {measured_largest}, fit {fit_largest}");
+        assert!(measured_count < fit_count, "measured {measured_count}, fit {fit_count}");
     }
 }
