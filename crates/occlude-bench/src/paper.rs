@@ -78,9 +78,6 @@ struct Experiment {
     ideals: &'static str,
     /// The tables of variants of `varied`.
     variant_tables: &'static [VariantTable],
-    /// Method options of the compared table and of the variants' defaults:
-    /// where the paper's settings are not our defaults.
-    options: &'static [&'static str],
 }
 
 /// A table of variants of one method.
@@ -131,7 +128,6 @@ const CHC: Experiment = Experiment {
     varied: "chc",
     ideals: "ideal: the CHC paper's (section 6.2), S&W's draws replayed without queries, in S&W's order; \
              opt (not in the paper): the per-instance lower bound, the instances owning a pixel, sorted by material",
-    options: &[],
     variant_tables: &[
         VariantTable {
             name: "Table 2",
@@ -160,7 +156,6 @@ const CHCPP: Experiment = Experiment {
     ideals: "ideal-sorted: the CHC++ paper's OPT (section 8), the nodes S&W finds visible drawn without queries \
              through chcpp's material-sorted render queue; opt (not in the paper): the per-instance lower bound, \
              the instances owning a pixel, sorted by material",
-    options: &[],
     variant_tables: &[
         VariantTable {
             name: "ablation",
@@ -173,6 +168,7 @@ const CHCPP: Experiment = Experiment {
                 ("", &["chcpp.tight=off"]),
                 ("", &["chcpp.b=1"]),
                 ("", &["chcpp.nav=0"]),
+                ("", &["chcpp.pkeep=measured"]),
             ],
         },
         FIGURE_8,
@@ -192,16 +188,14 @@ const OM: Experiment = Experiment {
     variant_tables: &[VariantTable {
         name: "variants",
         variants: &[
-            ("paper", &[]),
-            ("", &["om.overlap=on", "om.corner=on", "om.grouping=off"]),
-            ("ours", &["om.overlap=off", "om.corner=off"]),
-            ("", &["om.overlap=off", "om.corner=on"]),
-            ("", &["om.overlap=on", "om.corner=off"]),
+            ("", &[]),
+            ("", &["om.grouping=off"]),
+            // Stage 2's rule and the queues' order other than the paper's.
+            ("", &["om.overlap=off"]),
+            ("", &["om.corner=off"]),
+            ("", &["om.overlap=off", "om.corner=off"]),
         ],
     }],
-    // Stage 2's rule and the queues' order as section 4.2 has them; ours
-    // (the defaults of `om`) are a variant.
-    options: &["om.overlap=on", "om.corner=on"],
 };
 
 /// Tables and the reports behind them.
@@ -337,7 +331,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
             methods: e.methods.iter().map(|m| m.to_string()).collect(),
             hierarchy: e.hierarchy,
             gpu_model: (e.gpu_model)(),
-            options: MethodOptions::parse(e.options)?,
+            options: MethodOptions::default(),
             ..base.clone()
         };
         config.validate()?;
@@ -379,9 +373,6 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
     let mut tables = vec![Table::new(e.compared, published, compared)];
     let mut text = tables[0].render(e.title);
     let _ = writeln!(text, "ideal rows: {}", e.ideals);
-    if !e.options.is_empty() {
-        let _ = writeln!(text, "options: {}", e.options.join(" "));
-    }
     text.push_str(&published::claims_text(e.paper, &tables[0].rows));
     for (table, rows) in e.variant_tables.iter().zip(varied) {
         let t = Table::new(table.name, published::table(e.paper, table.name), rows);
@@ -569,7 +560,7 @@ mod tests {
             assert!(row("chcpp").state_changes > 0.0, "{scene}");
         }
         assert!(result.text.contains("ideal rows: ideal-sorted: the CHC++ paper's OPT"), "{}", result.text);
-        assert_eq!(ablation.rows.len(), 3 * 8);
+        assert_eq!(ablation.rows.len(), 3 * 9);
         assert_eq!(figure8.rows.len(), 3 * 5);
         for t in [compared, ablation, figure8] {
             assert!(t.rows.iter().all(|r| r.missing_pixels == 0 && r.frame_ms > 0.0), "{}", t.name);
