@@ -47,18 +47,20 @@
 //!
 //! # Deviations, stated
 //!
-//! - Two choices the paper makes have an alternative as an option, each
-//!   compared in `--paper om`'s variants (the paper's measured faster):
-//!   `om.overlap=off` takes a node into a round only when its rectangle
-//!   overlaps *no* marked cell, so no query of a round can be answered
-//!   "visible" merely because a box in front of it was not drawn yet;
-//!   `om.corner=off` sorts by the distance to a box's nearest point rather
-//!   than its nearest corner, which puts a box around the eye first.
 //! - The paper does not state the map's resolution (section 3.1 promises it
 //!   "below" and never gives it). The default is one 64-bit word per row, 64
 //!   columns, with rows following the camera's aspect ratio (48 at 4:3).
 //! - `n` on the first frame is 5, the fixed number of occupancy maps of the
 //!   authors' earlier paper (SBM03), which the adaptive `n` replaces.
+//!
+//! # Alternatives to two of the paper's choices
+//!
+//! `om.overlap=off` takes a node into a round only when its rectangle
+//! overlaps *no* marked cell, so no query of a round can be answered
+//! "visible" merely because a box in front of it was not drawn yet.
+//! `om.corner=off` sorts by the distance to a box's nearest point rather
+//! than its nearest corner, which puts a box around the eye first.
+//! `--paper om` compares them; the paper's choices measured faster.
 
 pub mod occupancy;
 
