@@ -28,7 +28,8 @@
 //!   the poster's figure, and of two-phase Hi-Z, `hiz`, which the poster does
 //!   not have) and Figure 4 (frame time of NOCULL, VFC, ROC, IOC, `hiz`
 //!   and the ideal set; the poster gives that one as a chart, without
-//!   figures).
+//!   figures); each walkthrough's first 12 seconds, as the poster animates
+//!   12-second sequences.
 //! - `gvq` (granular visibility queries, sections 4.1 and 4.2): Tables 1
 //!   to 3, in [`crate::gvq`], [`crate::gvq_shadows`] and
 //!   [`crate::gvq_parts`].
@@ -38,7 +39,7 @@
 //! cores, and a simulated table's rows do not depend on which other scenes
 //! ran, so scenes run apart give the same rows as one whole run.
 
-use crate::config::BenchConfig;
+use crate::config::{BenchConfig, ALL_FRAMES};
 use crate::error::{invalid, Result};
 use crate::ideal::{IDEAL, IDEAL_SORTED};
 use crate::paper_tables::{PaperTables, Row, Table};
@@ -396,6 +397,20 @@ const IOC_SCENES: [(&str, &str); 3] = [("rooms", "RM"), ("downtown", "DT"), ("fi
 const IOC_TABLE_1: [[(f64, f64); 2]; 3] =
     [[(0.41, 0.40), (0.61, 0.40)], [(3.47, 3.50), (0.78, 3.58)], [(7.96, 7.81), (1.05, 8.04)]];
 
+/// The poster's walkthroughs: "animated camera sequences of 12s durations"
+/// (section 3).
+const IOC_SECONDS: f32 = 12.0;
+
+/// Frames of each IOC walkthrough: the first [`IOC_SECONDS`] at `base`'s
+/// frame rate, unless `base` asks for a number of frames or spreads them
+/// over the whole walkthrough.
+fn ioc_frames(base: &BenchConfig) -> usize {
+    match (base.frames, base.fps) {
+        (ALL_FRAMES, Some(fps)) => (IOC_SECONDS * fps).round() as usize,
+        (frames, _) => frames,
+    }
+}
+
 /// `--paper ioc` (module documentation).
 fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Result<PaperResult> {
     let times = match base.backend {
@@ -418,6 +433,7 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Resu
         let config = BenchConfig {
             scene: scene_name.into(),
             methods: ["vfc", "nocull", "roc", "ioc", "hiz", "opt"].map(String::from).to_vec(),
+            frames: ioc_frames(base),
             hierarchy: HierarchyKind::Bvh,
             build: BuildOptions { leaf_size: 1, ..base.build },
             // The user's model (default `modern`): the poster's result hangs
@@ -584,6 +600,15 @@ mod tests {
         assert!(result.text.contains("CHC+B+R: chcpp chcpp.tight=off chcpp.multiquery=off"), "{}", result.text);
         let v = serde_json::to_value(&result.tables).unwrap();
         assert_eq!((v["paper"].as_str(), v["tables"][2]["name"].as_str()), (Some("chcpp"), Some("Figure 8")));
+    }
+
+    #[test]
+    fn ioc_runs_the_posters_twelve_seconds_unless_told_otherwise() {
+        let paper = BenchConfig { frames: ALL_FRAMES, fps: Some(30.0), ..BenchConfig::default() };
+        assert_eq!(ioc_frames(&paper), 360);
+        assert_eq!(ioc_frames(&BenchConfig { fps: Some(2.0), ..paper.clone() }), 24);
+        assert_eq!(ioc_frames(&BenchConfig { frames: 60, ..paper.clone() }), 60);
+        assert_eq!(ioc_frames(&BenchConfig { fps: None, ..paper }), ALL_FRAMES);
     }
 
     #[test]
