@@ -340,8 +340,15 @@ mod tests {
     }
 
     fn in_clip(m: &Mat4, p: Vec3) -> bool {
+        in_clip_within(m, p, 0.0)
+    }
+
+    /// Whether `p` lies in the clip volume grown by `eps` of its `w` on
+    /// every side: a point on a plane rounds to either side of it.
+    fn in_clip_within(m: &Mat4, p: Vec3, eps: f32) -> bool {
         let c = *m * p.extend(1.0);
-        c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w
+        let e = eps * c.w.abs();
+        c.x.abs() <= c.w + e && c.y.abs() <= c.w + e && c.z >= -e && c.z <= c.w + e
     }
 
     proptest! {
@@ -360,8 +367,10 @@ mod tests {
             if inside_corners > 0 {
                 prop_assert_ne!(class, Visibility::Outside);
             }
+            // Inside only spares the plane tests below a node (drawing more
+            // stays conservative): a corner on a plane may round out.
             if class == Visibility::Inside {
-                prop_assert_eq!(inside_corners, 8);
+                prop_assert!(b.corners().iter().all(|&c| in_clip_within(&vp, c, 1e-4)));
             }
             // Sample points inside the box: none may be in the clip volume if culled.
             if class == Visibility::Outside {
