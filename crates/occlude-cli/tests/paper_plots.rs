@@ -81,21 +81,22 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
 }
 
 /// `--csv` of `--paper chc` at 4 frames: every run behind the tables (per
-/// scene Table 1's five methods and Table 2's two variants of `chc`), each
-/// of its frames a row led by the run, the scene and the parameters.
+/// scene Table 1's five methods, Table 2's two variants of `chc` and
+/// section 5.3's three), each of its frames a row led by the run, the scene
+/// and the parameters.
 fn check_paper_csv(csv: &str) {
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     assert!(header.starts_with("run,scene,params,method,frame,frame_ms,"), "{header}");
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert!(rows.iter().all(|r| r.len() == header.split(',').count()), "a row's width differs from the header's");
-    assert_eq!(rows.len(), 3 * (5 + 2) * 4, "3 scenes x 7 method runs x 4 frames");
+    assert_eq!(rows.len(), 3 * (5 + 2 + 3) * 4, "3 scenes x 10 method runs x 4 frames");
     for scene in ["teapots", "city", "plant"] {
         let chc: std::collections::BTreeSet<(&str, &str)> =
             rows.iter().filter(|r| r[1] == scene && r[3] == "chc").map(|r| (r[0], r[2])).collect();
         let params: std::collections::BTreeSet<&str> = chc.iter().map(|&(_, p)| p).collect();
-        assert_eq!((chc.len(), params.len()), (3, 3), "{scene}: chc's three runs, each with its parameters: {chc:?}");
-        assert!(params.iter().all(|p| p.contains("tav=")), "{scene}: {params:?}");
+        assert_eq!((chc.len(), params.len()), (6, 6), "{scene}: chc's six runs, each with its parameters: {chc:?}");
+        assert!(params.iter().all(|p| p.contains("tav=") && p.contains("spec=")), "{scene}: {params:?}");
     }
     let frame_ms: f64 = rows[0][5].parse().unwrap();
     assert!(frame_ms > 0.0, "the first row's frame time: {frame_ms}");
