@@ -436,15 +436,23 @@ impl Renderer {
             wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
         );
         self.queue.submit([encoder.finish()]);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = sender.send(r);
-        });
-        self.device.poll(wgpu::PollType::wait_indefinitely())?;
-        receiver.recv()??;
-        let bytes = buffer.slice(..).get_mapped_range()?.to_vec();
+        let bytes = read_buffer(&self.device, &buffer)?;
         Ok(bytes.chunks_exact(padded as usize).flat_map(|r| &r[..row as usize]).copied().collect())
     }
+}
+
+/// The bytes of `buffer` (`MAP_READ` usage), once the GPU has finished
+/// everything submitted (blocking); the buffer is unmapped again.
+fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>, Box<dyn Error>> {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let _ = sender.send(r);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely())?;
+    receiver.recv()??;
+    let bytes = buffer.slice(..).get_mapped_range()?.to_vec();
+    buffer.unmap();
+    Ok(bytes)
 }
 
 /// The views a frame draws into.

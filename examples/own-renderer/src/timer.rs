@@ -65,14 +65,7 @@ impl Timer {
 
     /// The last frame's times (blocking until the GPU is done).
     pub fn read(&self, device: &wgpu::Device) -> Result<GpuTimes, Box<dyn Error>> {
-        let (sender, receiver) = std::sync::mpsc::channel();
-        self.staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = sender.send(r);
-        });
-        device.poll(wgpu::PollType::wait_indefinitely())?;
-        receiver.recv()??;
-        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&self.staging.slice(..).get_mapped_range()?[..]);
-        self.staging.unmap();
+        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&super::read_buffer(device, &self.staging)?);
         let ms = |spans: [(usize, usize); 2]| {
             let ticks: u64 = spans.iter().map(|&(a, b)| t[b].saturating_sub(t[a])).sum();
             ticks as f64 * self.period / 1e6
