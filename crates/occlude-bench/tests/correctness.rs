@@ -30,6 +30,17 @@ fn config(scene: &str, hierarchy: HierarchyKind) -> BenchConfig {
     }
 }
 
+/// The first 45 frames of `scene` with only `methods`, set by `options`:
+/// a variant of a method checked exact.
+fn variant_config(scene: &str, hierarchy: HierarchyKind, methods: &[&str], options: &[&str]) -> BenchConfig {
+    BenchConfig {
+        methods: methods.iter().map(|m| m.to_string()).collect(),
+        options: MethodOptions::parse(options).unwrap(),
+        frames: 45,
+        ..config(scene, hierarchy)
+    }
+}
+
 fn small(scene: &str) -> Scene {
     let s = generate(scene, Size::Small, 1).unwrap();
     s.validate().unwrap();
@@ -205,12 +216,7 @@ fn chcpp_is_exact_with_every_component_on_and_off() {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for opts in variants {
-                let cfg = BenchConfig {
-                    methods: vec!["chcpp".into()],
-                    options: MethodOptions::parse(opts).unwrap(),
-                    frames: 45,
-                    ..config(name, hierarchy)
-                };
+                let cfg = variant_config(name, hierarchy, &["chcpp"], opts);
                 exact_run(&scene, &cfg);
             }
         }
@@ -229,12 +235,7 @@ fn moc_is_exact_with_every_occluder_choice() {
         let scene = small(name);
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for opts in variants {
-                let cfg = BenchConfig {
-                    methods: vec!["vfc".into(), "moc".into()],
-                    options: MethodOptions::parse(opts).unwrap(),
-                    frames: 45,
-                    ..config(name, hierarchy)
-                };
+                let cfg = variant_config(name, hierarchy, &["vfc", "moc"], opts);
                 let run = exact_run(&scene, &cfg);
                 let triangles = |m: usize| run.methods[m].frames.iter().map(|f| f.triangles).sum::<u64>();
                 assert!(triangles(1) < triangles(0), "{name}/{hierarchy}/{opts:?}: moc culled nothing");
@@ -268,12 +269,7 @@ fn moc_with_inner_box_proxies_is_exact() {
     for scene in &scenes {
         for hierarchy in [HierarchyKind::Bvh, HierarchyKind::KdTree] {
             for opts in variants {
-                let cfg = BenchConfig {
-                    methods: vec!["vfc".into(), "moc".into()],
-                    options: MethodOptions::parse(opts).unwrap(),
-                    frames: 45,
-                    ..config(&scene.name, hierarchy)
-                };
+                let cfg = variant_config(&scene.name, hierarchy, &["vfc", "moc"], opts);
                 let run = exact_run(scene, &cfg);
                 let proxied: f64 = run.methods[1].counters["proxy_occluders"].iter().sum();
                 if proxied > 0.0 && hierarchy == HierarchyKind::Bvh && opts.len() == 1 {
