@@ -133,7 +133,6 @@ impl LeavesOf {
     }
 }
 
-/// Surface area of a box, 0 for an empty one.
 /// A node's term of the SAH cost's sum: its area, times its instance count
 /// for a leaf.
 pub(super) fn weighted_area(n: &Node) -> f64 {
@@ -144,6 +143,7 @@ pub(super) fn weighted_area(n: &Node) -> f64 {
     }
 }
 
+/// Surface area of a box, 0 for an empty one.
 fn area(b: &Aabb) -> f64 {
     if b.is_empty() {
         0.0
