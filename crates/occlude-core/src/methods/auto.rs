@@ -22,11 +22,12 @@
 //! list), then two measured frames (a method's first frame after another
 //! ran is never measured, the current one's included); `vfc`, which
 //! carries no state, is probed by one measured frame, and a probe whose
-//! first measured frame takes twice the current mean ends there. If their mean beats the current mean by `auto.margin`
-//! (5 %), the probed method becomes current. The next probe of a method
-//! waits long enough for probes to cost at most `auto.budget` (1 %) of the
-//! frame time: a method measured at three times the current one's time
-//! waits far longer than one within a few percent. The wait also doubles
+//! first measured frame takes twice the current mean ends there. If their
+//! mean beats the current mean by `auto.margin` (5 %), the probed method
+//! becomes current. The next probe of a method waits long enough for all
+//! probes together to cost at most `auto.budget` (1 %) of the frame time,
+//! each method an equal share: a method measured at three times the
+//! current one's time waits far longer than one within a few percent. The wait also doubles
 //! with each lost probe, from `auto.probe` frames (32). A method is tried
 //! at once, whatever its wait, when the current method's mean grows past
 //! that method's last measured time by the margin: a change of view that
@@ -239,9 +240,12 @@ impl Auto {
 
     /// Sets when `choice`, last measured at `time` ms, is next tried: after
     /// its wait, and late enough that a probe costing `excess` ms beyond
-    /// the current mean stays within the budget. Its wait doubles.
+    /// the current mean stays within its share of the budget (the budget
+    /// is split evenly among the methods other than the current one, so
+    /// that all probes together stay within it). Its wait doubles.
     fn schedule(&mut self, choice: usize, time: f64, excess: f64) {
-        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time);
+        let others = self.choices.len().saturating_sub(1).max(1) as f64;
+        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time) / others;
         let budget_wait = if per_frame > 0.0 { (excess.max(0.0) / per_frame).ceil() as u64 } else { 0 };
         let c = &mut self.choices[choice];
         c.last_time = Some(time);
@@ -460,6 +464,20 @@ mod tests {
         // measured frame, clearly slower, end that probe).
         assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 6);
         assert_eq!(ran.iter().filter(|&&n| n == "roc").count(), 3);
+    }
+
+    #[test]
+    fn all_probes_together_stay_within_the_budget() {
+        // vfc is fastest; each of the three others costs three times as
+        // much, so every probe is pure loss.
+        let cost = |_, name: &str| if name == "vfc" { 1.0 } else { 3.0 };
+        let ran = run(6000, cost);
+        let start = ran.iter().position(|&n| n == "vfc").unwrap() + 1;
+        let excess: f64 = ran[start..].iter().map(|&n| cost(0, n) - 1.0).sum();
+        let share = excess / (ran.len() - start) as f64;
+        // The budget is 1 % of the time for all probes, not for each.
+        assert!(share <= 0.0105, "probes cost {:.2} % of the frame time", share * 100.0);
+        assert!(share > 0.0, "no method was probed again");
     }
 
     #[test]
