@@ -48,6 +48,10 @@ use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::stats::FrameStats;
 
+mod chooser;
+
+pub use chooser::{Chooser, Ticket};
+
 /// Parameters of `auto`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AutoParams {
@@ -83,46 +87,6 @@ impl MethodParams for AutoParams {
     }
 }
 
-/// Measured frames of a probe, after its warm-up frame.
-const PROBE_FRAMES: u32 = 2;
-
-/// A probe's measured frame this many times the current mean ends it.
-const CLEARLY_SLOWER: f64 = 2.0;
-
-/// Frames a method runs from nothing before one is measured.
-const COLD_FRAMES: u64 = 2;
-
-/// Weight of the newest frame in the current method's running mean.
-const MEAN_WEIGHT: f64 = 0.25;
-
-/// One method `auto` may run, with its probe schedule.
-struct Choice {
-    method: Box<dyn CullingMethod + Send>,
-    /// Whether it carries nothing from frame to frame (`vfc`): its first
-    /// frame needs no warm-up, and one measured frame is its probe.
-    stateless: bool,
-    /// The shortest wait before its next probe, frames.
-    wait: u64,
-    /// First frame at which it may be probed.
-    next_probe: u64,
-    /// Its mean frame time when last measured (a probe, or its frames as
-    /// the current method), ms.
-    last_time: Option<f64>,
-    /// Frames it has rendered.
-    frames: u64,
-}
-
-/// A probe under way.
-#[derive(Clone, Debug)]
-struct Probe {
-    choice: usize,
-    /// Measured frame times, warm-up excluded.
-    times: Vec<f64>,
-    /// Its frames' time beyond the current method's mean, warm-up
-    /// included, ms.
-    excess: f64,
-}
-
 /// `auto`: the method that pays for itself (module documentation).
 ///
 /// **Use it** when you do not know whether occlusion culling pays on your
@@ -146,18 +110,13 @@ struct Probe {
 /// the embedding's `Culler` its choices are `chcpp` and `vfc`.
 pub struct Auto {
     params: AutoParams,
-    /// Empty until the first frame, when the backend is known.
-    choices: Vec<Choice>,
-    current: usize,
-    /// The current method's running mean frame time, ms.
-    mean: Option<f64>,
-    probe: Option<Probe>,
-    /// The method rendering this frame, and the one that rendered the last.
-    running: usize,
-    last_ran: Option<usize>,
-    frame: u64,
-    /// Whether this frame runs a probe.
-    probing: bool,
+    /// The methods it chooses among; empty until the first frame, when the
+    /// backend is known.
+    methods: Vec<Box<dyn CullingMethod + Send>>,
+    /// Which of them runs each frame; made with them.
+    chooser: Option<Chooser>,
+    /// The frame under way: the method running it.
+    ticket: Option<Ticket>,
     /// The backend's own cost model (a simulator's), if it has one: it
     /// charges frames the backend reports no time for (else the default
     /// model), and bounds `vfc`'s time.
@@ -175,14 +134,9 @@ impl Auto {
     pub fn new(params: AutoParams) -> Self {
         Self {
             params,
-            choices: Vec::new(),
-            current: 0,
-            mean: None,
-            probe: None,
-            running: 0,
-            last_ran: None,
-            frame: 0,
-            probing: false,
+            methods: Vec::new(),
+            chooser: None,
+            ticket: None,
             model: None,
             estimate_steps: 0,
             warned: false,
@@ -193,7 +147,7 @@ impl Auto {
     /// The names of the methods `auto` chooses among, the first tried first
     /// (empty before the first frame).
     pub fn choices(&self) -> Vec<&'static str> {
-        self.choices.iter().map(|c| c.method.name()).collect()
+        self.methods.iter().map(|m| m.name()).collect()
     }
 
     /// Makes the choices for `backend`: `roc` and `hiz` only where they run
@@ -206,18 +160,17 @@ impl Auto {
         let gpu = self.params.gpu;
         let roc = (gpu && culling).then(|| Method::Roc(Default::default()));
         let hiz = (gpu && pyramids).then(|| Method::Hiz(Default::default()));
-        let methods = roc.into_iter().chain(hiz).chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]);
-        self.choices = methods
-            .map(|m| Choice {
-                method: m.build().expect("default parameters are valid"),
-                stateless: m == Method::Vfc,
-                wait: u64::from(self.params.probe),
-                next_probe: 0,
-                last_time: None,
-                frames: 0,
-            })
-            .collect();
+        let methods: Vec<Method> =
+            roc.into_iter().chain(hiz).chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]).collect();
+        let stateless: Vec<bool> = methods.iter().map(|m| *m == Method::Vfc).collect();
+        self.methods = methods.iter().map(|m| m.build().expect("default parameters are valid")).collect();
+        self.chooser = Some(Chooser::new(self.params, &stateless));
         self.model = backend.cost_model();
+    }
+
+    /// The method running the frame under way (the first before any).
+    fn running(&self) -> usize {
+        self.ticket.map_or(0, |t| t.choice)
     }
 
     /// The frame's time in ms: the backend's, or modelled from its counts.
@@ -236,74 +189,6 @@ impl Auto {
         let render = m.render_us(stats.draw_calls, stats.triangles, stats.fragments as f64);
         let queries = stats.queries as f64 * m.cpu_query_us + stats.query_boxes as f64 * m.gpu_query_box_us;
         (render + queries) * 1e-3
-    }
-
-    /// Sets when `choice`, last measured at `time` ms, is next tried: after
-    /// its wait, and late enough that a probe costing `excess` ms beyond
-    /// the current mean stays within its share of the budget (the budget
-    /// is split evenly among the methods other than the current one, so
-    /// that all probes together stay within it). Its wait doubles.
-    fn schedule(&mut self, choice: usize, time: f64, excess: f64) {
-        let others = self.choices.len().saturating_sub(1).max(1) as f64;
-        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time) / others;
-        let budget_wait = if per_frame > 0.0 { (excess.max(0.0) / per_frame).ceil() as u64 } else { 0 };
-        let c = &mut self.choices[choice];
-        c.last_time = Some(time);
-        c.next_probe = self.frame + c.wait.max(budget_wait);
-        c.wait = c.wait.saturating_mul(2);
-    }
-
-    /// Ends a probe: the probed method takes over if it beat the current
-    /// one by the margin; the one left waits for its next probe.
-    fn end_probe(&mut self, probe: Probe) {
-        let probed = probe.times.iter().sum::<f64>() / probe.times.len() as f64;
-        let mean = self.mean.unwrap_or(probed);
-        if probed < mean * (1.0 - f64::from(self.params.margin)) {
-            let previous = std::mem::replace(&mut self.current, probe.choice);
-            self.mean = Some(probed);
-            let frames = if self.choices[previous].stateless { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
-            self.schedule(previous, mean, frames * (mean - probed));
-        } else {
-            self.schedule(probe.choice, probed, probe.excess);
-        }
-    }
-
-    /// Drops a probe of `vfc` that cannot win: where the backend models its
-    /// costs, a frame of `vfc` costs at least its draws of the instances in
-    /// view ([`vfc_bound`]), and if that is no faster than the current mean
-    /// by the margin, the probe is put off as if it had lost at that time.
-    /// This spares a frame of drawing everything in view where occlusion
-    /// culling wins by far.
-    fn skip_hopeless_vfc_probe(&mut self, ctx: &FrameContext<'_>) {
-        let (Some(probe), Some(mean)) = (&self.probe, self.mean) else { return };
-        let Some(model) = &self.model else { return };
-        if !self.choices[probe.choice].stateless {
-            return;
-        }
-        let (bound, steps) = vfc_bound(ctx, model);
-        self.estimate_steps = steps;
-        if bound >= mean * (1.0 - f64::from(self.params.margin)) {
-            let choice = probe.choice;
-            self.probe = None;
-            self.schedule(choice, bound, 0.0);
-        }
-    }
-
-    /// The method due for a probe now, if any (the earliest due first):
-    /// one whose wait is over, or one last measured faster than the
-    /// current method is now (the current one has stopped paying).
-    fn due(&self) -> Option<usize> {
-        let mean = self.mean?;
-        // A lost probe left the mean at most `1 / (1 - margin)` of the
-        // probe's time: only a mean grown past that by the margin again
-        // calls for a new probe, not one that stood still.
-        let margin = f64::from(self.params.margin);
-        let slack = (1.0 + margin) / (1.0 - margin);
-        let overtaken = |c: &Choice| c.last_time.is_some_and(|t| mean > t * slack);
-        (0..self.choices.len())
-            .filter(|&c| c != self.current)
-            .filter(|&c| self.choices[c].next_probe <= self.frame || overtaken(&self.choices[c]))
-            .min_by_key(|&c| self.choices[c].next_probe)
     }
 }
 
@@ -334,16 +219,22 @@ impl CullingMethod for Auto {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
-        if self.choices.is_empty() {
+        if self.methods.is_empty() {
             self.choose_among(backend);
         }
-        if self.probe.is_none() {
-            self.probe = self.due().map(|choice| Probe { choice, times: Vec::new(), excess: 0.0 });
-            self.skip_hopeless_vfc_probe(ctx);
-        }
-        self.probing = self.probe.is_some();
-        self.running = self.probe.as_ref().map_or(self.current, |p| p.choice);
-        self.choices[self.running].method.prepare(ctx, backend);
+        let Self { methods, chooser, model, estimate_steps, .. } = self;
+        // Where the backend models its costs, a frame of `vfc` costs at least
+        // its draws of the instances in view ([`vfc_bound`]): a probe of it
+        // that cannot win is spared, and with it a frame of drawing
+        // everything in view where occlusion culling wins by far.
+        let ticket = chooser.as_mut().expect("made above").begin(|choice, _| {
+            let model = model.as_ref().filter(|_| methods[choice].name() == "vfc")?;
+            let (bound, steps) = vfc_bound(ctx, model);
+            *estimate_steps = steps;
+            Some(bound)
+        });
+        self.ticket = Some(ticket);
+        self.methods[ticket.choice].prepare(ctx, backend);
     }
 
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
@@ -351,40 +242,22 @@ impl CullingMethod for Auto {
         if steps > 0 {
             backend.traverse(steps);
         }
-        self.choices[self.running].method.render(ctx, backend);
+        let running = self.running();
+        self.methods[running].render(ctx, backend);
     }
 
     fn finish_frame(&mut self, stats: &FrameStats) {
         let time = self.frame_time(stats);
-        let choice = &mut self.choices[self.running];
-        let warm_up = !choice.stateless && (choice.frames < COLD_FRAMES || self.last_ran != Some(self.running));
-        choice.frames += 1;
-        self.last_ran = Some(self.running);
-        self.choices[self.running].method.finish_frame(stats);
-        let mean = self.mean;
-        match self.probe.as_mut() {
-            Some(probe) => {
-                probe.excess += mean.map_or(0.0, |m| time - m);
-                if !warm_up {
-                    probe.times.push(time);
-                }
-            }
-            None if !warm_up => self.mean = Some(mean.map_or(time, |m| m + MEAN_WEIGHT * (time - m))),
-            None => {}
+        let running = self.running();
+        self.methods[running].finish_frame(stats);
+        if let (Some(chooser), Some(ticket)) = (&mut self.chooser, self.ticket) {
+            chooser.record(ticket, time);
         }
-        let needed = if self.choices[self.running].stateless { 1 } else { PROBE_FRAMES };
-        // A measured frame at twice the current mean cannot be made up by
-        // the next: the probe ends at once.
-        let lost = |p: &Probe| p.times.last().zip(mean).is_some_and(|(&t, m)| t > CLEARLY_SLOWER * m);
-        if let Some(probe) = self.probe.take_if(|p| p.times.len() as u32 >= needed || lost(p)) {
-            self.end_probe(probe);
-        }
-        self.frame += 1;
     }
 
     fn take_warnings(&mut self) -> Vec<String> {
         let mut warnings = std::mem::take(&mut self.warnings);
-        self.choices.iter_mut().for_each(|c| warnings.extend(c.method.take_warnings()));
+        self.methods.iter_mut().for_each(|m| warnings.extend(m.take_warnings()));
         warnings
     }
 
@@ -392,9 +265,9 @@ impl CullingMethod for Auto {
     /// `probe` 1 on a probe's frames.
     fn counters(&self) -> Vec<(&'static str, f64)> {
         let on = |yes: bool| f64::from(u8::from(yes));
-        let mut counters: Vec<_> =
-            self.choices.iter().zip(0..).map(|(c, i)| (c.method.name(), on(i == self.running))).collect();
-        counters.push(("probe", on(self.probing)));
+        let running = self.running();
+        let mut counters: Vec<_> = self.methods.iter().zip(0..).map(|(m, i)| (m.name(), on(i == running))).collect();
+        counters.push(("probe", on(self.ticket.is_some_and(|t| t.is_probe()))));
         counters
     }
 }
@@ -534,6 +407,6 @@ mod tests {
         assert_eq!(warnings.iter().filter(|w| w.contains("no frame time")).count(), 1, "{warnings:?}");
         // Without GPU-resident culling hiz is not among the choices.
         assert_eq!(auto.choices(), ["chcpp", "vfc"]);
-        assert!(auto.mean.is_some_and(|m| m > 0.0));
+        assert!(auto.chooser.as_ref().and_then(Chooser::mean).is_some_and(|m| m > 0.0));
     }
 }

@@ -1,0 +1,287 @@
+//! [`Chooser`]: `auto`'s rules for which choice runs a frame, apart from
+//! what the choices are. [`Auto`](super::Auto) chooses among culling
+//! methods on any backend; a GPU-driven culler chooses among its late tests
+//! by the same rules, with frame times read back some frames late. The
+//! rules are described in [`super`]'s documentation.
+
+use super::AutoParams;
+
+/// Measured frames of a probe, after its warm-up frame.
+const PROBE_FRAMES: u32 = 2;
+
+/// A probe's measured frame this many times the current mean ends it.
+const CLEARLY_SLOWER: f64 = 2.0;
+
+/// Frames a choice runs from nothing before one is measured.
+const COLD_FRAMES: u64 = 2;
+
+/// Weight of the newest frame in the current choice's running mean.
+const MEAN_WEIGHT: f64 = 0.25;
+
+/// One choice, with its probe schedule.
+#[derive(Clone, Debug)]
+struct Choice {
+    /// Whether it carries nothing from frame to frame: its first frame
+    /// needs no warm-up, and one measured frame is its probe.
+    stateless: bool,
+    /// The shortest wait before its next probe, frames.
+    wait: u64,
+    /// First frame at which it may be probed.
+    next_probe: u64,
+    /// Its mean frame time when last measured (a probe, or its frames as
+    /// the current choice), ms.
+    last_time: Option<f64>,
+    /// Frames it has run.
+    frames: u64,
+}
+
+/// A probe under way.
+#[derive(Clone, Debug)]
+struct Probe {
+    choice: usize,
+    /// Which probe this is: frames of an earlier one, recorded late, are
+    /// not counted in it.
+    serial: u64,
+    /// Measured frame times, warm-up excluded.
+    times: Vec<f64>,
+    /// Its frames' time beyond the current choice's mean, warm-up
+    /// included, ms.
+    excess: f64,
+}
+
+/// What runs one frame ([`Chooser::begin`]); handed back with the frame's
+/// time ([`Chooser::record`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ticket {
+    /// The choice that runs the frame.
+    pub choice: usize,
+    /// Whether the frame only warms the choice up (not measured).
+    warm_up: bool,
+    /// The probe the frame belongs to, if any.
+    probe: Option<u64>,
+}
+
+impl Ticket {
+    /// Whether the frame runs a probe rather than the current choice.
+    pub fn is_probe(&self) -> bool {
+        self.probe.is_some()
+    }
+}
+
+/// `auto`'s choice among a fixed list of choices by measured frame time:
+/// the current one runs; the others are probed now and then, within a
+/// budget, and take over when faster by a margin.
+#[derive(Clone, Debug)]
+pub struct Chooser {
+    params: AutoParams,
+    choices: Vec<Choice>,
+    current: usize,
+    /// The current choice's running mean frame time, ms.
+    mean: Option<f64>,
+    probe: Option<Probe>,
+    probes_begun: u64,
+    last_ran: Option<usize>,
+    /// Frames begun.
+    begun: u64,
+}
+
+impl Chooser {
+    /// A chooser among `stateless.len()` choices, tried first in that
+    /// order (the first is current until measured), `stateless[i]` saying
+    /// whether choice `i` carries nothing from frame to frame. At least one
+    /// choice.
+    pub fn new(params: AutoParams, stateless: &[bool]) -> Self {
+        assert!(!stateless.is_empty(), "a chooser needs a choice");
+        let choices = stateless
+            .iter()
+            .map(|&stateless| Choice {
+                stateless,
+                wait: u64::from(params.probe),
+                next_probe: 0,
+                last_time: None,
+                frames: 0,
+            })
+            .collect();
+        Self { params, choices, current: 0, mean: None, probe: None, probes_begun: 0, last_ran: None, begun: 0 }
+    }
+
+    /// The choice frames run when no probe does.
+    pub fn current(&self) -> usize {
+        self.current
+    }
+
+    /// The current choice's running mean frame time, ms, once measured.
+    pub fn mean(&self) -> Option<f64> {
+        self.mean
+    }
+
+    /// Begins a frame: the choice due for a probe, if any, else the
+    /// current one. `bound(choice, mean)` may give a lower bound of a due
+    /// choice's frame time, ms, where the caller knows one; a bound no
+    /// faster than the current `mean` by the margin puts the probe off as
+    /// if it had lost at that time, sparing its frame.
+    pub fn begin(&mut self, bound: impl FnOnce(usize, f64) -> Option<f64>) -> Ticket {
+        let frame = self.begun;
+        if self.probe.is_none() {
+            if let Some((choice, mean)) = self.due().zip(self.mean) {
+                match bound(choice, mean) {
+                    Some(bound) if bound >= mean * (1.0 - self.margin()) => self.schedule(choice, bound, 0.0, frame),
+                    _ => {
+                        self.probes_begun += 1;
+                        let serial = self.probes_begun;
+                        self.probe = Some(Probe { choice, serial, times: Vec::new(), excess: 0.0 });
+                    }
+                }
+            }
+        }
+        let choice = self.probe.as_ref().map_or(self.current, |p| p.choice);
+        let c = &mut self.choices[choice];
+        let warm_up = !c.stateless && (c.frames < COLD_FRAMES || self.last_ran != Some(choice));
+        c.frames += 1;
+        self.last_ran = Some(choice);
+        self.begun += 1;
+        Ticket { choice, warm_up, probe: self.probe.as_ref().map(|p| p.serial) }
+    }
+
+    /// Records `time` ms for the frame `ticket` began. A frame of a probe
+    /// that has ended, or of a choice no longer current, counts for
+    /// nothing (its time came back late).
+    pub fn record(&mut self, ticket: Ticket, time: f64) {
+        let mean = self.mean;
+        match self.probe.as_mut() {
+            Some(probe) if ticket.probe == Some(probe.serial) => {
+                probe.excess += mean.map_or(0.0, |m| time - m);
+                if !ticket.warm_up {
+                    probe.times.push(time);
+                }
+            }
+            _ if ticket.probe.is_none() && ticket.choice == self.current && !ticket.warm_up => {
+                self.mean = Some(mean.map_or(time, |m| m + MEAN_WEIGHT * (time - m)));
+            }
+            _ => return,
+        }
+        let Some(probe) = &self.probe else { return };
+        let needed = if self.choices[probe.choice].stateless { 1 } else { PROBE_FRAMES };
+        // A measured frame at twice the current mean cannot be made up by
+        // the next: the probe ends at once.
+        let lost = probe.times.last().zip(mean).is_some_and(|(&t, m)| t > CLEARLY_SLOWER * m);
+        if probe.times.len() as u32 >= needed || lost {
+            let probe = self.probe.take().expect("checked above");
+            self.end_probe(probe);
+        }
+    }
+
+    fn margin(&self) -> f64 {
+        f64::from(self.params.margin)
+    }
+
+    /// The latest frame begun.
+    fn now(&self) -> u64 {
+        self.begun.saturating_sub(1)
+    }
+
+    /// Sets when `choice`, last measured at `time` ms, is next tried: after
+    /// its wait from `frame`, and late enough that a probe costing `excess`
+    /// ms beyond the current mean stays within its share of the budget
+    /// (the budget is split evenly among the choices other than the current
+    /// one, so that all probes together stay within it). Its wait doubles.
+    fn schedule(&mut self, choice: usize, time: f64, excess: f64, frame: u64) {
+        let others = self.choices.len().saturating_sub(1).max(1) as f64;
+        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time) / others;
+        let budget_wait = if per_frame > 0.0 { (excess.max(0.0) / per_frame).ceil() as u64 } else { 0 };
+        let c = &mut self.choices[choice];
+        c.last_time = Some(time);
+        c.next_probe = frame + c.wait.max(budget_wait);
+        c.wait = c.wait.saturating_mul(2);
+    }
+
+    /// Ends a probe: the probed choice takes over if it beat the current
+    /// one by the margin; the one left waits for its next probe.
+    fn end_probe(&mut self, probe: Probe) {
+        let probed = probe.times.iter().sum::<f64>() / probe.times.len() as f64;
+        let mean = self.mean.unwrap_or(probed);
+        let now = self.now();
+        if probed < mean * (1.0 - self.margin()) {
+            let previous = std::mem::replace(&mut self.current, probe.choice);
+            self.mean = Some(probed);
+            let frames = if self.choices[previous].stateless { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
+            self.schedule(previous, mean, frames * (mean - probed), now);
+        } else {
+            self.schedule(probe.choice, probed, probe.excess, now);
+        }
+    }
+
+    /// The choice due for a probe now, if any (the earliest due first):
+    /// one whose wait is over, or one last measured faster than the
+    /// current choice is now (the current one has stopped paying).
+    fn due(&self) -> Option<usize> {
+        let mean = self.mean?;
+        // A lost probe left the mean at most `1 / (1 - margin)` of the
+        // probe's time: only a mean grown past that by the margin again
+        // calls for a new probe, not one that stood still.
+        let slack = (1.0 + self.margin()) / (1.0 - self.margin());
+        let overtaken = |c: &Choice| c.last_time.is_some_and(|t| mean > t * slack);
+        (0..self.choices.len())
+            .filter(|&c| c != self.current)
+            .filter(|&c| self.choices[c].next_probe <= self.begun || overtaken(&self.choices[c]))
+            .min_by_key(|&c| self.choices[c].next_probe)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs a chooser among choices costing `costs` ms (choice 0 first, all
+    /// keeping state) for `frames` frames, each frame's time recorded
+    /// `delay` frames after it began; returns the choice of each frame.
+    fn run(costs: &[f64], frames: usize, delay: usize) -> Vec<usize> {
+        let mut chooser = Chooser::new(AutoParams::default(), &vec![false; costs.len()]);
+        let mut pending = std::collections::VecDeque::new();
+        let mut ran = Vec::new();
+        for _ in 0..frames {
+            let ticket = chooser.begin(|_, _| None);
+            ran.push(ticket.choice);
+            pending.push_back(ticket);
+            if pending.len() > delay {
+                let t = pending.pop_front().unwrap();
+                chooser.record(t, costs[t.choice]);
+            }
+        }
+        ran
+    }
+
+    #[test]
+    fn times_read_back_late_still_find_the_fastest() {
+        for delay in [0, 3] {
+            let ran = run(&[2.0, 3.0, 1.0], 400, delay);
+            let late = ran[100..].iter().filter(|&&c| c == 2).count();
+            assert!(late as f64 > 0.97 * 300.0, "delay {delay}: the fastest ran {late} of 300 frames");
+        }
+    }
+
+    #[test]
+    fn a_late_time_of_an_ended_probe_counts_for_nothing() {
+        let mut chooser = Chooser::new(AutoParams::default(), &[true, true]);
+        let first = chooser.begin(|_, _| None);
+        chooser.record(first, 1.0);
+        // Choice 1 is due at once (never measured): one frame probes it.
+        let probe = chooser.begin(|_, _| None);
+        assert!(probe.is_probe() && probe.choice == 1);
+        chooser.record(probe, 3.0);
+        assert_eq!(chooser.current(), 0);
+        // The same frame's time again, late, changes nothing.
+        let before = chooser.clone();
+        chooser.record(probe, 0.1);
+        assert_eq!((chooser.current(), chooser.mean()), (before.current(), before.mean()));
+    }
+
+    #[test]
+    fn a_bound_that_cannot_win_spares_the_probe() {
+        let mut chooser = Chooser::new(AutoParams::default(), &[true, true]);
+        let first = chooser.begin(|_, _| None);
+        chooser.record(first, 1.0);
+        let next = chooser.begin(|choice, mean| (choice == 1).then_some(mean * 2.0));
+        assert_eq!((next.choice, next.is_probe()), (0, false));
+    }
+}
