@@ -50,7 +50,8 @@ impl QueryPool {
     }
 }
 
-fn new_readback(ctx: &GpuContext, size: u64, label: &str) -> Readback {
+/// A resolve buffer and its mappable copy of `size` bytes.
+pub(crate) fn new_readback(ctx: &GpuContext, size: u64, label: &str) -> Readback {
     let buffer = |usage| {
         ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
     };

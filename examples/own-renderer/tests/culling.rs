@@ -1,5 +1,5 @@
 //! The example renderer with occlude's culling on (the query-driven methods
-//! through `Culler`, `hiz`, `roc` and `ioc` through `GpuCuller`) draws fewer instances than
+//! through `Culler`; `hiz`, `roc`, `ioc` and `auto` through `GpuCuller`) draws fewer instances than
 //! with culling off, and its images are the same, bit for bit (colour and
 //! depth), on every frame of a moving camera, with forward and with reverse
 //! Z (with `Depth24Plus`, whose depth cannot be read back, the colour); and
@@ -8,6 +8,7 @@
 //! message where there is none, unless `OCCLUDE_REQUIRE_GPU=1`.
 
 use occlude::glam::{Mat4, Vec3};
+use occlude::methods::auto::AutoParams;
 use occlude::methods::hiz::{Granularity, HizParams};
 use occlude::methods::ioc::IocParams;
 use occlude::methods::roc::{RocMode, RocParams};
@@ -147,7 +148,8 @@ fn culling_keeps_the_image_of_two_hundred_meshes() {
 #[test]
 fn culling_passes_are_the_same_for_one_mesh_and_two_hundred() {
     let Some((device, queue)) = device("culling_passes_are_the_same_for_one_mesh_and_two_hundred") else { return };
-    for method in GPU_METHODS {
+    // `auto`'s passes are those of the late test it chooses each frame.
+    for method in GPU_METHODS.into_iter().filter(|&m| m != "auto") {
         let [one, many] = [1, 200].map(|meshes| {
             let options = Options {
                 size: 256,
@@ -371,8 +373,15 @@ fn the_gpu_driven_embedding_refuses_what_it_cannot_cull() {
     // range, are refused by name.
     let node = Method::Hiz(HizParams { granularity: Granularity::Node, ..Default::default() });
     let last = Method::Roc(RocParams { mode: RocMode::Last });
-    let auto = Method::Ioc(IocParams { auto: true, ..Default::default() });
-    for (method, setting) in [(node, "hiz.granularity=node"), (last, "roc.mode=last"), (auto, "ioc.auto=on")] {
+    let ioc_auto = Method::Ioc(IocParams { auto: true, ..Default::default() });
+    let cpu_auto = Method::Auto(AutoParams { gpu: false, ..Default::default() });
+    let refused = [
+        (node, "hiz.granularity=node"),
+        (last, "roc.mode=last"),
+        (ioc_auto, "ioc.auto=on"),
+        (cpu_auto, "auto.gpu=off"),
+    ];
+    for (method, setting) in refused {
         match GpuCuller::new(&device, &queue, attachments, &bounds, &method, draw).err() {
             Some(EmbedError::UnsupportedSetting(named)) => assert_eq!(named, setting),
             other => panic!("{setting}: {other:?}"),
@@ -505,6 +514,37 @@ fn the_gpu_driven_embedding_follows_moving_instances() {
             assert_eq!(culler.read_counts().unwrap(), *counts, "{method}, step {k}");
         }
         assert!(matches!(culler.update(&[InstanceChange::Hide(7)]), Err(EmbedError::Motion(_))), "{method}");
+    }
+}
+
+/// `auto` in a [`GpuCuller`] tries each of its late tests (`roc`, `hiz`,
+/// the frustum alone) within its first frames, timed by timestamps where
+/// the device has them and by the wall clock where not; whichever runs,
+/// the one box in view is in every frame's lists as the other methods put
+/// it (late in the first frame, early after).
+#[test]
+fn auto_in_the_gpu_driven_embedding_tries_every_late_test() {
+    let test = "auto_in_the_gpu_driven_embedding_tries_every_late_test";
+    let stamps = RASTER_FEATURES | wgpu::Features::TIMESTAMP_QUERY;
+    for features in [RASTER_FEATURES, stamps] {
+        let Some((device, queue)) = device_with(test, features) else { return };
+        let (attachments, bounds) = one_box();
+        let draw = IndirectDraw::NonIndexed { vertex_count: 36, first_vertex: 0 };
+        let depth = sampled_depth(&device, attachments.depth);
+        let target = FrameTarget::new(None, wgpu::Color::BLACK, &depth);
+        let mut culler = GpuCuller::new(&device, &queue, attachments, &bounds, &"auto".parse().unwrap(), draw).unwrap();
+        let mut ran = Vec::new();
+        for frame in 0..40 {
+            culler.render(&forward_camera(), target, |_, _| {}).unwrap();
+            ran.push(culler.late_test().0);
+            let expected = if frame == 0 { [0, 1] } else { [1, 0] };
+            assert_eq!(culler.read_counts().unwrap(), expected, "frame {frame}, {}", ran[frame]);
+        }
+        let timed = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        for method in ["roc", "hiz", "vfc"] {
+            assert!(ran.contains(&method), "timestamps {timed}: {method} never ran: {ran:?}");
+        }
+        assert_eq!(ran[0], "roc", "roc is tried first");
     }
 }
 

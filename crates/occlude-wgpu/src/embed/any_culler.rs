@@ -7,7 +7,8 @@ use occlude_core::methods::Method;
 use occlude_core::{Aabb, Camera, FrameStats, InstanceChange, Scene, Upkeep};
 
 /// A [`Culler`] for a query-driven method, a [`GpuCuller`] for a
-/// GPU-driven one ([`Method::is_gpu_driven`]). The renderer gives both ways
+/// GPU-driven one ([`Method::is_gpu_driven`]) and for `auto` where the
+/// device runs GPU-driven culling. The renderer gives both ways
 /// of drawing each frame: a list of instances decided on the CPU, and a
 /// [`VisibleList`] drawn indirectly; the method in use calls one of them.
 #[allow(clippy::large_enum_variant)] // one per renderer: the sizes do not matter
@@ -43,11 +44,19 @@ impl AnyCuller {
         method: Method,
         draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
-        Ok(if method.is_gpu_driven() {
-            AnyCuller::Gpu(GpuCuller::for_scene(device, queue, attachments, scene, &method, draws)?)
-        } else {
-            AnyCuller::Queries(Culler::for_scene(device, queue, attachments, scene, method)?)
-        })
+        if method.is_gpu_driven() {
+            return Ok(AnyCuller::Gpu(GpuCuller::for_scene(device, queue, attachments, scene, &method, draws)?));
+        }
+        if matches!(method, Method::Auto(p) if p.gpu) {
+            // `auto` chooses among GPU-driven tests where the device runs
+            // them, else among query-driven methods.
+            match GpuCuller::for_scene(device, queue, attachments, scene.clone(), &method, draws) {
+                Ok(culler) => return Ok(AnyCuller::Gpu(culler)),
+                Err(EmbedError::Adapter(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(AnyCuller::Queries(Culler::for_scene(device, queue, attachments, scene, method)?))
     }
 
     /// For a [`GpuCuller`], [`GpuCuller::with_list_pipeline`]; a

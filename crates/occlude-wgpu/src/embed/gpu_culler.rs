@@ -3,7 +3,8 @@
 //! [`occlude_core::methods::hiz`]), raster occlusion culling (`roc`,
 //! [`occlude_core::methods::roc`]; IOC poster, section 1) or its
 //! hierarchical form (`ioc`, [`occlude_core::methods::ioc`]; IOC poster,
-//! section 2). Each frame occlude writes two lists of visible instance ids
+//! section 2), or `auto`'s choice among them (`gpu_auto.rs`). Each frame
+//! occlude writes two lists of visible instance ids
 //! (the early pass's and the late pass's), each with one indirect command
 //! per draw group and mesh (`draws.rs`), and the renderer draws each list
 //! with a multi-draw per group of its own. The compute
@@ -42,6 +43,7 @@
 use super::backend::{begin_pass, PassStart};
 use super::box_tests::{BoxTest, BoxTests, TestInputs};
 use super::draws::{DrawTables, Draws, VisibleList};
+use super::gpu_auto::GpuAuto;
 use super::node_levels::{NodeLevels, WalkInputs};
 use super::passes::{PassCounts, Tally};
 use super::{Attachments, EmbedError, FrameTarget};
@@ -54,7 +56,7 @@ use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
 use occlude_core::depth_pyramid::PIXEL_MARGIN;
 use occlude_core::hierarchy::BuildOptions;
-use occlude_core::methods::hiz::Granularity;
+use occlude_core::methods::hiz::{Granularity, HizParams};
 use occlude_core::methods::ioc::IocWalk;
 use occlude_core::methods::roc::RocMode;
 use occlude_core::methods::{Method, MethodError};
@@ -66,8 +68,10 @@ use occlude_core::{
 /// pass over the renderer's depth, and `roc` and `ioc` (`roc` over a BVH
 /// of the boxes, level by level), whose box tests rasterize the boxes
 /// against the renderer's depth texture with a fragment stage writing
-/// flags (their device needs [`RASTER_FEATURES`]).
-pub const GPU_METHODS: [&str; 3] = ["hiz", "roc", "ioc"];
+/// flags (their device needs [`RASTER_FEATURES`]); and `auto`, which runs
+/// `roc`'s test (where the device has those features), `hiz`'s or only the
+/// frustum's each frame, whichever its GPU time says is fastest.
+pub const GPU_METHODS: [&str; 4] = ["hiz", "roc", "ioc", "auto"];
 
 /// The device features `roc` and `ioc` need in a [`GpuCuller`] (checked
 /// only for them): forced early depth tests, so that a box's fragments set
@@ -118,12 +122,39 @@ enum LateTest {
     /// `ioc`: the BVH's node boxes rasterized level by level, then the
     /// instances marked visible outside the frustum dropped.
     Nodes(BoxTests, NodeLevels, Box<Hierarchy>),
+    /// `vfc` (one of `auto`'s choices): every instance marked visible from
+    /// this buffer of ones, then those outside the frustum dropped.
+    Frustum(wgpu::Buffer),
 }
 
-/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`) in a renderer's own
-/// passes: give it the renderer's device, attachments, per-instance boxes
-/// and how each instance is drawn once; each frame, the camera and the
-/// frame's views, and draw its two [`VisibleList`]s.
+impl LateTest {
+    /// The method the test is.
+    fn name(&self) -> &'static str {
+        match self {
+            LateTest::Pyramid(_) => "hiz",
+            LateTest::Every(..) => "roc",
+            LateTest::Nodes(..) => "ioc",
+            LateTest::Frustum(_) => "vfc",
+        }
+    }
+}
+
+/// Two-phase GPU-driven culling (`hiz`, `roc`, `ioc`, `auto`) in a
+/// renderer's own passes: give it the renderer's device, attachments,
+/// per-instance boxes and how each instance is drawn once; each frame, the
+/// camera and the frame's views, and draw its two [`VisibleList`]s.
+///
+/// **`auto`**, the method to start with, runs one late test a frame:
+/// `roc`'s (where the device has [`RASTER_FEATURES`]), `hiz`'s, or none
+/// beyond the frustum, whichever measured fastest, probing the others
+/// within 1 % of the time ([`occlude_core::methods::auto`]). *Cost:* its
+/// first frames try each test; two timestamps and a 16-byte read-back a
+/// frame; the buffers of all three tests. *Requirements:* a depth texture
+/// with `TEXTURE_BINDING` (for `hiz`); each frame's commands submitted
+/// before the next frame's [`GpuCuller::encode_early`]; `TIMESTAMP_QUERY`
+/// on the device for GPU times, else it times frames by the wall clock
+/// between early phases (which a frame-rate cap makes all alike: then it
+/// keeps what it runs). *Limits:* it does not choose `ioc`.
 ///
 /// # Example
 ///
@@ -190,7 +221,12 @@ pub struct GpuCuller {
     drop_outside: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     compact_early: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     compact_late: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
-    late: LateTest,
+    /// The late tests it may run: one, or `auto`'s choices.
+    late: Vec<LateTest>,
+    /// The late test this frame runs.
+    running: usize,
+    /// `auto`'s choice among `late`.
+    auto: Option<GpuAuto>,
     counts_staging: wgpu::Buffer,
     /// The camera of a frame whose early phase is recorded and late phase
     /// not yet.
@@ -212,7 +248,8 @@ impl GpuCuller {
             Method::Roc(p) if p.mode != RocMode::Exact => "roc.mode=last",
             Method::Ioc(p) if !p.frustum => "ioc.frustum=off",
             Method::Ioc(p) if p.auto => "ioc.auto=on",
-            Method::Hiz(_) | Method::Roc(_) | Method::Ioc(_) => return Ok(()),
+            Method::Auto(p) if !p.gpu => "auto.gpu=off",
+            Method::Hiz(_) | Method::Roc(_) | Method::Ioc(_) | Method::Auto(_) => return Ok(()),
             other => return Err(EmbedError::Unsupported(other.name().to_string())),
         };
         Err(EmbedError::UnsupportedSetting(setting.to_string()))
@@ -253,8 +290,16 @@ impl GpuCuller {
         draws: impl Into<Draws>,
     ) -> Result<Self, EmbedError> {
         Self::check_method(method)?;
-        let raster = !matches!(method, Method::Hiz(_));
-        let reach = if let Method::Hiz(p) = method { p.texels } else { 0 };
+        // `auto` chooses among `roc` (where the device rasterizes box
+        // tests), `hiz` and `vfc`.
+        let methods = match method {
+            Method::Auto(_) => {
+                let roc = device.features().contains(RASTER_FEATURES).then(|| Method::Roc(Default::default()));
+                roc.into_iter().chain([Method::Hiz(HizParams::default()), Method::Vfc]).collect()
+            }
+            one => vec![one.clone()],
+        };
+        let raster = methods.iter().any(|m| matches!(m, Method::Roc(_) | Method::Ioc(_)));
         attachments.check()?;
         check_device(device, raster)?;
         scene.validate()?;
@@ -292,39 +337,62 @@ impl GpuCuller {
         let compact_late = compute("cs_compact_unless");
         let late_groups =
             parity_groups(&ctx, &compact_late, |p| vec![(6, &flags[p]), (7, &flags[1 - p]), (8, &compacted[1])]);
-        let late = if let Method::Ioc(params) = method {
-            let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
-            let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
-            // Depths past the tree's are clamped to it, as `ioc` does
-            // (IocWalk::warnings say so; the embedding runs the defaults).
-            let walk = IocWalk::new(params, &hierarchy);
-            let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
-            let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
-            LateTest::Nodes(tests, levels, Box::new(hierarchy))
-        } else if raster {
-            let tests = BoxTests::new(&ctx, &attachments, &module, n);
-            let every = [0, 1].map(|p| {
-                let inputs =
-                    TestInputs { cull_camera: &camera, boxes: &boxes, ids: (&all, n), flags: &flags[p], stats: &stats };
-                tests.test(&ctx, inputs)
-            });
-            LateTest::Every(tests, every)
-        } else {
-            let samples = attachments.samples > 1;
-            LateTest::Pyramid(PyramidTest {
-                base: compute(if samples { "cs_pyramid_base_samples" } else { "cs_pyramid_base" }),
-                reduce: compute("cs_pyramid_level"),
-                test: compute("cs_test_boxes_pyramid"),
-                reach: param_buffer(device, reach),
-                base_param: device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("pyramid base parameters"),
-                    size: 16,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                }),
-                depth_binding: if samples { 18 } else { 17 },
-                state: None,
-            })
+        let late_test = |method: &Method| match method {
+            Method::Ioc(params) => {
+                let hierarchy = Hierarchy::build(&scene, HierarchyKind::Bvh, BuildOptions::default());
+                let tests = BoxTests::new(&ctx, &attachments, &module, hierarchy.node_count() as u32);
+                // Depths past the tree's are clamped to it, as `ioc` does
+                // (IocWalk::warnings say so; the embedding runs the defaults).
+                let walk = IocWalk::new(params, &hierarchy);
+                let inputs = WalkInputs { cull_camera: &camera, instance_flags: &flags, stats: &stats };
+                let levels = NodeLevels::new(&ctx, &module, &tests, &hierarchy, &walk, inputs);
+                LateTest::Nodes(tests, levels, Box::new(hierarchy))
+            }
+            Method::Roc(_) => {
+                let tests = BoxTests::new(&ctx, &attachments, &module, n);
+                let every = [0, 1].map(|p| {
+                    let inputs = TestInputs {
+                        cull_camera: &camera,
+                        boxes: &boxes,
+                        ids: (&all, n),
+                        flags: &flags[p],
+                        stats: &stats,
+                    };
+                    tests.test(&ctx, inputs)
+                });
+                LateTest::Every(tests, every)
+            }
+            Method::Hiz(params) => {
+                let samples = attachments.samples > 1;
+                LateTest::Pyramid(PyramidTest {
+                    base: compute(if samples { "cs_pyramid_base_samples" } else { "cs_pyramid_base" }),
+                    reduce: compute("cs_pyramid_level"),
+                    test: compute("cs_test_boxes_pyramid"),
+                    reach: param_buffer(device, params.texels),
+                    base_param: device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("pyramid base parameters"),
+                        size: 16,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                    depth_binding: if samples { 18 } else { 17 },
+                    state: None,
+                })
+            }
+            _ => LateTest::Frustum(storage_init(
+                &ctx,
+                "all visible",
+                bytemuck::cast_slice(&vec![1u32; n as usize]),
+                wgpu::BufferUsages::COPY_SRC,
+            )),
+        };
+        let late: Vec<LateTest> = methods.iter().map(late_test).collect();
+        let auto = match method {
+            Method::Auto(params) => {
+                let stateless: Vec<bool> = late.iter().map(|l| matches!(l, LateTest::Frustum(_))).collect();
+                Some(GpuAuto::new(&ctx, *params, &stateless))
+            }
+            _ => None,
         };
         if let Some(error) = pollster::block_on(scope.pop()) {
             return Err(EmbedError::Adapter(format!("the device cannot run {method}'s culling passes: {error}")));
@@ -346,6 +414,8 @@ impl GpuCuller {
             draws,
             pipeline: None,
             late,
+            running: 0,
+            auto,
             counts_staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("visible counts read-back"),
                 size: 8,
@@ -371,7 +441,11 @@ impl GpuCuller {
         let boxes: Vec<(u32, Aabb)> =
             changed.iter().map(|&i| (i, self.scene.instances[i as usize].culling_bounds())).collect();
         write_boxes(&self.ctx.queue, &self.boxes, &boxes);
-        let LateTest::Nodes(_, levels, hierarchy) = &mut self.late else {
+        let nodes = self.late.iter_mut().find_map(|late| match late {
+            LateTest::Nodes(_, levels, hierarchy) => Some((levels, hierarchy)),
+            _ => None,
+        });
+        let Some((levels, hierarchy)) = nodes else {
             return Ok(Upkeep { instances: changed.len(), ..Upkeep::default() });
         };
         let before = hierarchy.version();
@@ -471,7 +545,8 @@ impl GpuCuller {
     ) -> Result<(), EmbedError> {
         target.check(&self.attachments)?;
         let depth = target.depth.texture();
-        if matches!(self.late, LateTest::Pyramid(_)) && !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        let pyramid = self.late.iter().any(|late| matches!(late, LateTest::Pyramid(_)));
+        if pyramid && !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
             return Err(EmbedError::Attachments(
                 "the depth texture needs TEXTURE_BINDING usage: hiz builds its depth pyramid from it".into(),
             ));
@@ -488,6 +563,9 @@ impl GpuCuller {
         // footprint holds no centre: footprints grow by half a pixel more.
         let samples_margin = if self.attachments.samples > 1 { 0.5 } else { 0.0 };
         write_cull_camera(&self.ctx.queue, &self.camera, camera, PIXEL_MARGIN as f32 + samples_margin);
+        if let Some(auto) = &mut self.auto {
+            self.running = auto.begin(&self.ctx).map_err(EmbedError::Device)?;
+        }
         let now = self.parity;
         for (compacted, list) in self.compacted.iter().zip(&self.lists) {
             encoder.clear_buffer(compacted, 0, Some(4));
@@ -496,7 +574,7 @@ impl GpuCuller {
         encoder.clear_buffer(&self.flags[now], 0, None);
         self.tally.reset();
         let n = self.instance_count();
-        let mut pass = self.tally.compute_pass(encoder);
+        let mut pass = self.tally.timed_compute_pass(encoder, self.auto.as_ref().and_then(GpuAuto::start_write));
         pass.dispatch(&self.drop_outside.0, &self.drop_outside.1[now], n);
         pass.dispatch(&self.compact_early.0, &self.compact_early.1[now], n);
         self.draws.dispatch(&mut pass, &self.lists[0], n);
@@ -523,8 +601,10 @@ impl GpuCuller {
         let camera = self.frame_camera.take().ok_or(EmbedError::Sequence("encode_late without encode_early first"))?;
         target.check(&self.attachments)?;
         let (now, before) = (self.parity, 1 - self.parity);
-        match &self.late {
+        let n = self.instance_count();
+        match &self.late[self.running] {
             LateTest::Pyramid(_) => self.encode_pyramid_test(encoder, target, now),
+            LateTest::Frustum(ones) => encoder.copy_buffer_to_buffer(ones, 0, &self.flags[now], 0, 4 * u64::from(n)),
             LateTest::Every(tests, every) => {
                 tests.set_camera(&self.ctx.queue, &camera, &self.attachments);
                 tests.encode(encoder, &self.tally, target, &self.attachments, &every[now]);
@@ -534,17 +614,19 @@ impl GpuCuller {
                 levels.encode(encoder, &self.tally, tests, target, &self.attachments, now);
             }
         }
-        let n = self.instance_count();
-        let mut pass = self.tally.compute_pass(encoder);
-        if matches!(self.late, LateTest::Nodes(..)) {
-            // `ioc.frustum`: the instances below a visible node that lie
-            // outside the frustum (the drop's groups of parity `before`
+        let mut pass = self.tally.timed_compute_pass(encoder, self.auto.as_ref().and_then(GpuAuto::end_write));
+        if matches!(self.late[self.running], LateTest::Nodes(..) | LateTest::Frustum(_)) {
+            // `ioc.frustum`, and `vfc`: the instances marked visible that
+            // lie outside the frustum (the drop's groups of parity `before`
             // clear this frame's flags).
             pass.dispatch(&self.drop_outside.0, &self.drop_outside.1[before], n);
         }
         pass.dispatch(&self.compact_late.0, &self.compact_late.1[now], n);
         self.draws.dispatch(&mut pass, &self.lists[1], n);
         drop(pass);
+        if let Some(auto) = &mut self.auto {
+            auto.resolve(encoder);
+        }
         self.parity = before;
         Ok(())
     }
@@ -595,6 +677,14 @@ impl GpuCuller {
         self.tally.counts()
     }
 
+    /// The late test running this frame (`hiz`, `roc`, `ioc`, or for
+    /// `auto` also `vfc`: the frustum alone), and whether `auto` is probing
+    /// it rather than running its current choice. An instrument, for tests
+    /// and printouts.
+    pub fn late_test(&self) -> (&'static str, bool) {
+        (self.late[self.running].name(), self.auto.as_ref().is_some_and(GpuAuto::probing))
+    }
+
     /// Instances culled: one per box given.
     fn instance_count(&self) -> u32 {
         self.scene.instances.len() as u32
@@ -607,7 +697,7 @@ impl GpuCuller {
     fn encode_pyramid_test(&mut self, encoder: &mut wgpu::CommandEncoder, target: &FrameTarget<'_>, now: usize) {
         let n = self.instance_count();
         let reverse = u32::from(self.attachments.reverse_z());
-        let LateTest::Pyramid(p) = &mut self.late else { return };
+        let Some(LateTest::Pyramid(p)) = self.late.get_mut(self.running) else { return };
         let (ctx, device) = (&self.ctx, &self.ctx.device);
         let depth = target.depth.texture();
         let size = target.size();

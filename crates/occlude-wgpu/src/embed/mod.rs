@@ -12,12 +12,15 @@
 //!   queries in your passes, and calls your draw code with the instances
 //!   to draw.
 //! - [`GpuCuller`] runs the GPU-driven methods: `hiz` (two-phase Hi-Z),
-//!   `roc` (every box rasterized against your depth) and `ioc` (`roc` down
-//!   a BVH). It writes two lists of visible instances on the GPU, with a
-//!   draw command per mesh and draw group; you draw them with multi-draws.
-//!   Nothing comes back to the CPU.
+//!   `roc` (every box rasterized against your depth), `ioc` (`roc` down
+//!   a BVH), and `auto` (the one to start with: `roc`, `hiz` or frustum
+//!   culling, whichever its GPU timestamps, read back a few frames late,
+//!   measure faster). It writes two lists of visible instances on the GPU,
+//!   with a draw command per mesh and draw group; you draw them with
+//!   multi-draws. Only `auto`'s timestamps come back to the CPU.
 //! - [`AnyCuller`] is either, as the [`Method`](occlude_core::methods::Method)
-//!   says: give it both ways of drawing and switch methods freely.
+//!   says (`auto`: a [`GpuCuller`] where the device runs one): give it both
+//!   ways of drawing and switch methods freely.
 //!
 //! # What you give
 //!
@@ -102,6 +105,7 @@ mod backend;
 mod box_tests;
 mod culler;
 mod draws;
+mod gpu_auto;
 mod gpu_culler;
 mod node_levels;
 mod passes;
@@ -130,7 +134,8 @@ pub enum EmbedError {
     /// A parameter value the method does not run with here
     /// ([`GpuCuller::check_method`]).
     #[error(
-        "{0} does not run in a GpuCuller: it runs hiz at instance granularity, roc.mode=exact, ioc without ioc.auto"
+        "{0} does not run in a GpuCuller: it runs hiz at instance granularity, roc.mode=exact, ioc without ioc.auto, \
+         auto with auto.gpu on"
     )]
     UnsupportedSetting(String),
     /// The method's name or parameters are wrong.

@@ -53,8 +53,18 @@ impl Tally {
     /// Begins a compute pass in `encoder`, counted, whose dispatches are
     /// counted too.
     pub fn compute_pass<'e>(&'e self, encoder: &'e mut wgpu::CommandEncoder) -> ComputePass<'e> {
+        self.timed_compute_pass(encoder, None)
+    }
+
+    /// [`Tally::compute_pass`] writing the timestamps `writes` says, if any.
+    pub fn timed_compute_pass<'e>(
+        &'e self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> ComputePass<'e> {
         bump(&self.compute_passes);
-        ComputePass { pass: encoder.begin_compute_pass(&Default::default()), tally: self }
+        let descriptor = wgpu::ComputePassDescriptor { label: None, timestamp_writes: writes };
+        ComputePass { pass: encoder.begin_compute_pass(&descriptor), tally: self }
     }
 
     /// Begins a render pass on `target`'s views as
