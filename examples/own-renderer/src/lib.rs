@@ -281,6 +281,15 @@ impl Renderer {
         }
     }
 
+    /// The late test a GPU-driven frame ran, and whether `auto` was probing
+    /// it (see `GpuCuller::late_test`); `None` for other culling.
+    pub fn late_test(&self) -> Option<(&'static str, bool)> {
+        match &self.culling {
+            Some(AnyCuller::Gpu(culler)) => Some(culler.late_test()),
+            _ => None,
+        }
+    }
+
     /// Culls with occlude's method `method` from now on (`None`: culling off).
     pub fn set_culling(&mut self, method: Option<Method>) -> Result<(), Box<dyn Error>> {
         // occlude: the attachments, the instance boxes and the method, once.

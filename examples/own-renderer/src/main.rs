@@ -5,7 +5,7 @@
 //! idle (with `--gpu-time`, a GPU-driven method's culling passes and
 //! drawing passes timed on the GPU), and writes the last frame as a PNG.
 //!
-//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc]
+//! `cargo run --release -p own-renderer -- [--culling off,chcpp,chc,om,sw,vfc,hiz,roc,ioc,auto]
 //! [--frames N] [--grid N] [--meshes N] [--msaa SAMPLES] [--viewport X,Y,W,H] [--size PIXELS] [--reverse-z] [--depth24]
 //! [--gpu-time] [--out FILE.png]`
 
@@ -71,6 +71,9 @@ fn run() -> Result<(), Box<dyn Error>> {
             if let Some(p) = renderer.pass_counts() {
                 let (compute, render, dispatches) = (p.compute_passes, p.render_passes, p.dispatches);
                 line += &format!("; {compute} compute and {render} render passes, {dispatches} dispatches");
+                if let Some((test, probe)) = renderer.late_test().filter(|_| mode == "auto") {
+                    line += &format!("; late test {test}{}", if probe { " (probe)" } else { "" });
+                }
                 if let Some(gpu) = renderer.gpu_times()? {
                     line += &format!("; GPU: culling {:.2} ms, drawing {:.2} ms", gpu.culling_ms, gpu.drawing_ms);
                     total_gpu = (total_gpu.0 + gpu.culling_ms, total_gpu.1 + gpu.drawing_ms);

@@ -4,14 +4,15 @@
 //! [`Chooser`]). The tests share the culler's visibility flags, so a switch
 //! keeps what the last frame found.
 //!
-//! The evidence is GPU time: from the start of the early phase's first
-//! pass to the end of the late phase's last, the early list's draws
-//! between (what a looser test costs shows there, a frame later).
-//! Timestamps are resolved in the frame's own encoder and read back
-//! without waiting, some frames late, through a ring of read-back buffers;
-//! a frame whose slot is still being read goes unmeasured. On a device
-//! without timestamp queries a frame is charged the wall time from its
-//! early phase to the next frame's.
+//! The evidence is GPU time, frame to frame: from the end of a frame's
+//! first pass (the early list's compaction) to the start of the next
+//! frame's, so that both lists' draws count, and whatever else the
+//! renderer draws. A looser test shows there too: its extra instances are
+//! drawn in the next frame's early list. Timestamps are resolved in the
+//! renderer's encoder and read back without waiting, some frames late,
+//! through a ring of read-back buffers; a frame whose slot is still being
+//! read goes unmeasured. On a device without timestamp queries a frame is
+//! charged the wall time from its early phase to the next frame's.
 
 use crate::context::GpuContext;
 use crate::queries::{encode_resolve, new_readback, read_values, Readback};
@@ -25,10 +26,11 @@ const SLOTS: u32 = 4;
 /// Bytes of a frame's two timestamps.
 const STAMP_BYTES: u64 = 16;
 
-/// One frame's timestamps on their way back.
+/// One frame's timestamps (its start at index `2 * slot`, its end at
+/// `2 * slot + 1`) on their way back.
 struct Slot {
     readback: Readback,
-    /// The frame whose timestamps were resolved into it.
+    /// The frame timed in it.
     ticket: Option<Ticket>,
     /// Whether its resolve was recorded and not yet mapped.
     resolved: bool,
@@ -37,8 +39,19 @@ struct Slot {
 
 /// Where frame times come from.
 enum Clock {
-    /// Two timestamps a frame, in ring slot `frame % SLOTS`.
-    Stamps { set: wgpu::QuerySet, slots: Vec<Slot>, period_ns: f64, frame: u32, timed: bool },
+    /// Timestamps in a ring of slots.
+    Stamps {
+        set: wgpu::QuerySet,
+        slots: Vec<Slot>,
+        period_ns: f64,
+        /// Frames begun.
+        frame: u32,
+        /// This frame's slot, if it is timed.
+        timed: Option<u32>,
+        /// The last frame's slot, if timed: this frame's first pass writes
+        /// its end.
+        closing: Option<u32>,
+    },
     /// The wall time between early phases, charged to the earlier frame.
     Wall { last: Option<(Instant, Ticket)> },
 }
@@ -71,7 +84,8 @@ impl GpuAuto {
                     .collect(),
                 period_ns: f64::from(ctx.queue.get_timestamp_period()),
                 frame: 0,
-                timed: false,
+                timed: None,
+                closing: None,
             }
         } else {
             Clock::Wall { last: None }
@@ -84,7 +98,7 @@ impl GpuAuto {
     /// before were submitted (a renderer submits its frames in order).
     pub fn begin(&mut self, ctx: &GpuContext) -> Result<usize, String> {
         let ticket = match &mut self.clock {
-            Clock::Stamps { slots, period_ns, frame, timed, .. } => {
+            Clock::Stamps { slots, period_ns, frame, timed, closing, .. } => {
                 for slot in slots.iter_mut() {
                     if std::mem::take(&mut slot.resolved) {
                         slot.mapping = Some(Mapping::start(&slot.readback.staging, STAMP_BYTES));
@@ -93,18 +107,21 @@ impl GpuAuto {
                         slot.mapping = None;
                         let stamps = read_values(&slot.readback, STAMP_BYTES)?;
                         let ms = stamps[1].saturating_sub(stamps[0]) as f64 * *period_ns * 1e-6;
-                        let ticket = slot.ticket.take().expect("a resolved slot has its frame");
-                        self.chooser.record(ticket, ms);
+                        if let Some(ticket) = slot.ticket.take() {
+                            self.chooser.record(ticket, ms);
+                        }
                     }
                 }
                 let ticket = self.chooser.begin(|_, _| None);
+                *closing = timed.take();
+                let k = *frame % SLOTS;
                 *frame = frame.wrapping_add(1);
-                let slot = &mut slots[(*frame % SLOTS) as usize];
-                // A slot not being read is free, or its frame's late phase
-                // never came (its resolve was never recorded).
-                *timed = slot.mapping.is_none();
-                if *timed {
+                // A slot not being read is free, or its frame was never
+                // closed (no late phase followed): it is taken.
+                let slot = &mut slots[k as usize];
+                if slot.mapping.is_none() {
                     slot.ticket = Some(ticket);
+                    *timed = Some(k);
                 }
                 ticket
             }
@@ -127,41 +144,25 @@ impl GpuAuto {
         self.ticket.is_some_and(|t| t.is_probe())
     }
 
-    /// The timestamp write for the early phase's first pass, if the frame
-    /// is timed.
-    pub fn start_write(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.writes().map(|(set, k)| wgpu::ComputePassTimestampWrites {
+    /// The timestamp writes of the frame's first pass: at its start the
+    /// last frame's end, at its end this frame's start.
+    pub fn first_pass_writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let Clock::Stamps { set, timed, closing, .. } = &self.clock else { return None };
+        (timed.is_some() || closing.is_some()).then(|| wgpu::ComputePassTimestampWrites {
             query_set: set,
-            beginning_of_pass_write_index: Some(k),
-            end_of_pass_write_index: None,
+            beginning_of_pass_write_index: closing.map(|k| 2 * k + 1),
+            end_of_pass_write_index: timed.map(|k| 2 * k),
         })
     }
 
-    /// The timestamp write for the late phase's last pass, if the frame is
-    /// timed.
-    pub fn end_write(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.writes().map(|(set, k)| wgpu::ComputePassTimestampWrites {
-            query_set: set,
-            beginning_of_pass_write_index: None,
-            end_of_pass_write_index: Some(k + 1),
-        })
-    }
-
-    /// Records the resolve of the frame's timestamps into `encoder`, after
-    /// its last pass.
+    /// Records into `encoder`, after the frame's first pass, the resolve of
+    /// the last frame's timestamps, both written by then.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if let Clock::Stamps { set, slots, frame, timed: true, .. } = &mut self.clock {
-            let slot = &mut slots[(*frame % SLOTS) as usize];
-            encode_resolve(encoder, set, 2 * (*frame % SLOTS), 2, &slot.readback);
+        let Clock::Stamps { set, slots, closing, .. } = &mut self.clock else { return };
+        if let Some(k) = closing.take() {
+            let slot = &mut slots[k as usize];
+            encode_resolve(encoder, set, 2 * k, 2, &slot.readback);
             slot.resolved = true;
-        }
-    }
-
-    /// The query set and this frame's first index in it, if timed.
-    fn writes(&self) -> Option<(&wgpu::QuerySet, u32)> {
-        match &self.clock {
-            Clock::Stamps { set, frame, timed: true, .. } => Some((set, 2 * (*frame % SLOTS))),
-            _ => None,
         }
     }
 }

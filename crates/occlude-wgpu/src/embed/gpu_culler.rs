@@ -574,11 +574,15 @@ impl GpuCuller {
         encoder.clear_buffer(&self.flags[now], 0, None);
         self.tally.reset();
         let n = self.instance_count();
-        let mut pass = self.tally.timed_compute_pass(encoder, self.auto.as_ref().and_then(GpuAuto::start_write));
+        let writes = self.auto.as_ref().and_then(GpuAuto::first_pass_writes);
+        let mut pass = self.tally.timed_compute_pass(encoder, writes);
         pass.dispatch(&self.drop_outside.0, &self.drop_outside.1[now], n);
         pass.dispatch(&self.compact_early.0, &self.compact_early.1[now], n);
         self.draws.dispatch(&mut pass, &self.lists[0], n);
         drop(pass);
+        if let Some(auto) = &mut self.auto {
+            auto.resolve(encoder);
+        }
         self.frame_camera = Some(*camera);
         Ok(())
     }
@@ -614,7 +618,7 @@ impl GpuCuller {
                 levels.encode(encoder, &self.tally, tests, target, &self.attachments, now);
             }
         }
-        let mut pass = self.tally.timed_compute_pass(encoder, self.auto.as_ref().and_then(GpuAuto::end_write));
+        let mut pass = self.tally.compute_pass(encoder);
         if matches!(self.late[self.running], LateTest::Nodes(..) | LateTest::Frustum(_)) {
             // `ioc.frustum`, and `vfc`: the instances marked visible that
             // lie outside the frustum (the drop's groups of parity `before`
@@ -624,9 +628,6 @@ impl GpuCuller {
         pass.dispatch(&self.compact_late.0, &self.compact_late.1[now], n);
         self.draws.dispatch(&mut pass, &self.lists[1], n);
         drop(pass);
-        if let Some(auto) = &mut self.auto {
-            auto.resolve(encoder);
-        }
         self.parity = before;
         Ok(())
     }
