@@ -107,7 +107,9 @@ impl MethodParams for AutoParams {
 /// **Limits.** It chooses among four methods (not `om`, `ioc`, `chc`); it
 /// assumes that neighbouring frames cost about the same, so after a cut
 /// to another view it may run the wrong method until the next probe; in
-/// the embedding's `Culler` its choices are `chcpp` and `vfc`.
+/// the embedding's `Culler` its choices are `chcpp` and `vfc` (its
+/// `GpuCuller` runs `auto` among `roc`, `hiz` and `vfc` by the same
+/// [`Chooser`]).
 pub struct Auto {
     params: AutoParams,
     /// The methods it chooses among; empty until the first frame, when the
