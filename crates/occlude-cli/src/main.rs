@@ -21,7 +21,7 @@ use occlude_core::methods::{MethodOptions, METHOD_NAMES};
 use occlude_core::{HierarchyKind, UpdatePolicy};
 use occlude_scenes::import::SceneSource;
 use occlude_scenes::{AutoPath, ImportOptions, Size};
-use occlude_soft::GpuModel;
+use occlude_soft::{GpuModel, Shading};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -185,6 +185,11 @@ struct BenchArgs {
     /// Simulated GPU: a preset (gpu-2004, modern) or a TOML file.
     #[arg(long, default_value = "modern")]
     gpu_model: String,
+    /// How the simulated GPU shades drawn fragments, as the CHC++ paper's
+    /// Figure 9 tests: dp (depth only), fix (the model as it is), sh (a
+    /// shader of 40 texture lookups). Soft backend only.
+    #[arg(long, default_value = "fix")]
+    shading: Shading,
     /// Write the full report as JSON.
     #[arg(long, value_parser = parse_output_path)]
     json: Option<PathBuf>,
@@ -368,7 +373,7 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
             .unwrap_or(DEFAULT_RESOLUTION),
         backend: args.backend,
         queries: args.queries,
-        gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?,
+        gpu_model: GpuModel::load(&args.gpu_model).map_err(|e| usage(e.into()))?.with_shading(args.shading),
         dump_frame: args.dump_frame,
         parallel_lanes: !args.serial_lanes,
         ..args.scene.config(args.paper.is_some())?
@@ -378,6 +383,12 @@ fn configure(args: &BenchArgs) -> Result<BenchConfig, Failure> {
         _ => config,
     };
     config.validate().map_err(|e| usage(e.into()))?;
+    if args.shading != Shading::Fixed && (args.backend == BackendKind::Wgpu || args.paper.is_some()) {
+        return Err(usage(anyhow::anyhow!(
+            "--shading sets the soft backend's simulated fragment cost in a plain bench run (not with \
+             --backend wgpu, which shades for real, nor with --paper, which uses the paper's GPU model)"
+        )));
+    }
     if let Some(paper) = &args.paper {
         if args.dump_frame.is_some() {
             return Err(usage(anyhow::anyhow!("--dump-frame cannot be combined with --paper")));

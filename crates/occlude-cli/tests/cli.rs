@@ -27,6 +27,9 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_usage_error(&["bench", "--hierarchy", "octree"], "octree");
     assert_usage_error(&["bench", "--queries", "occlusion"], "expected 'hardware' or 'hib'");
     assert_usage_error(&["bench", "--gpu-model", "gpu-1999"], "gpu-1999");
+    assert_usage_error(&["bench", "--shading", "phong"], "expected dp, fix or sh");
+    assert_usage_error(&["bench", "--shading", "sh", "--backend", "wgpu"], "--shading");
+    assert_usage_error(&["bench", "--shading", "dp", "--paper", "chcpp"], "--shading");
     assert_usage_error(&["bench", "--method-opt", "sw.tav=2"], "no parameter 'tav'");
     assert_usage_error(&["bench", "--plot", "frames.jpg"], "frames.jpg");
     assert_usage_error(

@@ -8,7 +8,9 @@ pub mod clock;
 pub mod gpu_model;
 pub mod raster;
 pub mod sat;
+pub mod shading;
 pub mod workload;
 
 pub use backend::{DrawReplay, SharedSetup, SoftBackend};
 pub use gpu_model::{GpuModel, GpuModelError};
+pub use shading::Shading;
