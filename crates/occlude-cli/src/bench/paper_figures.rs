@@ -8,8 +8,9 @@
 //! 5, 6 and 7 (Figure 7 on a logarithmic axis, as the paper's), the CHC++
 //! paper's Figure 1 (the power plant's frame times) and Figure 10 (the
 //! city's queries, state changes and frame times), the occupancy-map
-//! paper's Figure 7 (the city; the paper plots frame rates) and the IOC
-//! poster's Figure 4.
+//! paper's Figure 7 (the city; the paper plots frame rates, and rendered
+//! polygons, drawn here as triangles per frame below the frame times) and
+//! the IOC poster's Figure 4.
 
 use super::plot::{write_styled_plot, PlotKind, PlotStyle, TimeScale};
 use anyhow::{Context, Result};
@@ -111,6 +112,7 @@ fn paper_name(paper: &str) -> &str {
 pub fn style(paper: &str, scene: &str, kind: PlotKind) -> PlotStyle {
     let figures = FIGURES.iter().find(|f| f.paper == paper && f.scene == scene);
     let (figure, what) = match kind {
+        PlotKind::FrameTime if paper == "om" => (figures.and_then(|f| f.frame_time), "frame times and triangles drawn"),
         PlotKind::FrameTime => (figures.and_then(|f| f.frame_time), "frame times"),
         PlotKind::QueriesAndStateChanges => (figures.and_then(|f| f.queries), "queries and state changes"),
     };
@@ -120,7 +122,8 @@ pub fn style(paper: &str, scene: &str, kind: PlotKind) -> PlotStyle {
         None => format!("{name}'s setting, {what} (no figure in the paper)"),
     };
     let time_scale = figures.filter(|_| figure.is_some()).map_or(TimeScale::Auto, |f| f.time_scale);
-    PlotStyle { title: Some(title), time_scale }
+    let triangles = paper == "om" && kind == PlotKind::FrameTime;
+    PlotStyle { title: Some(title), time_scale, triangles }
 }
 
 /// The file of `scene`'s plot: `path` with `-SCENE` put before its extension.
@@ -167,6 +170,9 @@ mod tests {
         assert_eq!(style("chc", "city", PlotKind::FrameTime).time_scale, TimeScale::Linear);
         let queries = style("chcpp", "city", PlotKind::QueriesAndStateChanges);
         assert_eq!(queries.title.as_deref(), Some("CHC++ paper, Figure 10: queries and state changes"));
+        let om = style("om", "city", PlotKind::FrameTime);
+        assert_eq!(om.title.as_deref(), Some("Occupancy-map paper, Figure 7: frame times and triangles drawn"));
+        assert!(om.triangles && !plant.triangles);
         let none = style("chc", "city", PlotKind::QueriesAndStateChanges);
         assert_eq!(
             none.title.as_deref(),

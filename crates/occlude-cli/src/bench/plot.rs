@@ -49,6 +49,10 @@ pub struct PlotStyle {
     pub title: Option<String>,
     /// The frame-time axis (count axes are always linear).
     pub time_scale: TimeScale,
+    /// Whether a frame-time plot also draws the triangles drawn per frame
+    /// below it, as the occupancy-map paper's Figures 5-8 plot rendered
+    /// polygons beside frame rates.
+    pub triangles: bool,
 }
 
 /// Image size in pixels.
@@ -177,7 +181,20 @@ where
                 scale: style.time_scale,
                 series: series(&report.methods, |f| f.frame_ms),
             };
-            panel.draw(root)
+            if !style.triangles {
+                return panel.draw(root);
+            }
+            let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
+            panel.draw(&top)?;
+            let triangles = Panel {
+                caption: "triangles drawn per frame".into(),
+                x_desc: &x_desc,
+                y_desc: "triangles",
+                counts: true,
+                scale: TimeScale::Linear,
+                series: series(&report.methods, |f| f.triangles as f64),
+            };
+            triangles.draw(&bottom)
         }
         PlotKind::QueriesAndStateChanges => {
             let root = root.titled(&title("Queries and state changes"), (FONT, 20))?;
@@ -461,6 +478,18 @@ mod tests {
             let panels = if kind == PlotKind::FrameTime { 1 } else { 3 };
             assert!(lines >= 2 * r.methods.len() * panels, "{file}: only {lines} polylines");
         }
+    }
+
+    #[test]
+    fn a_frame_time_plot_with_triangles_draws_them_below() {
+        let r = sample();
+        let style = PlotStyle { triangles: true, ..PlotStyle::default() };
+        let with = styled_svg_string(&r, PlotKind::FrameTime, &style).unwrap();
+        let without = styled_svg_string(&r, PlotKind::FrameTime, &PlotStyle::default()).unwrap();
+        assert!(with.contains("triangles drawn per frame") && !without.contains("triangles drawn per frame"));
+        let lines = |svg: &str| svg.matches("<polyline").count();
+        // The second panel: a line and a legend sample per method.
+        assert!(lines(&with) >= lines(&without) + 2 * r.methods.len(), "{} against {}", lines(&with), lines(&without));
     }
 
     #[test]
