@@ -389,8 +389,11 @@ impl GpuCuller {
         let late: Vec<LateTest> = methods.iter().map(late_test).collect();
         let auto = match method {
             Method::Auto(params) => {
-                let stateless: Vec<bool> = late.iter().map(|l| matches!(l, LateTest::Frustum(_))).collect();
-                Some(GpuAuto::new(&ctx, *params, &stateless))
+                // `roc` and `hiz` from nothing: the first frame has no depth
+                // to test against, the second draws all it found early.
+                let cold: Vec<u64> =
+                    late.iter().map(|l| if matches!(l, LateTest::Frustum(_)) { 0 } else { 2 }).collect();
+                Some(GpuAuto::new(&ctx, *params, &cold))
             }
             _ => None,
         };

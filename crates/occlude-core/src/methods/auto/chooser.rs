@@ -12,18 +12,16 @@ const PROBE_FRAMES: u32 = 2;
 /// A probe's measured frame this many times the current mean ends it.
 const CLEARLY_SLOWER: f64 = 2.0;
 
-/// Frames a choice runs from nothing before one is measured.
-const COLD_FRAMES: u64 = 2;
-
 /// Weight of the newest frame in the current choice's running mean.
 const MEAN_WEIGHT: f64 = 0.25;
 
 /// One choice, with its probe schedule.
 #[derive(Clone, Debug)]
 struct Choice {
-    /// Whether it carries nothing from frame to frame: its first frame
-    /// needs no warm-up, and one measured frame is its probe.
-    stateless: bool,
+    /// Frames it runs from nothing before one is measured; 0 for a choice
+    /// that carries nothing from frame to frame, whose first frame needs
+    /// no warm-up and whose probe is one measured frame.
+    cold: u64,
     /// The shortest wait before its next probe, frames.
     wait: u64,
     /// First frame at which it may be probed.
@@ -86,21 +84,15 @@ pub struct Chooser {
 }
 
 impl Chooser {
-    /// A chooser among `stateless.len()` choices, tried first in that
-    /// order (the first is current until measured), `stateless[i]` saying
-    /// whether choice `i` carries nothing from frame to frame. At least one
-    /// choice.
-    pub fn new(params: AutoParams, stateless: &[bool]) -> Self {
-        assert!(!stateless.is_empty(), "a chooser needs a choice");
-        let choices = stateless
+    /// A chooser among `cold.len()` choices, tried first in that order (the
+    /// first is current until measured), choice `i` running `cold[i]`
+    /// frames from nothing before one is measured (0: it carries nothing
+    /// from frame to frame). At least one choice.
+    pub fn new(params: AutoParams, cold: &[u64]) -> Self {
+        assert!(!cold.is_empty(), "a chooser needs a choice");
+        let choices = cold
             .iter()
-            .map(|&stateless| Choice {
-                stateless,
-                wait: u64::from(params.probe),
-                next_probe: 0,
-                last_time: None,
-                frames: 0,
-            })
+            .map(|&cold| Choice { cold, wait: u64::from(params.probe), next_probe: 0, last_time: None, frames: 0 })
             .collect();
         Self { params, choices, current: 0, mean: None, probe: None, probes_begun: 0, last_ran: None, begun: 0 }
     }
@@ -136,7 +128,7 @@ impl Chooser {
         }
         let choice = self.probe.as_ref().map_or(self.current, |p| p.choice);
         let c = &mut self.choices[choice];
-        let warm_up = !c.stateless && (c.frames < COLD_FRAMES || self.last_ran != Some(choice));
+        let warm_up = c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice));
         c.frames += 1;
         self.last_ran = Some(choice);
         self.begun += 1;
@@ -161,7 +153,7 @@ impl Chooser {
             _ => return,
         }
         let Some(probe) = &self.probe else { return };
-        let needed = if self.choices[probe.choice].stateless { 1 } else { PROBE_FRAMES };
+        let needed = if self.choices[probe.choice].cold == 0 { 1 } else { PROBE_FRAMES };
         // A measured frame at twice the current mean cannot be made up by
         // the next: the probe ends at once.
         let lost = probe.times.last().zip(mean).is_some_and(|(&t, m)| t > CLEARLY_SLOWER * m);
@@ -204,7 +196,7 @@ impl Chooser {
         if probed < mean * (1.0 - self.margin()) {
             let previous = std::mem::replace(&mut self.current, probe.choice);
             self.mean = Some(probed);
-            let frames = if self.choices[previous].stateless { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
+            let frames = if self.choices[previous].cold == 0 { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
             self.schedule(previous, mean, frames * (mean - probed), now);
         } else {
             self.schedule(probe.choice, probed, probe.excess, now);
@@ -236,7 +228,7 @@ mod tests {
     /// keeping state) for `frames` frames, each frame's time recorded
     /// `delay` frames after it began; returns the choice of each frame.
     fn run(costs: &[f64], frames: usize, delay: usize) -> Vec<usize> {
-        let mut chooser = Chooser::new(AutoParams::default(), &vec![false; costs.len()]);
+        let mut chooser = Chooser::new(AutoParams::default(), &vec![2; costs.len()]);
         let mut pending = std::collections::VecDeque::new();
         let mut ran = Vec::new();
         for _ in 0..frames {
@@ -262,7 +254,7 @@ mod tests {
 
     #[test]
     fn a_late_time_of_an_ended_probe_counts_for_nothing() {
-        let mut chooser = Chooser::new(AutoParams::default(), &[true, true]);
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0]);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
         // Choice 1 is due at once (never measured): one frame probes it.
@@ -278,7 +270,7 @@ mod tests {
 
     #[test]
     fn a_bound_that_cannot_win_spares_the_probe() {
-        let mut chooser = Chooser::new(AutoParams::default(), &[true, true]);
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0]);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
         let next = chooser.begin(|choice, mean| (choice == 1).then_some(mean * 2.0));

@@ -17,9 +17,9 @@
 //!
 //! **How.** The method in use is the current one; its frames keep a
 //! running mean. Another method is tried now and then for a probe: one
-//! frame to warm up its temporal state (two the first time, when it starts
-//! from nothing: `hiz`'s and `roc`'s second frame still draws no early
-//! list), then two measured frames (a method's first frame after another
+//! frame to warm up its temporal state (two for `hiz` and `roc` the first
+//! time, when they start from nothing: their second frame draws early all
+//! that the first found against no depth), then two measured frames (a method's first frame after another
 //! ran is never measured, the current one's included); `vfc`, which
 //! carries no state, is probed by one measured frame, and a probe whose
 //! first measured frame takes twice the current mean ends there. If their
@@ -27,8 +27,8 @@
 //! becomes current. The next probe of a method waits long enough for all
 //! probes together to cost at most `auto.budget` (1 %) of the frame time,
 //! each method an equal share: a method measured at three times the
-//! current one's time waits far longer than one within a few percent. The wait also doubles
-//! with each lost probe, from `auto.probe` frames (32). A method is tried
+//! current one's time waits far longer than one within a few percent. The
+//! wait also doubles with each lost probe, from `auto.probe` frames (32). A method is tried
 //! at once, whatever its wait, when the current method's mean grows past
 //! that method's last measured time by the margin: a change of view that
 //! makes the current method stop paying is found without waiting. Every
@@ -164,9 +164,9 @@ impl Auto {
         let hiz = (gpu && pyramids).then(|| Method::Hiz(Default::default()));
         let methods: Vec<Method> =
             roc.into_iter().chain(hiz).chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]).collect();
-        let stateless: Vec<bool> = methods.iter().map(|m| *m == Method::Vfc).collect();
         self.methods = methods.iter().map(|m| m.build().expect("default parameters are valid")).collect();
-        self.chooser = Some(Chooser::new(self.params, &stateless));
+        let cold: Vec<u64> = methods.iter().map(cold_frames).collect();
+        self.chooser = Some(Chooser::new(self.params, &cold));
         self.model = backend.cost_model();
     }
 
@@ -191,6 +191,19 @@ impl Auto {
         let render = m.render_us(stats.draw_calls, stats.triangles, stats.fragments as f64);
         let queries = stats.queries as f64 * m.cpu_query_us + stats.query_boxes as f64 * m.gpu_query_box_us;
         (render + queries) * 1e-3
+    }
+}
+
+/// Frames `method` runs from nothing before its frames cost what they will:
+/// `roc`'s and `hiz`'s first frame has no depth to test against, so their
+/// second draws all it found in its early list; `chcpp`'s first queries
+/// every node, its second knows last frame's visibility; `vfc` carries
+/// nothing.
+fn cold_frames(method: &Method) -> u64 {
+    match method {
+        Method::Roc(_) | Method::Hiz(_) => 2,
+        Method::Vfc => 0,
+        _ => 1,
     }
 }
 
@@ -325,9 +338,10 @@ mod tests {
         };
         let ran = run(600, cost);
         // roc first (two frames from nothing, one measured), then probes of
-        // hiz, which loses, of chcpp, which takes over, and of vfc (one
-        // frame, no state), which loses.
-        let start = ["roc", "roc", "roc", "hiz", "hiz", "hiz", "hiz", "chcpp", "chcpp", "chcpp", "chcpp", "vfc"];
+        // hiz (two frames from nothing, two measured), which loses, of chcpp
+        // (one from nothing), which takes over, and of vfc (one frame, no
+        // state), which loses.
+        let start = ["roc", "roc", "roc", "hiz", "hiz", "hiz", "hiz", "chcpp", "chcpp", "chcpp", "vfc", "chcpp"];
         assert_eq!(ran[..12], start);
         assert!(share(&ran[12..], "chcpp") > 0.97, "{}", share(&ran[12..], "chcpp"));
         // Each probe of vfc costs 0.5 ms beyond chcpp's 0.5 ms: 1 % of the
