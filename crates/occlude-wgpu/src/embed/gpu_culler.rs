@@ -379,12 +379,13 @@ impl GpuCuller {
                     state: None,
                 })
             }
-            _ => LateTest::Frustum(storage_init(
+            Method::Vfc => LateTest::Frustum(storage_init(
                 &ctx,
                 "all visible",
                 bytemuck::cast_slice(&vec![1u32; n as usize]),
                 wgpu::BufferUsages::COPY_SRC,
             )),
+            other => unreachable!("check_method admits no late test for {other}"),
         };
         let late: Vec<LateTest> = methods.iter().map(late_test).collect();
         let auto = match method {
