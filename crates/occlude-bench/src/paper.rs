@@ -12,8 +12,10 @@
 //! - `chcpp` (Mattausch et al. 2008, section 8): BVH, `modern`; the
 //!   comparison of VFC, S&W, CHC, CHC++, NOHC, NOHC-OPT, the paper's OPT
 //!   (`ideal-sorted`: S&W's visible nodes drawn without queries through
-//!   the material-sorted render queue) and `opt`, and an ablation of
-//!   CHC++'s components.
+//!   the material-sorted render queue) and `opt`, an ablation of
+//!   CHC++'s components, Figure 8 (the components added one at a time)
+//!   and Figure 9 (`vfc`, `chcpp` and `nohc` on the plant's first 350
+//!   frames under each [`Shading`]).
 //!
 //! Each table of methods says under it which ideal it uses
 //! (`Experiment::ideals`).
@@ -51,7 +53,7 @@ use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
 use occlude_scenes::Size;
-use occlude_soft::GpuModel;
+use occlude_soft::{GpuModel, Shading};
 use std::fmt::Write;
 
 /// Papers whose experiments `--paper` can run.
@@ -79,7 +81,27 @@ struct Experiment {
     ideals: &'static str,
     /// The tables of variants of `varied`.
     variant_tables: &'static [VariantTable],
+    /// A figure whose runs vary the simulated GPU's shading, if any.
+    shading_figure: Option<ShadingFigure>,
 }
+
+/// A figure of some methods' frame times under each [`Shading`]: each
+/// setting one run of its own, the GPU model's fragment cost changed.
+struct ShadingFigure {
+    /// Its name in the paper.
+    name: &'static str,
+    scene: &'static str,
+    methods: &'static [&'static str],
+    /// Frames it covers from the walkthrough's start, when the run asks for
+    /// the whole walkthrough.
+    frames: usize,
+}
+
+/// CHC++'s Figure 9 (section 8): CHC++ and NOHC on "a walkthrough in the
+/// Powerplant" of about 350 frames, depth only, fixed-pipeline shading and
+/// a shader of 40 texture lookups.
+const FIGURE_9: ShadingFigure =
+    ShadingFigure { name: "Figure 9", scene: "plant", methods: &["vfc", "chcpp", "nohc"], frames: 350 };
 
 /// A table of variants of one method.
 struct VariantTable {
@@ -143,6 +165,7 @@ const CHC: Experiment = Experiment {
             variants: &[("", &[]), ("", &["chc.spec=1000"]), ("", &["chc.spec=10000"]), ("", &["chc.spec=100000"])],
         },
     ],
+    shading_figure: None,
 };
 
 const CHCPP: Experiment = Experiment {
@@ -174,6 +197,7 @@ const CHCPP: Experiment = Experiment {
         },
         FIGURE_8,
     ],
+    shading_figure: Some(FIGURE_9),
 };
 
 const OM: Experiment = Experiment {
@@ -197,6 +221,7 @@ const OM: Experiment = Experiment {
             ("", &["om.overlap=off", "om.corner=off"]),
         ],
     }],
+    shading_figure: None,
 };
 
 /// Tables and the reports behind them.
@@ -326,6 +351,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
     }
     let mut reports = Vec::new();
     let mut compared_runs = Vec::new();
+    let mut shaded = Vec::new();
     for &scene_name in e.scenes.iter().filter(|s| chosen(only, s)) {
         let config = BenchConfig {
             scene: scene_name.into(),
@@ -370,6 +396,20 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
                 rows.push(Row::new(scene_name, &summary, &opts.join(" "), table_published));
             }
         }
+        if let Some(figure) = e.shading_figure.as_ref().filter(|f| f.scene == scene_name) {
+            for shading in Shading::ALL {
+                let config = BenchConfig {
+                    methods: figure.methods.iter().map(|m| m.to_string()).collect(),
+                    gpu_model: (e.gpu_model)().with_shading(shading),
+                    frames: if base.frames == ALL_FRAMES { figure.frames } else { base.frames },
+                    ..config.clone()
+                };
+                progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
+                let report = run_scene(&scene, &config, progress)?.report(&config);
+                shaded.extend(report.methods.iter().map(|m| Row::new(scene_name, m, shading.paper_name(), None)));
+                reports.push(report);
+            }
+        }
     }
     let mut tables = vec![Table::new(e.compared, published, compared)];
     let mut text = tables[0].render(e.title);
@@ -383,6 +423,17 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
             let opts = if opts.is_empty() { "(the defaults)".to_string() } else { opts.join(" ") };
             let _ = writeln!(text, "  {label}: {} {opts}", e.varied);
         }
+        tables.push(t);
+    }
+    if let Some(figure) = e.shading_figure.as_ref().filter(|_| !shaded.is_empty()) {
+        let t = Table::new(figure.name, None, shaded);
+        text.push('\n');
+        text.push_str(&t.render(e.title));
+        let _ = writeln!(
+            text,
+            "  DP, FIX, SH: drawn fragments shaded depth only, as the model has them, by a shader of 40 texture \
+             lookups (--shading dp, fix, sh)"
+        );
         tables.push(t);
     }
     let tables = PaperTables { paper: e.paper.to_string(), tables, reports };
@@ -562,8 +613,8 @@ mod tests {
         let base = BenchConfig { frames: 3, resolution: (96, 64), ..BenchConfig::default() };
         let result = run("chcpp", &base, &[], &()).unwrap();
         let names: Vec<&str> = result.tables.tables.iter().map(|t| t.name.as_str()).collect();
-        assert_eq!(names, ["methods compared", "ablation", "Figure 8"]);
-        let [compared, ablation, figure8] = &result.tables.tables[..] else { unreachable!() };
+        assert_eq!(names, ["methods compared", "ablation", "Figure 8", "Figure 9"]);
+        let [compared, ablation, figure8, figure9] = &result.tables.tables[..] else { unreachable!() };
         assert_eq!(compared.rows.len(), 3 * 8, "3 scenes x vfc, sw, chc, chcpp, nohc, nohc-opt, ideal-sorted, opt");
         // The paper's OPT: S&W's visible set, no query, so no state change,
         // and no more material switches than the materials it draws.
@@ -578,9 +629,22 @@ mod tests {
         assert!(result.text.contains("ideal rows: ideal-sorted: the CHC++ paper's OPT"), "{}", result.text);
         assert_eq!(ablation.rows.len(), 3 * 9);
         assert_eq!(figure8.rows.len(), 3 * 5);
-        for t in [compared, ablation, figure8] {
+        for t in [compared, ablation, figure8, figure9] {
             assert!(t.rows.iter().all(|r| r.missing_pixels == 0 && r.frame_ms > 0.0), "{}", t.name);
         }
+        // Figure 9: the plant under each shading, a run of its own with the
+        // model's fragment cost changed; shading never makes a frame cheaper.
+        assert_eq!(figure9.rows.len(), 3 * 3);
+        assert!(figure9.rows.iter().all(|r| r.scene == "plant"));
+        for method in ["vfc", "chcpp", "nohc"] {
+            let ms: Vec<f64> = ["DP", "FIX", "SH"]
+                .iter()
+                .map(|s| figure9.rows.iter().find(|r| r.method == method && r.options == *s).unwrap().frame_ms)
+                .collect();
+            assert!(ms[0] <= ms[1] && ms[1] <= ms[2], "{method}: {ms:?}");
+        }
+        let models: Vec<&str> = result.tables.reports.iter().rev().take(3).map(|r| r.gpu_model.as_str()).collect();
+        assert_eq!(models, ["modern+sh", "modern", "modern+dp"]);
         // Figure 8 starts from CHC (every optimisation off) and ends at
         // CHC++, the compared table's row; its rows cite the figure's page.
         assert!(figure8.rows[0].options.contains("chcpp.b=1") && figure8.rows[0].options.contains("chcpp.tight=off"));
@@ -591,7 +655,7 @@ mod tests {
         // The variant shared by the ablation and Figure 8 runs once.
         let lanes = ablation.rows.iter().chain(&figure8.rows).filter(|r| r.scene == "city" && !r.options.is_empty());
         let distinct: std::collections::HashSet<&str> = lanes.map(|r| r.options.as_str()).collect();
-        assert_eq!(result.tables.reports.len(), 3 * (1 + distinct.len()));
+        assert_eq!(result.tables.reports.len(), 3 * (1 + distinct.len()) + 3);
         assert!(
             result.text.contains("nohc / chcpp frame time") && result.text.contains("(paper 1.5)"),
             "{}",
