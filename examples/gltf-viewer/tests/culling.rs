@@ -1,5 +1,5 @@
-//! The viewer's frames with occlude's culling (`hiz`, `roc`, `ioc`
-//! GPU-driven, `chcpp` query-driven) are the frames without culling, bit
+//! The viewer's frames with occlude's culling (`hiz`, `roc`, `ioc` and
+//! `auto` GPU-driven, `chcpp` query-driven) are the frames without culling, bit
 //! for bit (colour and depth), over frames of motion: a generated building
 //! with people walking and doors opening (`crowd`), and an animated glTF
 //! file written here. Runs on any adapter (lavapipe in CI, with
@@ -17,7 +17,7 @@ const FRAMES: u32 = 5;
 /// Image width and height.
 const SIZE: u32 = 256;
 /// The methods compared with culling off.
-const METHODS: [&str; 4] = ["hiz", "chcpp", "roc", "ioc"];
+const METHODS: [&str; 5] = ["hiz", "chcpp", "roc", "ioc", "auto"];
 
 /// A device for test `test`, or `None` (after saying why) when there is no
 /// adapter and the environment does not require one.
