@@ -237,6 +237,20 @@ pub struct PaperResult {
     /// methods (not of a table's variants), in scene order: what
     /// the command line's `--plot` draws (`occlude_cli::bench::paper_figures`).
     pub compared_runs: Vec<usize>,
+    /// The runs of a figure beyond the compared methods' (CHC++'s Figure 9,
+    /// a run per shading), which `--plot` draws too.
+    pub figure_runs: Vec<FigureRun>,
+}
+
+/// A run plotted as one of a paper's figures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureRun {
+    /// Its part of the plot's file name (`plant-fig9-dp`).
+    pub tag: String,
+    /// The figure, as the paper names it, and the setting (`Figure 9, DP`).
+    pub figure: String,
+    /// Its index into the tables' reports.
+    pub report: usize,
 }
 
 /// Papers whose tables come from no walkthrough runs (`gvq`'s are counts
@@ -332,6 +346,7 @@ pub fn run(paper: &str, base: &BenchConfig, only: &[String], progress: &dyn Prog
                 tables: PaperTables { paper: "gvq".into(), ..PaperTables::default() },
                 gvq: Some(gvq),
                 compared_runs: Vec::new(),
+                figure_runs: Vec::new(),
             })
         }
         _ => invalid!("unknown paper '{paper}': expected one of {}", PAPERS.join(", ")),
@@ -352,6 +367,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
     let mut reports = Vec::new();
     let mut compared_runs = Vec::new();
     let mut shaded = Vec::new();
+    let mut figure_runs = Vec::new();
     for &scene_name in e.scenes.iter().filter(|s| chosen(only, s)) {
         let config = BenchConfig {
             scene: scene_name.into(),
@@ -407,6 +423,12 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
                 progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
                 let report = run_scene(&scene, &config, progress)?.report(&config);
                 shaded.extend(report.methods.iter().map(|m| Row::new(scene_name, m, shading.paper_name(), None)));
+                let number = figure.name.trim_start_matches("Figure ");
+                figure_runs.push(FigureRun {
+                    tag: format!("{scene_name}-fig{number}-{shading}"),
+                    figure: format!("{}, {}", figure.name, shading.paper_name()),
+                    report: reports.len(),
+                });
                 reports.push(report);
             }
         }
@@ -437,7 +459,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
         tables.push(t);
     }
     let tables = PaperTables { paper: e.paper.to_string(), tables, reports };
-    Ok(PaperResult { text, tables, gvq: None, compared_runs })
+    Ok(PaperResult { text, tables, gvq: None, compared_runs, figure_runs })
 }
 
 /// The IOC poster's scenes, as its tables name them.
@@ -531,7 +553,7 @@ fn run_ioc(base: &BenchConfig, only: &[String], progress: &dyn Progress) -> Resu
     // of parts of the frame, not the rows of [`Table`].
     let compared_runs = (0..reports.len()).collect();
     let tables = PaperTables { paper: "ioc".into(), tables: Vec::new(), reports };
-    Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None, compared_runs })
+    Ok(PaperResult { text: format!("{table}\n{figure}"), tables, gvq: None, compared_runs, figure_runs: Vec::new() })
 }
 
 fn run_labelled(scene: &Scene, config: &BenchConfig, progress: &dyn Progress, label: &str) -> Result<BenchReport> {
@@ -645,6 +667,10 @@ mod tests {
         }
         let models: Vec<&str> = result.tables.reports.iter().rev().take(3).map(|r| r.gpu_model.as_str()).collect();
         assert_eq!(models, ["modern+sh", "modern", "modern+dp"]);
+        let tags: Vec<&str> = result.figure_runs.iter().map(|f| f.tag.as_str()).collect();
+        assert_eq!(tags, ["plant-fig9-dp", "plant-fig9-fix", "plant-fig9-sh"]);
+        let last = result.figure_runs.last().unwrap();
+        assert_eq!((last.figure.as_str(), last.report), ("Figure 9, SH", result.tables.reports.len() - 1));
         // Figure 8 starts from CHC (every optimisation off) and ends at
         // CHC++, the compared table's row; its rows cite the figure's page.
         assert!(figure8.rows[0].options.contains("chcpp.b=1") && figure8.rows[0].options.contains("chcpp.tight=off"));

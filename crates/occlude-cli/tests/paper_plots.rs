@@ -1,6 +1,6 @@
 //! `occlude bench --paper P --plot PATH` as a user runs it: one plot per
 //! scene, named after PATH, one line per compared method, titled with the
-//! paper's figure; `--csv` beside it writes every run's frames; a bad
+//! paper's figure, and one per setting of CHC++'s Figure 9; `--csv` beside it writes every run's frames; a bad
 //! extension, a paper without a walkthrough or a scene the paper does not
 //! have (`--scene`) is a usage error before anything runs.
 
@@ -78,6 +78,43 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
     let plant = y_labels(&read(&dir.path().join("chc-plant.svg")));
     assert!(plant.len() >= 2 && plant[0] > 0.0, "plant's y labels: {plant:?}");
     assert!(plant.windows(2).all(|w| (w[1] / w[0] - 10.0).abs() < 1e-9), "plant's y labels: {plant:?}");
+}
+
+/// `--paper chcpp --scene plant`: the plant's Figure 1 and a plot per
+/// setting of Figure 9, each titled with its shading.
+#[test]
+fn the_chcpp_run_plots_figure_9_a_file_per_shading() {
+    let dir = tempfile::tempdir().unwrap();
+    let plot = dir.path().join("c.svg");
+    let out = occlude(&[
+        "bench",
+        "--paper",
+        "chcpp",
+        "--scene",
+        "plant",
+        "--size",
+        "small",
+        "--frames",
+        "3",
+        "--resolution",
+        "96x64",
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    assert_eq!(names, ["c-plant-fig9-dp.svg", "c-plant-fig9-fix.svg", "c-plant-fig9-sh.svg", "c-plant.svg"]);
+    assert!(read(&dir.path().join("c-plant.svg")).contains("CHC++ paper, Figure 1: frame times"));
+    for (file, setting, model) in [("dp", "DP", "modern+dp"), ("sh", "SH", "modern+sh")] {
+        let svg = read(&dir.path().join(format!("c-plant-fig9-{file}.svg")));
+        assert!(svg.contains(&format!("CHC++ paper, Figure 9, {setting}: frame times")), "{file}: no title");
+        assert!(svg.contains(&format!("{model} GPU model")), "{file}: the model is not named");
+        for method in ["vfc", "chcpp", "nohc"] {
+            assert_eq!(svg.matches(&format!("\n{method}\n</text>")).count(), 1, "{file}: {method}");
+        }
+    }
 }
 
 /// `--csv` of `--paper chc` at 4 frames: every run behind the tables (per

@@ -137,7 +137,9 @@ pub fn scene_path(path: &Path, scene: &str) -> PathBuf {
 }
 
 /// Writes `kind` plots of each scene of `result` (the run of the compared
-/// methods) to the files [`scene_path`] names after `path`; returns them.
+/// methods), and frame-time plots of its figures' own runs (CHC++'s Figure
+/// 9: `chcpp-plant-fig9-dp.svg` and so on), to the files [`scene_path`]
+/// names after `path`; returns them.
 pub fn write(result: &PaperResult, kind: PlotKind, path: &Path) -> Result<Vec<PathBuf>> {
     let paper = &result.tables.paper;
     check_walkthroughs(paper, "--plot")?;
@@ -146,6 +148,14 @@ pub fn write(result: &PaperResult, kind: PlotKind, path: &Path) -> Result<Vec<Pa
         let report = result.tables.reports.get(i).context("a compared run's report is missing")?;
         let file = scene_path(path, &report.scene);
         write_styled_plot(report, kind, &style(paper, &report.scene, kind), &file)?;
+        written.push(file);
+    }
+    // A figure's own runs plot frame times only.
+    for run in result.figure_runs.iter().filter(|_| kind == PlotKind::FrameTime) {
+        let report = result.tables.reports.get(run.report).context("a figure's report is missing")?;
+        let file = scene_path(path, &run.tag);
+        let title = format!("{}, {}: frame times", paper_name(paper), run.figure);
+        write_styled_plot(report, kind, &PlotStyle { title: Some(title), ..PlotStyle::default() }, &file)?;
         written.push(file);
     }
     Ok(written)
