@@ -19,22 +19,24 @@
 //! running mean. Another method is tried now and then for a probe: one
 //! frame to warm up its temporal state (two for `hiz` and `roc` the first
 //! time, when they start from nothing: their second frame draws early all
-//! that the first found against no depth), then two measured frames (a method's first frame after another
-//! ran is never measured, the current one's included); `vfc`, which
-//! carries no state, is probed by one measured frame, and a probe whose
-//! first measured frame takes twice the current mean ends there. If their
-//! mean beats the current mean by `auto.margin` (5 %), the probed method
-//! becomes current. The next probe of a method waits long enough for all
-//! probes together to cost at most `auto.budget` (1 %) of the frame time,
-//! each method an equal share: a method measured at three times the
-//! current one's time waits far longer than one within a few percent. The
-//! wait also doubles with each lost probe, from `auto.probe` frames (32). A method is tried
-//! at once, whatever its wait, when the current method's mean grows past
-//! that method's last measured time by the margin: a change of view that
-//! makes the current method stop paying is found without waiting. Every
-//! method keeps its own state while another runs, as CHC++ keeps its
+//! that the first found against no depth), then two measured frames (a
+//! method's first frame after another ran is never measured, the current
+//! one's included); `vfc`, which carries no state, is probed by one
+//! measured frame, and a probe whose first measured frame takes twice the
+//! current mean ends there. If their mean beats the current mean by
+//! `auto.margin` (5 %), the probed method becomes current. The next probe
+//! of a method waits long enough for all probes together to cost at most
+//! `auto.budget` (1 %) of the frame time, each method an equal share: a
+//! method measured at three times the current one's time waits far longer
+//! than one within a few percent. The wait also doubles with each lost
+//! probe, from `auto.probe` frames (32). A method is tried at once,
+//! whatever its wait, when the current method's mean grows past that
+//! method's last measured time by the margin: a change of view that makes
+//! the current method stop paying is found without waiting. Every method
+//! keeps its own state while another runs, as CHC++ keeps its
 //! classification from frame to frame (section 5.2): coming back, it
-//! starts from what it knew.
+//! starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
+//! embedding's `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try every method once (the GPU-driven
 //! ones first, the cheapest to try on a current GPU); after that, probes
@@ -93,7 +95,7 @@ impl MethodParams for AutoParams {
 /// scenes: on a scene with little occlusion, or geometry your GPU draws in
 /// a fraction of a millisecond, it settles on frustum culling.
 ///
-/// **Cost.** Its first frames try each method once (about fifteen frames,
+/// **Cost.** Its first frames try each method once (about ten frames,
 /// some of them slower than frustum culling: a method starting from nothing
 /// tests everything). After that, probes cost about `auto.budget` (1 %) of
 /// the frame time. Memory: the state of every method it may choose.
