@@ -20,6 +20,14 @@ fn y_labels(svg: &str) -> Vec<f64> {
         .collect()
 }
 
+/// The names of the files in `dir`, sorted.
+fn file_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    names
+}
+
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -50,9 +58,7 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "stderr: {stderr}");
     check_paper_csv(&read(&csv));
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
-    names.sort();
+    let names = file_names(dir.path());
     assert_eq!(
         names,
         ["chc-city.svg", "chc-plant.svg", "chc-teapots.svg", "chc.csv", "q-city.svg", "q-plant.svg", "q-teapots.svg"]
@@ -102,9 +108,7 @@ fn the_chcpp_run_plots_figure_9_a_file_per_shading() {
         plot.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
-    names.sort();
+    let names = file_names(dir.path());
     assert_eq!(names, ["c-plant-fig9-dp.svg", "c-plant-fig9-fix.svg", "c-plant-fig9-sh.svg", "c-plant.svg"]);
     assert!(read(&dir.path().join("c-plant.svg")).contains("CHC++ paper, Figure 1: frame times"));
     for (file, setting, model) in [("dp", "DP", "modern+dp"), ("sh", "SH", "modern+sh")] {
