@@ -56,6 +56,7 @@ use crate::pipelines::compute_pipeline;
 use crate::readback::{take_bytes, Mapping};
 use occlude_core::depth_pyramid::PIXEL_MARGIN;
 use occlude_core::hierarchy::BuildOptions;
+use occlude_core::methods::auto::cold_frames;
 use occlude_core::methods::hiz::{Granularity, HizParams};
 use occlude_core::methods::ioc::IocWalk;
 use occlude_core::methods::roc::RocMode;
@@ -390,10 +391,7 @@ impl GpuCuller {
         let late: Vec<LateTest> = methods.iter().map(late_test).collect();
         let auto = match method {
             Method::Auto(params) => {
-                // `roc` and `hiz` from nothing: the first frame has no depth
-                // to test against, the second draws all it found early.
-                let cold: Vec<u64> =
-                    late.iter().map(|l| if matches!(l, LateTest::Frustum(_)) { 0 } else { 2 }).collect();
+                let cold: Vec<u64> = methods.iter().map(cold_frames).collect();
                 Some(GpuAuto::new(&ctx, *params, &cold))
             }
             _ => None,

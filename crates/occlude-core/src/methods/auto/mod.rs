@@ -196,12 +196,13 @@ impl Auto {
     }
 }
 
-/// Frames `method` runs from nothing before its frames cost what they will:
-/// `roc`'s and `hiz`'s first frame has no depth to test against, so their
-/// second draws all it found in its early list; `chcpp`'s first queries
-/// every node, its second knows last frame's visibility; `vfc` carries
-/// nothing.
-fn cold_frames(method: &Method) -> u64 {
+/// Frames `method` runs from nothing before its frames cost what they will
+/// (a [`Chooser`]'s warm-up): `roc`'s and `hiz`'s first frame has no depth
+/// to test against, so their second draws all it found in its early list;
+/// `chcpp`'s first queries every node, its second knows last frame's
+/// visibility; `vfc` carries nothing. `auto` in the wgpu embedding's
+/// `GpuCuller` warms its late tests up by it too.
+pub fn cold_frames(method: &Method) -> u64 {
     match method {
         Method::Roc(_) | Method::Hiz(_) => 2,
         Method::Vfc => 0,
