@@ -90,6 +90,8 @@ struct Experiment {
 struct ShadingFigure {
     /// Its name in the paper.
     name: &'static str,
+    /// Its plots' part of the file name.
+    file: &'static str,
     scene: &'static str,
     methods: &'static [&'static str],
     /// Frames it covers from the walkthrough's start, when the run asks for
@@ -101,7 +103,7 @@ struct ShadingFigure {
 /// Powerplant" of about 350 frames, depth only, fixed-pipeline shading and
 /// a shader of 40 texture lookups.
 const FIGURE_9: ShadingFigure =
-    ShadingFigure { name: "Figure 9", scene: "plant", methods: &["vfc", "chcpp", "nohc"], frames: 350 };
+    ShadingFigure { name: "Figure 9", file: "fig9", scene: "plant", methods: &["vfc", "chcpp", "nohc"], frames: 350 };
 
 /// A table of variants of one method.
 struct VariantTable {
@@ -423,9 +425,8 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
                 progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
                 let report = run_scene(&scene, &config, progress)?.report(&config);
                 shaded.extend(report.methods.iter().map(|m| Row::new(scene_name, m, shading.paper_name(), None)));
-                let number = figure.name.trim_start_matches("Figure ");
                 figure_runs.push(FigureRun {
-                    tag: format!("{scene_name}-fig{number}-{shading}"),
+                    tag: format!("{scene_name}-{}-{shading}", figure.file),
                     figure: format!("{}, {}", figure.name, shading.paper_name()),
                     report: reports.len(),
                 });
