@@ -52,7 +52,7 @@ use crate::summary::BenchReport;
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
-use occlude_scenes::Size;
+use occlude_scenes::{Inputs, Size};
 use occlude_soft::{GpuModel, Shading};
 use std::fmt::Write;
 
@@ -68,6 +68,8 @@ struct Experiment {
     paper: &'static str,
     title: &'static str,
     scenes: &'static [&'static str],
+    /// The scene inputs the paper leaves unstated ([`Inputs`]).
+    inputs: Inputs,
     hierarchy: HierarchyKind,
     gpu_model: fn() -> GpuModel,
     methods: &'static [&'static str],
@@ -146,6 +148,7 @@ const CHC: Experiment = Experiment {
     paper: "chc",
     title: "CHC paper (kD-tree, gpu-2004)",
     scenes: CHC_SCENES,
+    inputs: Inputs::ChcTable1,
     hierarchy: HierarchyKind::KdTree,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "chc", IDEAL, "opt"],
@@ -174,6 +177,7 @@ const CHCPP: Experiment = Experiment {
     paper: "chcpp",
     title: "CHC++ paper (BVH, modern)",
     scenes: CHC_SCENES,
+    inputs: Inputs::Own,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::modern,
     methods: &["vfc", "sw", "chc", "chcpp", "nohc", "nohc-opt", IDEAL_SORTED, "opt"],
@@ -206,6 +210,7 @@ const OM: Experiment = Experiment {
     paper: "om",
     title: "Occupancy-map paper (BVH, gpu-2004)",
     scenes: &["city", "plant"],
+    inputs: Inputs::Own,
     hierarchy: HierarchyKind::Bvh,
     gpu_model: GpuModel::gpu_2004,
     methods: &["vfc", "sw", "om", "opt"],
@@ -380,7 +385,7 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
             ..base.clone()
         };
         config.validate()?;
-        let scene = occlude_scenes::generate(scene_name, config.size, config.seed)?;
+        let scene = occlude_scenes::generate_with(scene_name, config.size, config.seed, e.inputs)?;
         // The variants run as lanes of the same run: `vfc` renders once per
         // scene.
         let variants = lane_options
@@ -437,6 +442,13 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
     let mut tables = vec![Table::new(e.compared, published, compared)];
     let mut text = tables[0].render(e.title);
     let _ = writeln!(text, "ideal rows: {}", e.ideals);
+    if e.inputs == Inputs::ChcTable1 {
+        let _ = writeln!(
+            text,
+            "scene inputs: walkthroughs, field of view and view distance set so that VFC's and S&W's triangles \
+             per frame come out near Table 1's (occlude_scenes::Inputs::ChcTable1)"
+        );
+    }
     text.push_str(&published::claims_text(e.paper, &tables[0].rows));
     for (table, rows) in e.variant_tables.iter().zip(varied) {
         let t = Table::new(table.name, published::table(e.paper, table.name), rows);
@@ -575,6 +587,7 @@ mod tests {
         assert_eq!((t2.name.as_str(), t2.rows.len()), ("Table 2", 9), "3 scenes x the paper's 3 rows");
         assert_eq!((t3.name.as_str(), t3.rows.len()), ("section 5.3", 12), "3 scenes x spec off and 3 constants");
         assert!(t3.rows.iter().all(|r| r.missing_pixels == 0), "speculation draws more, never less");
+        assert!(result.text.contains("scene inputs: walkthroughs, field of view"), "{}", result.text);
         // Each of the paper's rows has its figure beside ours; opt has none.
         for r in &t1.rows {
             assert_eq!(r.published_frame_ms.is_some(), r.method != "opt", "{r:?}");

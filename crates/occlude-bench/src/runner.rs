@@ -337,10 +337,11 @@ fn modelled_upkeep_ms(config: &BenchConfig, upkeep: &Upkeep, h: &Hierarchy) -> f
     (upkeep.visited + rebuild) as f64 * config.gpu_model.cpu_node_us * 1e-3
 }
 
-/// Far clipping distance of every camera in `scene`: beyond the whole scene
-/// seen from anywhere in it.
+/// Far clipping distance of every camera in `scene`: its
+/// [`Scene::view_distance`] if it has one, else beyond the whole scene seen
+/// from anywhere in it.
 pub fn far_plane(scene: &Scene) -> f32 {
-    (scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0)
+    scene.view_distance.unwrap_or(scene.bounds().extent().length() * 1.5).max(NEAR_PLANE * 10.0)
 }
 
 /// The walkthrough's cameras for `scene` at the configured resolution,

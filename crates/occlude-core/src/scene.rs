@@ -111,6 +111,9 @@ pub enum SceneError {
     /// An instance transform is not finite.
     #[error("instance {0} has a non-finite transform")]
     NonFiniteTransform(usize),
+    /// [`Scene::view_distance`] is not a finite positive distance.
+    #[error("the view distance {0} is not a finite positive distance")]
+    ViewDistance(f32),
     /// A box given to [`Scene::from_bounds`] is not finite or has a
     /// minimum above its maximum.
     #[error("instance {0}'s bounds are not a finite box with min <= max")]
@@ -145,6 +148,11 @@ pub struct Scene {
     /// ([`Scene::with_triangle_counts`]). Empty: every instance counts its
     /// mesh's triangles ([`Scene::instance_triangles`]).
     pub triangle_counts: Vec<u32>,
+    /// How far the walkthrough's cameras see: their far clipping distance.
+    /// `None`: beyond the whole scene from anywhere in it. A generator sets
+    /// it where a paper's scene statistics call for a shorter view
+    /// (`occlude_scenes::Inputs`).
+    pub view_distance: Option<f32>,
     /// How many times [`Scene::apply`] changed the instances.
     revision: u64,
 }
@@ -161,6 +169,7 @@ impl Scene {
             material_count: 0,
             path: Default::default(),
             triangle_counts: Vec::new(),
+            view_distance: None,
             revision: 0,
         }
     }
@@ -327,6 +336,9 @@ impl Scene {
             let (given, instances) = (self.triangle_counts.len(), self.instances.len());
             return Err(SceneError::TriangleCounts { given, instances });
         }
+        if let Some(d) = self.view_distance.filter(|d| !(d.is_finite() && *d > 0.0)) {
+            return Err(SceneError::ViewDistance(d));
+        }
         if self.triangle_count() == 0 {
             return Err(SceneError::Empty(self.name.clone()));
         }
@@ -357,6 +369,10 @@ mod tests {
             Err(SceneError::IndexOutOfRange { mesh: 0, index: 7, vertices: 3 })
         );
         assert_eq!(triangle_scene(Vec3::Y, vec![]).validate(), Err(SceneError::Empty("t".into())));
+        for (d, ok) in [(50.0, true), (0.0, false), (-1.0, false), (f32::INFINITY, false), (f32::NAN, false)] {
+            let scene = Scene { view_distance: Some(d), ..triangle_scene(Vec3::Y, vec![0, 1, 2]) };
+            assert_eq!(scene.validate().is_ok(), ok, "view distance {d}");
+        }
     }
 
     #[test]

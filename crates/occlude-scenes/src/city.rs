@@ -13,7 +13,7 @@
 use crate::rng::Rng;
 use crate::shapes::{block, cone, cuboid, cylinder, prism, MeshBuilder};
 use crate::walk::{PathBuilder, PathClearance, EYE};
-use crate::Size;
+use crate::{Inputs, Size};
 use glam::{Mat4, Vec2, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
 
@@ -145,7 +145,8 @@ fn tree() -> Mesh {
 }
 
 /// The walkthrough through a city whose roofs are below `roofs`: 69 s,
-/// 2,071 frames at 30 fps.
+/// 2,071 frames at 30 fps; `flight` scales how far the flight above the
+/// roofs rises above eye height (1: occlude's own).
 ///
 /// The path is an input of the experiment, laid out from the CHC paper's
 /// description of its city walkthrough (section 6.2, Figure 6) before any
@@ -160,10 +161,10 @@ fn tree() -> Mesh {
 /// above the corner where the walk began across the city's diagonal, then
 /// comes down into another street and walks it to the end. It stays within
 /// the first 8 x 8 blocks, the `small` city, at every size.
-fn walkthrough(roofs: f32) -> CameraPath {
+fn walkthrough(roofs: f32, flight: f32) -> CameraPath {
     // `s(i, j)` is at eye height at street coordinates (`i`, `j` in pitches).
     let s = |i: f32, j: f32| Vec3::new(i * PITCH, EYE, j * PITCH);
-    let up = |i: f32, j: f32, y: f32| Vec3::new(i * PITCH, y, j * PITCH);
+    let up = |i: f32, j: f32, y: f32| Vec3::new(i * PITCH, EYE + flight * (y - EYE), j * PITCH);
     let high = roofs + 15.0;
     let mut b = PathBuilder::new();
     // Along a street, round a corner and up another street.
@@ -210,19 +211,34 @@ fn walkthrough(roofs: f32) -> CameraPath {
     b.build()
 }
 
-/// Builds the city.
-pub(crate) fn generate(size: Size, seed: u64) -> Scene {
-    build("city", layout(size), seed)
+/// How far the CHC Table 1 city's flight rises above eye height, as a
+/// share of occlude's own: a view over the nearer roofs rather than over
+/// the whole city.
+const TABLE1_FLIGHT: f32 = 0.35;
+/// How far the CHC Table 1 city's cameras see, in metres (11 pitches).
+const TABLE1_VIEW: f32 = 700.0;
+
+/// Builds the city with `inputs`' walkthrough heights and view distance.
+pub(crate) fn generate(size: Size, seed: u64, inputs: Inputs) -> Scene {
+    match inputs {
+        Inputs::Own => build("city", layout(size), seed, 1.0),
+        Inputs::ChcTable1 => {
+            let mut scene = build("city", layout(size), seed, TABLE1_FLIGHT);
+            scene.view_distance = Some(TABLE1_VIEW);
+            scene
+        }
+    }
 }
 
 /// Builds `downtown`: the same streets and walkthrough over more blocks.
 pub(crate) fn downtown(size: Size, seed: u64) -> Scene {
-    build("downtown", downtown_layout(size), seed)
+    build("downtown", downtown_layout(size), seed, 1.0)
 }
 
 /// A city called `name` of `blocks` x `blocks` blocks built from `kinds`
-/// building meshes.
-fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
+/// building meshes, its walkthrough's flight scaled by `flight` (see
+/// [`walkthrough`]); a lot the walkthrough would pass through stays empty.
+fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64, flight: f32) -> Scene {
     let span = blocks as f32 * PITCH;
     let mut scene = Scene::new(name);
     let mut rng = Rng::new(seed, 0xC17E);
@@ -236,11 +252,14 @@ fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
     let tree = scene.add_mesh(tree());
 
     let lot = (inner - 2.0 * SIDEWALK) / LOTS as f32;
+    // Slabs and buildings, then lamps and trees, each as (mesh, transform,
+    // material), added in this order once the walkthrough is known.
+    let mut blocks_content = Vec::new();
     let mut furniture = Vec::new();
     for bx in 0..blocks {
         for bz in 0..blocks {
             let corner = Vec3::new(bx as f32 * PITCH + 0.5 * STREET, 0.0, bz as f32 * PITCH + 0.5 * STREET);
-            scene.add_instance(slab, Mat4::from_translation(corner), PAVEMENT);
+            blocks_content.push((slab, Mat4::from_translation(corner), PAVEMENT));
             for lx in 0..LOTS {
                 for lz in 0..LOTS {
                     if rng.chance(0.08) {
@@ -253,7 +272,7 @@ fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
                     let scale = Vec3::new(rng.range(0.8, 1.1), rng.range(0.9, 1.1), rng.range(0.8, 1.1));
                     let transform =
                         Mat4::from_translation(centre) * Mat4::from_rotation_y(quarter) * Mat4::from_scale(scale);
-                    scene.add_instance(mesh, transform, FACADE_FIRST + rng.below(FACADES));
+                    blocks_content.push((mesh, transform, FACADE_FIRST + rng.below(FACADES)));
                 }
             }
             // Lamps and trees along the sidewalks, facing the street.
@@ -273,13 +292,14 @@ fn build(name: &str, (blocks, kinds): (u32, u32), seed: u64) -> Scene {
             }
         }
     }
-    let roofs = scene.bounds().max.y;
-    scene.path = walkthrough(roofs);
+    let bounds = |&(mesh, transform, _): &(u32, Mat4, u32)| scene.meshes[mesh as usize].bounds.transformed(&transform);
+    let roofs = blocks_content.iter().map(|c| bounds(c).max.y).fold(0.0, f32::max);
+    scene.path = walkthrough(roofs, flight);
     let clearance = PathClearance::new(&scene.path);
-    for (mesh, transform, material) in furniture {
-        if clearance.is_clear(&scene.meshes[mesh as usize].bounds.transformed(&transform)) {
-            scene.add_instance(mesh, transform, material);
-        }
+    let clear: Vec<_> =
+        blocks_content.into_iter().chain(furniture).filter(|c| clearance.is_clear(&bounds(c))).collect();
+    for (mesh, transform, material) in clear {
+        scene.add_instance(mesh, transform, material);
     }
     scene
 }

@@ -15,7 +15,7 @@
 use crate::rng::Rng;
 use crate::shapes::{block, cuboid, cylinder, round_corners, sphere, stairs, torus, tube, MeshBuilder};
 use crate::walk::{PathBuilder, EYE};
-use crate::Size;
+use crate::{Inputs, Size};
 use glam::{Mat4, Vec3};
 use occlude_core::{CameraPath, Mesh, Scene};
 
@@ -389,8 +389,15 @@ fn walkthrough(nx: u32, nz: u32, levels: u32, row: u32, shaft: u32) -> CameraPat
     w.build()
 }
 
-/// Builds the plant.
-pub(crate) fn generate(size: Size, seed: u64) -> Scene {
+/// Vertical field of view of the CHC Table 1 plant's walkthrough, in
+/// degrees.
+const TABLE1_FOV_Y_DEG: f32 = 50.0;
+/// How far the CHC Table 1 plant's cameras see, in metres (8 bays).
+const TABLE1_VIEW: f32 = 80.0;
+
+/// Builds the plant; with [`Inputs::ChcTable1`], its cameras see
+/// [`TABLE1_VIEW`] far in a [`TABLE1_FOV_Y_DEG`] field of view.
+pub(crate) fn generate(size: Size, seed: u64, inputs: Inputs) -> Scene {
     let Layout { bays: [nx, nz], levels, sides } = layout(size);
     let (row, shaft) = (nz / 2, nx / 2);
     let (wx, wz, height) = (nx as f32 * BAY, nz as f32 * BAY, levels as f32 * LEVEL);
@@ -528,5 +535,11 @@ pub(crate) fn generate(size: Size, seed: u64) -> Scene {
         scene.add_instance(outdoor, Mat4::from_translation(p), TANK_FIRST + k % TANKS);
     }
     debug_assert!(scene.bounds().max.y >= height);
+    if inputs == Inputs::ChcTable1 {
+        scene.view_distance = Some(TABLE1_VIEW);
+        for key in &mut scene.path.keyframes {
+            key.fov_y_deg = TABLE1_FOV_Y_DEG;
+        }
+    }
     scene
 }

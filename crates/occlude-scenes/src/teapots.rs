@@ -23,8 +23,8 @@
 
 use crate::newell;
 use crate::rng::Rng;
-use crate::walk::{PathBuilder, PathClearance};
-use crate::Size;
+use crate::walk::{PathBuilder, PathClearance, EYE};
+use crate::{Inputs, Size};
 use glam::{Mat4, Vec3};
 use occlude_core::Scene;
 
@@ -91,13 +91,45 @@ fn walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath
     b.build()
 }
 
-/// Builds the teapot field.
-pub(crate) fn generate(size: Size, seed: u64) -> Scene {
+/// The CHC Table 1 walkthrough of a field of `length` x `height` x `width`
+/// metres: 29 s, 871 frames at 30 fps, as the paper's. The paper names one
+/// unrestricted section, "along the longer side of the arrangement (frames
+/// 25-90)"; so does this path, from above the near end's corner. Every
+/// other frame is a low view into the field end on, from beyond its near
+/// end, where the nearest teapots hide most of the rest.
+fn table1_walkthrough(length: f32, height: f32, width: f32) -> occlude_core::CameraPath {
+    let (l, h, w) = (length, height, width);
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x * l, y, z * w);
+    // A low eye at `f` of the field's height, never below eye height.
+    let low = |x: f32, f: f32, z: f32| Vec3::new(x * w, (f * h).max(EYE), z * w);
+    let mut b = PathBuilder::new();
+    b.key(0.0, low(-0.8, 0.5, 0.5), p(0.5, 0.4 * h, 0.5))
+        .key(0.8, low(-1.0, 0.9, 0.1), p(0.5, 0.3 * h, 0.5))
+        // Frames 25-90: up to the side, along the long side from above.
+        .key(1.1, Vec3::new(-1.4 * w, h + 0.7 * w, -0.8 * w), p(0.45, 0.0, 0.5))
+        .key(1.1, low(-1.2, 0.6, -0.1), p(0.5, 0.4 * h, 0.5))
+        .key(3.0, low(-0.9, 0.45, 0.2), p(0.5, 0.4 * h, 0.5))
+        .key(3.0, low(-0.7, 0.6, 0.8), p(0.5, 0.4 * h, 0.4))
+        .key(3.0, low(-1.0, 0.5, 1.0), p(0.5, 0.4 * h, 0.6))
+        .key(3.0, low(-1.0, 0.8, 0.5), p(0.5, 0.3 * h, 0.5))
+        .key(3.0, low(-0.8, 0.45, 0.0), p(0.5, 0.4 * h, 0.5))
+        .key(3.0, low(-1.3, 0.6, 0.5), p(0.5, 0.4 * h, 0.5))
+        .key(3.0, low(-0.9, 0.45, 0.9), p(0.5, 0.4 * h, 0.4))
+        .key(3.0, low(-1.1, 0.7, 0.3), p(0.5, 0.4 * h, 0.5))
+        .key(2.0, low(-0.8, 0.5, 0.5), p(0.5, 0.4 * h, 0.5));
+    b.build()
+}
+
+/// Builds the teapot field with `inputs`' walkthrough.
+pub(crate) fn generate(size: Size, seed: u64, inputs: Inputs) -> Scene {
     let layout = layout(size);
     let [nx, nz, ny] = layout.cells;
     let (length, width, height) = (nx as f32 * CELL, nz as f32 * CELL, BASE + ny as f32 * LAYER);
     let mut scene = Scene::new("teapots");
-    scene.path = walkthrough(length, height, width);
+    scene.path = match inputs {
+        Inputs::Own => walkthrough(length, height, width),
+        Inputs::ChcTable1 => table1_walkthrough(length, height, width),
+    };
     let clearance = PathClearance::new(&scene.path);
 
     let ground = scene

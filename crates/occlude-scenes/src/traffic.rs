@@ -55,7 +55,7 @@ fn truck() -> Mesh {
 /// Builds the city with its traffic, at time 0, and the traffic's motion.
 pub(crate) fn generate(size: Size, seed: u64) -> (Scene, SceneMotion) {
     let (blocks, _) = city::layout(size);
-    let mut scene = city::generate(size, seed);
+    let mut scene = city::generate(size, seed, crate::Inputs::Own);
     scene.name = "traffic".into();
     let span = blocks as f32 * PITCH;
     let eyes = EyeTimeline::new(&scene.path);
