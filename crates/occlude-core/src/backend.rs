@@ -116,10 +116,11 @@ pub trait Backend {
         None
     }
 
-    /// The backend's estimate of what draws and queries cost, for methods
-    /// that decide by cost whether a query pays (`nohc`), or `None` for a
-    /// backend that measures its time rather than modelling it (the
-    /// default): such methods then use [`CostModel::default`].
+    /// The backend's estimate of what draws, queries and GPU-driven passes
+    /// cost, for methods that decide by cost whether a query pays (`nohc`)
+    /// or which method may win (`auto`), or `None` for a backend that
+    /// measures its time rather than modelling it (the default): `nohc`
+    /// then uses [`CostModel::default`], and `auto` bounds nothing.
     fn cost_model(&self) -> Option<CostModel> {
         None
     }

@@ -1,6 +1,8 @@
-//! What a draw and an occlusion query cost, as a backend estimates them: the
-//! "calibrated model of graphics hardware" that NOHC's decision per node
-//! needs (CHC++ paper, section 3.2, after Guthe et al. 2006).
+//! What a draw, an occlusion query and a GPU-driven pass cost, as a backend
+//! estimates them: the "calibrated model of graphics hardware" that NOHC's
+//! decision per node needs (CHC++ paper, section 3.2, after Guthe et al.
+//! 2006), and the fixed passes whose cost bounds a method's frame from
+//! below (`CullingMethod::floor_ms`).
 //!
 //! A backend with a cost model of its own (the soft backend's `GpuModel`)
 //! gives it through [`Backend::cost_model`](crate::Backend::cost_model); one
@@ -9,8 +11,9 @@
 //! preset, a current desktop GPU (`docs/gpu-models.md`), so that a run on a
 //! real GPU decides as a simulated `modern` run would.
 
-/// Costs of drawing and querying, split as the soft backend's clock charges
-/// them: CPU time per call, GPU time per call, per triangle and per pixel.
+/// Costs of drawing, querying and GPU-driven passes, split as the soft
+/// backend's clock charges them: CPU time per call, GPU time per call, per
+/// triangle and per pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostModel {
     /// CPU time to issue one draw call, µs.
@@ -27,6 +30,16 @@ pub struct CostModel {
     pub gpu_query_box_us: f64,
     /// GPU time per query fragment (depth test only), ns.
     pub gpu_query_fragment_ns: f64,
+    /// Time from the GPU finishing a query until the CPU can read its
+    /// result, µs.
+    pub query_latency_us: f64,
+    /// CPU time to record one compute dispatch or indirect draw, µs.
+    pub cpu_dispatch_us: f64,
+    /// GPU time of one compute dispatch (launch and the barrier after it),
+    /// µs.
+    pub gpu_dispatch_us: f64,
+    /// GPU time per texel a depth-pyramid level writes, ns.
+    pub gpu_pyramid_texel_ns: f64,
 }
 
 impl Default for CostModel {
@@ -41,6 +54,10 @@ impl Default for CostModel {
             cpu_query_us: 0.5,
             gpu_query_box_us: 0.3,
             gpu_query_fragment_ns: 0.005,
+            query_latency_us: 30.0,
+            cpu_dispatch_us: 1.0,
+            gpu_dispatch_us: 3.0,
+            gpu_pyramid_texel_ns: 0.05,
         }
     }
 }
@@ -60,6 +77,23 @@ impl CostModel {
     pub fn query_us(&self, boxes: u64, pixels: f64) -> f64 {
         self.cpu_query_us + boxes as f64 * self.gpu_query_box_us + pixels * self.gpu_query_fragment_ns * 1e-3
     }
+
+    /// The least time a frame takes that records `dispatches` compute
+    /// dispatches and `draws` indirect draws and has the GPU write
+    /// `pyramid_texels` depth-pyramid texels, ms: the CPU records them all,
+    /// the GPU runs the dispatches one after another, and the frame ends
+    /// after both.
+    pub fn passes_ms(&self, dispatches: u64, draws: u64, pyramid_texels: u64) -> f64 {
+        let cpu = (dispatches + draws) as f64 * self.cpu_dispatch_us;
+        let gpu = dispatches as f64 * self.gpu_dispatch_us + pyramid_texels as f64 * self.gpu_pyramid_texel_ns * 1e-3;
+        cpu.max(gpu) * 1e-3
+    }
+
+    /// The least time a frame takes that waits for one occlusion query's
+    /// result, ms: the latency of its result alone.
+    pub fn query_round_trip_ms(&self) -> f64 {
+        self.query_latency_us * 1e-3
+    }
 }
 
 #[cfg(test)]
@@ -72,5 +106,10 @@ mod tests {
         assert!((m.render_us(2, 1000, 0.0) - (2.0 * 1.5 + 0.4)).abs() < 1e-12);
         assert!((m.query_us(1, 1000.0) - (0.5 + 0.3 + 0.005)).abs() < 1e-12);
         assert!(m.render_us(1, 10, 100.0) < m.render_us(1, 10, 1000.0));
+        // Six dispatches on the GPU (18 µs) outlast nine recordings on the
+        // CPU (9 µs); a pyramid's texels add GPU time.
+        assert!((m.passes_ms(6, 3, 0) - 0.018).abs() < 1e-12);
+        assert!((m.passes_ms(6, 3, 20_000) - 0.019).abs() < 1e-12);
+        assert!((m.query_round_trip_ms() - 0.030).abs() < 1e-12);
     }
 }

@@ -288,8 +288,9 @@ impl GpuModel {
         items as f64 * self.gpu_compute_item_ns * 1e-3
     }
 
-    /// The costs of draws and queries this model charges, for methods
-    /// that decide by cost whether a query pays (`nohc`).
+    /// The costs of draws, queries and GPU-driven passes this model
+    /// charges, for methods that decide by cost whether a query pays
+    /// (`nohc`) or which method to run (`auto`).
     pub fn cost_model(&self) -> CostModel {
         CostModel {
             cpu_draw_call_us: self.cpu_draw_call_us,
@@ -299,6 +300,10 @@ impl GpuModel {
             cpu_query_us: self.cpu_query_us,
             gpu_query_box_us: self.gpu_query_box_us,
             gpu_query_fragment_ns: self.gpu_query_fragment_ns,
+            query_latency_us: self.query_latency_us,
+            cpu_dispatch_us: self.cpu_dispatch_us,
+            gpu_dispatch_us: self.gpu_dispatch_us,
+            gpu_pyramid_texel_ns: self.gpu_pyramid_texel_ns,
         }
     }
 

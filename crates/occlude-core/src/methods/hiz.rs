@@ -53,6 +53,8 @@ use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
+use crate::cost_model::CostModel;
+use crate::depth_pyramid::level_sizes;
 use crate::gpu_culling::{ExpandInto, Flags, IdList, Pyramid};
 use std::fmt;
 use std::str::FromStr;
@@ -196,6 +198,17 @@ impl CullingMethod for TwoPhaseHiZ {
             temporal: TemporalSet::new(gpu, instances),
             nodes,
         });
+    }
+
+    /// Every frame: dropping last frame's flags outside the frustum,
+    /// compacting and listing their draws, clearing this frame's flags, a
+    /// reduction per pyramid level past the first, at least one box test,
+    /// compacting and listing the new draws: seven dispatches and a
+    /// reduction per level, two indirect draws, the pyramid's texels.
+    fn floor_ms(&self, _: &FrameContext<'_>, model: &CostModel, (width, height): (u32, u32), _: bool) -> f64 {
+        let levels = level_sizes(width, height);
+        let texels = levels[1..].iter().map(|&(w, h)| u64::from(w) * u64::from(h)).sum();
+        model.passes_ms(7 + levels.len() as u64 - 1, 2, texels)
     }
 
     /// A backend without [`GpuCulling`](crate::GpuCulling) or depth pyramids (which the runner

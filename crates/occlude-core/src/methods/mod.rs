@@ -36,6 +36,7 @@ pub use options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
 
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
+use crate::cost_model::CostModel;
 use crate::gpu_culling::GpuCullingUnsupported;
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
@@ -154,6 +155,16 @@ pub trait CullingMethod {
     /// The statistics of the frame just rendered, as the backend ended it:
     /// for a method that learns from what its frames cost (`auto`).
     fn finish_frame(&mut self, _stats: &FrameStats) {}
+
+    /// A lower bound of the time of a frame of this method at `resolution`
+    /// under `model`, ms: the passes it runs whatever the scene holds;
+    /// `cold`, a frame that starts from nothing (its first, or the first
+    /// after other methods ran), where that costs more. 0 where none is
+    /// known. `auto` spares trying a method whose bound cannot beat the one
+    /// it runs.
+    fn floor_ms(&self, _ctx: &FrameContext<'_>, _model: &CostModel, _resolution: (u32, u32), _cold: bool) -> f64 {
+        0.0
+    }
 
     /// Method-specific figures of the last frame it rendered, by name (for
     /// example `om`'s nodes decided in stage 1 without a query and its

@@ -26,6 +26,7 @@ use super::tracked::{update_instance_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
 use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
+use crate::cost_model::CostModel;
 use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
 use crate::scene::Scene;
 use std::fmt;
@@ -196,6 +197,17 @@ impl CullingMethod for RasterOcclusion {
         let Ok(gpu) = backend.gpu_culling() else { return };
         let all = AllInstances::new(gpu, ctx.scene);
         self.resources = Some(Resources { all, temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32) });
+    }
+
+    /// Every frame: compacting last frame's flags, listing their draws,
+    /// clearing this frame's flags, the box test, and (exact) compacting and
+    /// listing the new draws: six dispatches and three indirect draws (four
+    /// and two without the new draws).
+    fn floor_ms(&self, _: &FrameContext<'_>, model: &CostModel, _: (u32, u32), _: bool) -> f64 {
+        match self.params.mode {
+            RocMode::Exact => model.passes_ms(6, 3, 0),
+            RocMode::Last => model.passes_ms(4, 2, 0),
+        }
     }
 
     /// A backend without [`GpuCulling`] (which the runner refuses first)

@@ -31,6 +31,21 @@ struct Choice {
     last_time: Option<f64>,
     /// Frames it has run.
     frames: u64,
+    /// Whether its first probe was put off until the budget covers the
+    /// least its warm-up can cost ([`Bound::warm_up`]).
+    deferred: bool,
+}
+
+/// Lower bounds of a choice's frame times, ms, where the caller knows them
+/// ([`Chooser::begin`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    /// Of a frame once it runs warm: what its probe's measured frames cost
+    /// at least.
+    pub measured: f64,
+    /// Of a frame from nothing: what each of its warm-up frames costs at
+    /// least.
+    pub warm_up: f64,
 }
 
 /// A probe under way.
@@ -92,7 +107,14 @@ impl Chooser {
         assert!(!cold.is_empty(), "a chooser needs a choice");
         let choices = cold
             .iter()
-            .map(|&cold| Choice { cold, wait: u64::from(params.probe), next_probe: 0, last_time: None, frames: 0 })
+            .map(|&cold| Choice {
+                cold,
+                wait: u64::from(params.probe),
+                next_probe: 0,
+                last_time: None,
+                frames: 0,
+                deferred: false,
+            })
             .collect();
         Self { params, choices, current: 0, mean: None, probe: None, probes_begun: 0, last_ran: None, begun: 0 }
     }
@@ -108,16 +130,28 @@ impl Chooser {
     }
 
     /// Begins a frame: the choice due for a probe, if any, else the
-    /// current one. `bound(choice, mean)` may give a lower bound of a due
-    /// choice's frame time, ms, where the caller knows one; a bound no
-    /// faster than the current `mean` by the margin puts the probe off as
-    /// if it had lost at that time, sparing its frame.
-    pub fn begin(&mut self, bound: impl FnOnce(usize, f64) -> Option<f64>) -> Ticket {
+    /// current one. `bound(choice, mean)` may give lower bounds of a due
+    /// choice's frame times ([`Bound`]), where the caller knows them. A
+    /// measured bound no faster than the current `mean` by the margin puts
+    /// the probe off as if it had lost at that time, sparing its frames;
+    /// a choice never tried whose warm-up must cost more than `mean` is
+    /// first tried once the budget covers that much.
+    pub fn begin(&mut self, bound: impl FnOnce(usize, f64) -> Option<Bound>) -> Ticket {
         let frame = self.begun;
         if self.probe.is_none() {
             if let Some((choice, mean)) = self.due().zip(self.mean) {
+                let c = &self.choices[choice];
+                let first = c.last_time.is_none() && !c.deferred;
                 match bound(choice, mean) {
-                    Some(bound) if bound >= mean * (1.0 - self.margin()) => self.schedule(choice, bound, 0.0, frame),
+                    Some(b) if b.measured >= mean * (1.0 - self.margin()) => {
+                        self.schedule(choice, b.measured, 0.0, frame)
+                    }
+                    Some(b) if first && b.warm_up > mean && c.cold > 0 => {
+                        let wait = self.budget_wait(c.cold as f64 * (b.warm_up - mean), mean);
+                        let c = &mut self.choices[choice];
+                        c.deferred = true;
+                        c.next_probe = frame + wait;
+                    }
                     _ => {
                         self.probes_begun += 1;
                         let serial = self.probes_begun;
@@ -175,16 +209,26 @@ impl Chooser {
     /// Sets when `choice`, last measured at `time` ms, is next tried: after
     /// its wait from `frame`, and late enough that a probe costing `excess`
     /// ms beyond the current mean stays within its share of the budget
-    /// (the budget is split evenly among the choices other than the current
-    /// one, so that all probes together stay within it). Its wait doubles.
+    /// ([`Chooser::budget_wait`]). Its wait doubles.
     fn schedule(&mut self, choice: usize, time: f64, excess: f64, frame: u64) {
-        let others = self.choices.len().saturating_sub(1).max(1) as f64;
-        let per_frame = f64::from(self.params.budget) * self.mean.unwrap_or(time) / others;
-        let budget_wait = if per_frame > 0.0 { (excess.max(0.0) / per_frame).ceil() as u64 } else { 0 };
+        let budget_wait = self.budget_wait(excess, self.mean.unwrap_or(time));
         let c = &mut self.choices[choice];
         c.last_time = Some(time);
         c.next_probe = frame + c.wait.max(budget_wait);
         c.wait = c.wait.saturating_mul(2);
+    }
+
+    /// Frames a probe costing `excess` ms beyond a current mean of `mean`
+    /// ms must wait for its share of the budget to cover it (the budget is
+    /// split evenly among the choices other than the current one).
+    fn budget_wait(&self, excess: f64, mean: f64) -> u64 {
+        let others = self.choices.len().saturating_sub(1).max(1) as f64;
+        let per_frame = f64::from(self.params.budget) * mean / others;
+        if per_frame > 0.0 {
+            (excess.max(0.0) / per_frame).ceil() as u64
+        } else {
+            0
+        }
     }
 
     /// Ends a probe: the probed choice takes over if it beat the current
@@ -273,7 +317,29 @@ mod tests {
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 0]);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
-        let next = chooser.begin(|choice, mean| (choice == 1).then_some(mean * 2.0));
+        let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
+        let next = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
         assert_eq!((next.choice, next.is_probe()), (0, false));
+    }
+
+    #[test]
+    fn a_first_try_waits_until_the_budget_covers_its_least_warm_up() {
+        // Choice 1 might win once warm, but its warm-up frame costs at
+        // least 3 ms where the current choice takes 1: its first probe
+        // waits until 1 % of 1 ms a frame has paid the 2 ms beyond.
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 1]);
+        let first = chooser.begin(|_, _| None);
+        chooser.record(first, 1.0);
+        let bound = Bound { measured: 0.5, warm_up: 3.0 };
+        let mut waited = 0;
+        loop {
+            let t = chooser.begin(|_, _| Some(bound));
+            if t.is_probe() {
+                break;
+            }
+            chooser.record(t, 1.0);
+            waited += 1;
+        }
+        assert_eq!(waited, 201, "the frame that put it off, then 2 ms of excess at 0.01 ms a frame");
     }
 }

@@ -29,7 +29,16 @@
 //! `auto.budget` (1 %) of the frame time, each method an equal share: a
 //! method measured at three times the current one's time waits far longer
 //! than one within a few percent. The wait also doubles with each lost
-//! probe, from `auto.probe` frames (32). A method is tried at once,
+//! probe, from `auto.probe` frames (32). Where the backend models its
+//! costs ([`Backend::cost_model`]), each choice's frames have lower bounds:
+//! `vfc`'s draws of the instances in view; the fixed passes of `roc` and
+//! `hiz` (dispatches, a depth pyramid); `chcpp`'s wait for its first query
+//! when it starts from nothing ([`CullingMethod::floor_ms`]). The first
+//! frame runs the choice whose frame from nothing costs least at best; a
+//! probe whose bound cannot beat the current mean by the margin is spared;
+//! a first try whose warm-up must cost more than the current mean waits
+//! until the budget covers that much. On a scene drawn in microseconds, no
+//! method whose fixed passes take longer is ever tried. A method is tried at once,
 //! whatever its wait, when the current method's mean grows past that
 //! method's last measured time by the margin: a change of view that makes
 //! the current method stop paying is found without waiting. Every method
@@ -38,9 +47,10 @@
 //! starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
 //! embedding's `GpuCuller` shares.
 //!
-//! **What it costs.** The first frames try every method once (the GPU-driven
-//! ones first, the cheapest to try on a current GPU); after that, probes
-//! cost about `auto.budget` of the time. The choice assumes that
+//! **What it costs.** The first frames try once each method that might win
+//! (without a cost model, every method, the GPU-driven ones first, the
+//! cheapest to try on a current GPU); after that, probes cost about
+//! `auto.budget` of the time. The choice assumes that
 //! neighbouring frames cost about the same (a camera that moves smoothly).
 
 use super::chcpp::ChcppParams;
@@ -52,7 +62,7 @@ use crate::stats::FrameStats;
 
 mod chooser;
 
-pub use chooser::{Chooser, Ticket};
+pub use chooser::{Bound, Chooser, Ticket};
 
 /// Parameters of `auto`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,10 +105,12 @@ impl MethodParams for AutoParams {
 /// scenes: on a scene with little occlusion, or geometry your GPU draws in
 /// a fraction of a millisecond, it settles on frustum culling.
 ///
-/// **Cost.** Its first frames try each method once (about ten frames,
-/// some of them slower than frustum culling: a method starting from nothing
-/// tests everything). After that, probes cost about `auto.budget` (1 %) of
-/// the frame time. Memory: the state of every method it may choose.
+/// **Cost.** Its first frames try each method that might win once (about
+/// ten frames, some of them slower than frustum culling: a method starting
+/// from nothing tests everything); where the backend models its costs, a
+/// method whose fixed passes alone outlast the running method's frame is
+/// not tried. After that, probes cost about `auto.budget` (1 %) of the
+/// frame time. Memory: the state of every method it may choose.
 ///
 /// **Requirements.** Frame times from the backend
 /// ([`FrameStats::frame_ms`]); without them the backend's cost model, or
@@ -155,8 +167,10 @@ impl Auto {
     }
 
     /// Makes the choices for `backend`: `roc` and `hiz` only where they run
-    /// there.
-    fn choose_among(&mut self, backend: &mut dyn Backend) {
+    /// there. Where the backend models its costs, the first tried is the
+    /// one whose frame from nothing costs least at best ([`bounds`]; ties
+    /// in the order `roc`, `hiz`, `chcpp`, `vfc`).
+    fn choose_among(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend) {
         let (culling, pyramids) = match backend.gpu_culling() {
             Ok(gpu) => (true, gpu.pyramid_support().is_ok()),
             Err(_) => (false, false),
@@ -164,12 +178,32 @@ impl Auto {
         let gpu = self.params.gpu;
         let roc = (gpu && culling).then(|| Method::Roc(Default::default()));
         let hiz = (gpu && pyramids).then(|| Method::Hiz(Default::default()));
-        let methods: Vec<Method> =
-            roc.into_iter().chain(hiz).chain([Method::Chcpp(ChcppParams::default()), Method::Vfc]).collect();
-        self.methods = methods.iter().map(|m| m.build().expect("default parameters are valid")).collect();
-        let cold: Vec<u64> = methods.iter().map(cold_frames).collect();
-        self.chooser = Some(Chooser::new(self.params, &cold));
+        let mut methods: Vec<(Method, Box<dyn CullingMethod + Send>)> = roc
+            .into_iter()
+            .chain(hiz)
+            .chain([Method::Chcpp(ChcppParams::default()), Method::Vfc])
+            .map(|m| {
+                let built = m.build().expect("default parameters are valid");
+                (m, built)
+            })
+            .collect();
         self.model = backend.cost_model();
+        if let Some(model) = &self.model {
+            let resolution = backend.resolution();
+            let mut first_frame = Vec::new();
+            for (_, m) in &methods {
+                let (bound, steps) = bounds(m.as_ref(), ctx, model, resolution);
+                self.estimate_steps += steps;
+                first_frame.push(bound.warm_up);
+            }
+            let mut order: Vec<usize> = (0..methods.len()).collect();
+            order.sort_by(|&a, &b| first_frame[a].total_cmp(&first_frame[b]));
+            let mut taken: Vec<_> = methods.into_iter().map(Some).collect();
+            methods = order.into_iter().map(|i| taken[i].take().expect("each index once")).collect();
+        }
+        let cold: Vec<u64> = methods.iter().map(|(m, _)| cold_frames(m)).collect();
+        self.methods = methods.into_iter().map(|(_, built)| built).collect();
+        self.chooser = Some(Chooser::new(self.params, &cold));
     }
 
     /// The method running the frame under way (the first before any).
@@ -210,6 +244,24 @@ pub fn cold_frames(method: &Method) -> u64 {
     }
 }
 
+/// Lower bounds of `method`'s frame times under `model` at `resolution`
+/// ([`Bound`]): `vfc`'s from its draws ([`vfc_bound`]), the others' from
+/// their fixed passes ([`CullingMethod::floor_ms`]); and the nodes `vfc`'s
+/// walk visited, to be charged to the frame.
+fn bounds(
+    method: &dyn CullingMethod,
+    ctx: &FrameContext<'_>,
+    model: &CostModel,
+    resolution: (u32, u32),
+) -> (Bound, u64) {
+    if method.name() == "vfc" {
+        let (bound, steps) = vfc_bound(ctx, model);
+        return (Bound { measured: bound, warm_up: bound }, steps);
+    }
+    let floor = |cold| method.floor_ms(ctx, model, resolution, cold);
+    (Bound { measured: floor(false), warm_up: floor(true) }, 0)
+}
+
 /// A lower bound of `vfc`'s frame time under `model`, ms: one draw call
 /// for each shown instance in the leaves in view, its triangles, the CPU's
 /// and the GPU's share overlapping (fragments and material switches left
@@ -238,17 +290,18 @@ impl CullingMethod for Auto {
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
         if self.methods.is_empty() {
-            self.choose_among(backend);
+            self.choose_among(ctx, backend);
         }
+        let resolution = backend.resolution();
         let Self { methods, chooser, model, estimate_steps, .. } = self;
-        // Where the backend models its costs, a frame of `vfc` costs at least
-        // its draws of the instances in view ([`vfc_bound`]): a probe of it
-        // that cannot win is spared, and with it a frame of drawing
-        // everything in view where occlusion culling wins by far.
+        // Where the backend models its costs, a due probe's frames cost at
+        // least their bounds ([`bounds`]): a probe that cannot win is
+        // spared, and with it frames of drawing everything in view where
+        // occlusion culling wins by far, or of fixed passes dearer than a
+        // whole frame of the method running.
         let ticket = chooser.as_mut().expect("made above").begin(|choice, _| {
-            let model = model.as_ref().filter(|_| methods[choice].name() == "vfc")?;
-            let (bound, steps) = vfc_bound(ctx, model);
-            *estimate_steps = steps;
+            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, model.as_ref()?, resolution);
+            *estimate_steps += steps;
             Some(bound)
         });
         self.ticket = Some(ticket);
@@ -301,11 +354,18 @@ mod tests {
     /// each frame reported as costing `cost(frame, method)` ms; returns the
     /// method that rendered each frame.
     fn run(frames: u64, cost: impl Fn(u64, &str) -> f64) -> Vec<&'static str> {
-        run_modelled(None, frames, cost)
+        let (ran, choices) = run_modelled(None, frames, cost);
+        assert_eq!(choices, ["roc", "hiz", "chcpp", "vfc"]);
+        ran
     }
 
-    /// [`run`] on a backend whose cost model is `model`, if any.
-    fn run_modelled(model: Option<CostModel>, frames: u64, cost: impl Fn(u64, &str) -> f64) -> Vec<&'static str> {
+    /// [`run`] on a backend whose cost model is `model`, if any; also
+    /// returns the choices in the order they were first tried.
+    fn run_modelled(
+        model: Option<CostModel>,
+        frames: u64,
+        cost: impl Fn(u64, &str) -> f64,
+    ) -> (Vec<&'static str>, Vec<&'static str>) {
         let rig = Rig::wall();
         let mut backend = rig.mock().with_gpu_culling();
         if let Some(model) = model {
@@ -324,8 +384,7 @@ mod tests {
             auto.finish_frame(&FrameStats { frame_ms: cost(frame, name), ..FrameStats::default() });
             ran.push(name);
         }
-        assert_eq!(auto.choices(), ["roc", "hiz", "chcpp", "vfc"]);
-        ran
+        (ran, auto.choices())
     }
 
     fn share(ran: &[&str], name: &str) -> f64 {
@@ -404,13 +463,31 @@ mod tests {
         // One millisecond a draw call: drawing the wall rig's instances in
         // view costs far more than the 0.5 ms the others take.
         let slow_draws = CostModel { cpu_draw_call_us: 1000.0, ..CostModel::default() };
-        let ran = run_modelled(Some(slow_draws), 600, cost);
+        let (ran, choices) = run_modelled(Some(slow_draws), 600, cost);
         assert_eq!(share(&ran, "vfc"), 0.0);
-        // Under a model in which its draws are cheap, vfc is probed (and
-        // loses).
+        assert_eq!(choices.last(), Some(&"vfc"), "tried last: its first frame is the dearest");
+        // Under a model in which its draws are cheap, vfc is tried first
+        // (and loses).
         let cheap_draws = CostModel { cpu_draw_call_us: 0.0, gpu_draw_call_us: 0.0, ..CostModel::default() };
-        let ran = run_modelled(Some(cheap_draws), 600, cost);
-        assert!(ran.contains(&"vfc"));
+        let (ran, choices) = run_modelled(Some(cheap_draws), 600, cost);
+        assert_eq!((choices[0], ran[0]), ("vfc", "vfc"));
+        assert!(share(&ran, "vfc") < 0.05);
+    }
+
+    #[test]
+    fn a_method_whose_fixed_passes_outlast_vfcs_frame_is_never_tried() {
+        // Draws nearly free: vfc's frame of 5 µs is shorter than roc's six
+        // dispatches (18 µs), hiz's pyramid, and chcpp's first query from
+        // nothing (30 µs). Were they tried, they would win; they are not.
+        let cheap_draws =
+            CostModel { cpu_draw_call_us: 0.01, gpu_draw_call_us: 0.01, gpu_triangle_ns: 0.0, ..CostModel::default() };
+        let cost = |_, name: &str| if name == "vfc" { 0.005 } else { 0.0025 };
+        let (ran, choices) = run_modelled(Some(cheap_draws), 600, cost);
+        assert_eq!(choices[0], "vfc");
+        assert!(ran.iter().all(|&m| m == "vfc"), "{:?}", ran.iter().find(|&&m| m != "vfc"));
+        // Without a cost model every method is tried, and roc, first, wins.
+        let (ran, _) = run_modelled(None, 600, cost);
+        assert!(share(&ran, "vfc") < 0.05);
     }
 
     #[test]

@@ -24,6 +24,7 @@ use super::{
     OptionError, ParamVisitor,
 };
 use crate::backend::{Backend, QueryHandle};
+use crate::cost_model::CostModel;
 use crate::geometry::Aabb;
 use crate::hierarchy::{NodeId, Since};
 use crate::rng::mix64;
@@ -346,6 +347,16 @@ impl Chcpp {
 impl CullingMethod for Chcpp {
     fn name(&self) -> &'static str {
         "chcpp"
+    }
+
+    /// From nothing, every node counts as invisible: the root, if in view,
+    /// is queried and its result awaited before anything else.
+    fn floor_ms(&self, ctx: &FrameContext<'_>, model: &CostModel, _: (u32, u32), cold: bool) -> f64 {
+        if cold && ctx.in_frustum(ctx.hierarchy.root()) {
+            model.query_round_trip_ms()
+        } else {
+            0.0
+        }
     }
 
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
