@@ -38,10 +38,10 @@
 //! probe whose bound cannot beat the current mean by the margin is spared;
 //! a first try whose warm-up must cost more than the current mean waits
 //! until the budget covers that much. On a scene drawn in microseconds, no
-//! method whose fixed passes take longer is ever tried. A method is tried at once,
-//! whatever its wait, when the current method's mean grows past that
-//! method's last measured time by the margin: a change of view that makes
-//! the current method stop paying is found without waiting. Every method
+//! method whose fixed passes take longer is ever tried. A method is tried
+//! at once, whatever its wait, when the current method's mean grows past
+//! that method's last measured time by the margin: a change of view that
+//! makes the current method stop paying is found without waiting. Every method
 //! keeps its own state while another runs, as CHC++ keeps its
 //! classification from frame to frame (section 5.2): coming back, it
 //! starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
@@ -188,18 +188,17 @@ impl Auto {
             })
             .collect();
         self.model = backend.cost_model();
-        if let Some(model) = &self.model {
+        if let Some(model) = self.model {
             let resolution = backend.resolution();
-            let mut first_frame = Vec::new();
-            for (_, m) in &methods {
-                let (bound, steps) = bounds(m.as_ref(), ctx, model, resolution);
+            let mut keyed = Vec::new();
+            for (method, built) in methods {
+                let (bound, steps) = bounds(built.as_ref(), ctx, &model, resolution);
                 self.estimate_steps += steps;
-                first_frame.push(bound.warm_up);
+                keyed.push((bound.warm_up, (method, built)));
             }
-            let mut order: Vec<usize> = (0..methods.len()).collect();
-            order.sort_by(|&a, &b| first_frame[a].total_cmp(&first_frame[b]));
-            let mut taken: Vec<_> = methods.into_iter().map(Some).collect();
-            methods = order.into_iter().map(|i| taken[i].take().expect("each index once")).collect();
+            // A stable sort: ties keep the default order.
+            keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+            methods = keyed.into_iter().map(|(_, m)| m).collect();
         }
         let cold: Vec<u64> = methods.iter().map(|(m, _)| cold_frames(m)).collect();
         self.methods = methods.into_iter().map(|(_, built)| built).collect();
