@@ -214,8 +214,8 @@ fn the_plant_walkthrough_is_as_long_as_the_papers_and_stays_in_the_hall() {
 /// every walkthrough clear of every object on every frame at 30 fps; the
 /// teapots' 871 frames from outside the field, most of it in view; the
 /// city's flight, lower than occlude's own, still 20 m above the street
-/// over frames 1210-1800 and at its highest around frame 1600; the plant's eye where occlude's own is, with
-/// a narrower view that reaches less far.
+/// over frames 1210-1800 and at its highest around frame 1600; the plant's
+/// eye where occlude's own is, with a narrower view that reaches less far.
 #[test]
 fn the_chc_table1_inputs_change_only_the_walkthroughs_and_views() {
     for size in Size::ALL {
