@@ -1,8 +1,9 @@
 //! `occlude bench --paper P --plot PATH` as a user runs it: one plot per
 //! scene, named after PATH, one line per compared method, titled with the
-//! paper's figure, and one per setting of CHC++'s Figure 9; `--csv` beside it writes every run's frames; a bad
-//! extension, a paper without a walkthrough or a scene the paper does not
-//! have (`--scene`) is a usage error before anything runs.
+//! paper's figure, and one per setting of CHC++'s Figure 9; `--csv` beside
+//! it writes every run's frames; a bad extension, a paper without a
+//! walkthrough or a scene the paper does not have (`--scene`) is a usage
+//! error before anything runs.
 
 use std::path::Path;
 use std::process::Command;

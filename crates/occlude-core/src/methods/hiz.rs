@@ -200,15 +200,17 @@ impl CullingMethod for TwoPhaseHiZ {
         });
     }
 
-    /// Every frame: dropping last frame's flags outside the frustum,
-    /// compacting and listing their draws, clearing this frame's flags, a
-    /// reduction per pyramid level past the first, at least one box test,
-    /// compacting and listing the new draws: seven dispatches and a
-    /// reduction per level, two indirect draws, the pyramid's texels.
+    /// Every frame: the temporal set's passes (`TemporalSet::passes`,
+    /// dropping what left the frustum, drawing the new), a reduction per
+    /// pyramid level past the first (the pyramid's texels) and at least one
+    /// box test: seven dispatches and a reduction per level, two indirect
+    /// draws.
     fn floor_ms(&self, _: &FrameContext<'_>, model: &CostModel, (width, height): (u32, u32), _: bool) -> f64 {
         let levels = level_sizes(width, height);
         let texels = levels[1..].iter().map(|&(w, h)| u64::from(w) * u64::from(h)).sum();
-        model.passes_ms(7 + levels.len() as u64 - 1, 2, texels)
+        let (dispatches, draws) = TemporalSet::passes(true, true);
+        let reductions = levels.len() as u64 - 1;
+        model.passes_ms(dispatches + reductions + 1, draws, texels)
     }
 
     /// A backend without [`GpuCulling`](crate::GpuCulling) or depth pyramids (which the runner

@@ -123,6 +123,21 @@ impl TemporalSet {
         self.visible
     }
 
+    /// The dispatches and indirect draws that [`TemporalSet::begin`] (with
+    /// `in_frustum` or without) and [`TemporalSet::finish`] (with
+    /// `draw_new` or without) record whatever the scene: a method's cost
+    /// floor (`CullingMethod::floor_ms`).
+    pub(crate) fn passes(in_frustum: bool, draw_new: bool) -> (u64, u64) {
+        // Dropping (if in_frustum), compacting, listing's dispatch and
+        // clearing; listing's draw. Then compacting and listing again.
+        let (dispatches, draws) = (3 + u64::from(in_frustum), 1);
+        if draw_new {
+            (dispatches + 2, draws + 1)
+        } else {
+            (dispatches, draws)
+        }
+    }
+
     /// Steps 3 (when `draw_new`) and 4.
     pub(crate) fn finish(&mut self, gpu: &mut dyn GpuCulling, draw_new: bool) {
         if draw_new {
@@ -199,15 +214,12 @@ impl CullingMethod for RasterOcclusion {
         self.resources = Some(Resources { all, temporal: TemporalSet::new(gpu, ctx.scene.instances.len() as u32) });
     }
 
-    /// Every frame: compacting last frame's flags, listing their draws,
-    /// clearing this frame's flags, the box test, and (exact) compacting and
-    /// listing the new draws: six dispatches and three indirect draws (four
-    /// and two without the new draws).
+    /// Every frame: the temporal set's passes (`TemporalSet::passes`;
+    /// the new draws only when exact) and the box test, a dispatch and an
+    /// indirect draw: six dispatches and three draws when exact.
     fn floor_ms(&self, _: &FrameContext<'_>, model: &CostModel, _: (u32, u32), _: bool) -> f64 {
-        match self.params.mode {
-            RocMode::Exact => model.passes_ms(6, 3, 0),
-            RocMode::Last => model.passes_ms(4, 2, 0),
-        }
+        let (dispatches, draws) = TemporalSet::passes(false, self.params.mode == RocMode::Exact);
+        model.passes_ms(dispatches + 1, draws + 1, 0)
     }
 
     /// A backend without [`GpuCulling`] (which the runner refuses first)
