@@ -13,8 +13,8 @@
 //!   comparison of VFC, S&W, CHC, CHC++, NOHC, NOHC-OPT, the paper's OPT
 //!   (`ideal-sorted`: S&W's visible nodes drawn without queries through
 //!   the material-sorted render queue) and `opt`, an ablation of
-//!   CHC++'s components, Figure 8 (the components added one at a time)
-//!   and Figure 9 (`vfc`, `chcpp` and `nohc` on the plant's first 350
+//!   CHC++'s components, Figure 8 (the components added one at a time,
+//!   plotted along the plant's walkthrough) and Figure 9 (`vfc`, `chcpp` and `nohc` on the plant's first 350
 //!   frames under each [`Shading`]).
 //!
 //! Each table of methods says under it which ideal it uses
@@ -48,7 +48,7 @@ use crate::paper_tables::{PaperTables, Row, Table};
 use crate::progress::Progress;
 use crate::published;
 use crate::runner::{run_scene, run_scene_with_variants, Variant};
-use crate::summary::BenchReport;
+use crate::summary::{BenchReport, MethodSummary};
 use occlude_core::hierarchy::BuildOptions;
 use occlude_core::methods::MethodOptions;
 use occlude_core::{HierarchyKind, Scene};
@@ -114,6 +114,10 @@ struct VariantTable {
     /// The variants, each a label and a list of `method.key=value`; the
     /// defaults (no options) are the compared table's row of the method.
     variants: &'static [(&'static str, &'static [&'static str])],
+    /// Where the paper plots the variants along a walkthrough: the scene
+    /// and the plot's file tag (`fig8`), one line per variant, named by
+    /// its label.
+    plotted: Option<(&'static str, &'static str)>,
 }
 
 /// CHC++'s Figure 8 (section 8, p. 229): "We start with CHC and add one
@@ -142,6 +146,7 @@ const FIGURE_8: VariantTable = VariantTable {
         ("CHC+B+R+TB", &["chcpp.multiquery=off"]),
         ("CHC+B+R+TB+MQ (CHC++)", &[]),
     ],
+    plotted: Some(("plant", "fig8")),
 };
 
 const CHC: Experiment = Experiment {
@@ -160,6 +165,7 @@ const CHC: Experiment = Experiment {
         VariantTable {
             name: "Table 2",
             variants: &[("", &[]), ("", &["chc.tav=2"]), ("", &["chc.tav=2", "chc.nvp=25"])],
+            plotted: None,
         },
         // Section 5.3, speculative rendering, for which the paper gives no
         // figure ("We did not find constants that could produce additional
@@ -168,6 +174,7 @@ const CHC: Experiment = Experiment {
         VariantTable {
             name: "section 5.3",
             variants: &[("", &[]), ("", &["chc.spec=1000"]), ("", &["chc.spec=10000"]), ("", &["chc.spec=100000"])],
+            plotted: None,
         },
     ],
     shading_figure: None,
@@ -200,6 +207,7 @@ const CHCPP: Experiment = Experiment {
                 ("", &["chcpp.nav=0"]),
                 ("", &["chcpp.pkeep=measured"]),
             ],
+            plotted: None,
         },
         FIGURE_8,
     ],
@@ -227,6 +235,7 @@ const OM: Experiment = Experiment {
             ("", &["om.corner=off"]),
             ("", &["om.overlap=off", "om.corner=off"]),
         ],
+        plotted: None,
     }],
     shading_figure: None,
 };
@@ -244,20 +253,47 @@ pub struct PaperResult {
     /// methods (not of a table's variants), in scene order: what
     /// the command line's `--plot` draws (`occlude_cli::bench::paper_figures`).
     pub compared_runs: Vec<usize>,
-    /// The runs of a figure beyond the compared methods' (CHC++'s Figure 9,
-    /// a run per shading), which `--plot` draws too.
+    /// The runs of a figure beyond the compared methods' (CHC++'s Figure 8,
+    /// its variants' lanes as one run; Figure 9, a run per shading), which
+    /// `--plot` draws too.
     pub figure_runs: Vec<FigureRun>,
 }
 
-/// A run plotted as one of a paper's figures.
+/// A plot of one of a paper's figures, its lines methods of the tables'
+/// reports.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FigureRun {
     /// Its part of the plot's file name (`plant-fig9-dp`).
     pub tag: String,
     /// The figure, as the paper names it, and the setting (`Figure 9, DP`).
     pub figure: String,
-    /// Its index into the tables' reports.
+    /// Its lines, in legend order.
+    pub lines: Vec<FigureLine>,
+}
+
+/// One line of a [`FigureRun`]: a method of one of the tables' reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureLine {
+    /// Its name in the legend (Figure 8's `CHC+B`).
+    pub label: String,
+    /// Its report's index into the tables' reports.
     pub report: usize,
+    /// Its index into that report's methods.
+    pub method: usize,
+}
+
+impl PaperResult {
+    /// `figure`'s lines as one report: the first line's run, with the
+    /// lines as its methods, each named by its label.
+    pub fn figure_report(&self, figure: &FigureRun) -> Option<BenchReport> {
+        let reports = &self.tables.reports;
+        let first = reports.get(figure.lines.first()?.report)?;
+        let methods = figure.lines.iter().map(|l| {
+            let method = reports.get(l.report)?.methods.get(l.method)?;
+            Some(MethodSummary { name: l.label.clone(), ..method.clone() })
+        });
+        Some(BenchReport { methods: methods.collect::<Option<_>>()?, ..first.clone() })
+    }
 }
 
 /// Papers whose tables come from no walkthrough runs (`gvq`'s are counts
@@ -396,27 +432,38 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
         let run = run_scene_with_variants(&scene, &config, &variants, progress)?;
         let report = run.report(&config);
         compared.extend(report.methods.iter().map(|m| Row::new(scene_name, m, "", published)));
-        let defaults = report.methods.iter().find(|m| m.name == e.varied).cloned();
-        compared_runs.push(reports.len());
+        let defaults = report.methods.iter().position(|m| m.name == e.varied);
+        let defaults = defaults.expect("every experiment's varied method is one of its methods");
+        let compared_report = reports.len();
+        compared_runs.push(compared_report);
         reports.push(report);
-        let lanes: Vec<_> = run
+        let lanes: Vec<usize> = run
             .variants
             .iter()
             .map(|lane| {
-                let report = BenchReport::with_methods(&run, std::slice::from_ref(lane), &config);
-                let summary = report.methods[0].clone();
-                reports.push(report);
-                summary
+                reports.push(BenchReport::with_methods(&run, std::slice::from_ref(lane), &config));
+                reports.len() - 1
             })
             .collect();
+        // A variant's lane, as a report and a method of it: its own, or the
+        // compared run's for the defaults.
+        let lane_of = |opts: &&[&str]| match lane_options.iter().position(|o| o == opts) {
+            Some(lane) => (lanes[lane], 0),
+            None => (compared_report, defaults),
+        };
         for (table, rows) in e.variant_tables.iter().zip(&mut varied) {
             let table_published = published::table(e.paper, table.name);
             for (_, opts) in table.variants {
-                let summary = match lane_options.iter().position(|o| o == opts) {
-                    Some(lane) => lanes[lane].clone(),
-                    None => defaults.clone().expect("every experiment's varied method is one of its methods"),
-                };
-                rows.push(Row::new(scene_name, &summary, &opts.join(" "), table_published));
+                let (report, method) = lane_of(opts);
+                rows.push(Row::new(scene_name, &reports[report].methods[method], &opts.join(" "), table_published));
+            }
+            if let Some((_, file)) = table.plotted.filter(|(scene, _)| *scene == scene_name) {
+                let lines = table.variants.iter().map(|(label, opts)| {
+                    let (report, method) = lane_of(opts);
+                    FigureLine { label: label.to_string(), report, method }
+                });
+                let tag = format!("{scene_name}-{file}");
+                figure_runs.push(FigureRun { tag, figure: table.name.to_string(), lines: lines.collect() });
             }
         }
         if let Some(figure) = e.shading_figure.as_ref().filter(|f| f.scene == scene_name) {
@@ -430,10 +477,15 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
                 progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
                 let report = run_scene(&scene, &config, progress)?.report(&config);
                 shaded.extend(report.methods.iter().map(|m| Row::new(scene_name, m, shading.paper_name(), None)));
+                let lines = report.methods.iter().enumerate().map(|(method, m)| FigureLine {
+                    label: m.name.clone(),
+                    report: reports.len(),
+                    method,
+                });
                 figure_runs.push(FigureRun {
                     tag: format!("{scene_name}-{}-{shading}", figure.file),
                     figure: format!("{}, {}", figure.name, shading.paper_name()),
-                    report: reports.len(),
+                    lines: lines.collect(),
                 });
                 reports.push(report);
             }
@@ -682,9 +734,9 @@ mod tests {
         let models: Vec<&str> = result.tables.reports.iter().rev().take(3).map(|r| r.gpu_model.as_str()).collect();
         assert_eq!(models, ["modern+sh", "modern", "modern+dp"]);
         let tags: Vec<&str> = result.figure_runs.iter().map(|f| f.tag.as_str()).collect();
-        assert_eq!(tags, ["plant-fig9-dp", "plant-fig9-fix", "plant-fig9-sh"]);
+        assert_eq!(tags, ["plant-fig8", "plant-fig9-dp", "plant-fig9-fix", "plant-fig9-sh"]);
         let last = result.figure_runs.last().unwrap();
-        assert_eq!((last.figure.as_str(), last.report), ("Figure 9, SH", result.tables.reports.len() - 1));
+        assert_eq!((last.figure.as_str(), last.lines[0].report), ("Figure 9, SH", result.tables.reports.len() - 1));
         // Figure 8 starts from CHC (every optimisation off) and ends at
         // CHC++, the compared table's row; its rows cite the figure's page.
         assert!(figure8.rows[0].options.contains("chcpp.b=1") && figure8.rows[0].options.contains("chcpp.tight=off"));
@@ -696,6 +748,16 @@ mod tests {
         let lanes = ablation.rows.iter().chain(&figure8.rows).filter(|r| r.scene == "city" && !r.options.is_empty());
         let distinct: std::collections::HashSet<&str> = lanes.map(|r| r.options.as_str()).collect();
         assert_eq!(result.tables.reports.len(), 3 * (1 + distinct.len()) + 3);
+        // Figure 8's plot: the plant's five lanes, each named by its label,
+        // the last one the compared run's CHC++.
+        let fig8 = result.figure_report(&result.figure_runs[0]).unwrap();
+        let lines: Vec<&str> = fig8.methods.iter().map(|m| m.name.as_str()).collect();
+        let labels: Vec<&str> = FIGURE_8.variants.iter().map(|(label, _)| *label).collect();
+        assert_eq!((fig8.scene.as_str(), result.figure_runs[0].figure.as_str(), lines), ("plant", "Figure 8", labels));
+        let plant = &result.tables.reports[result.compared_runs[2]];
+        let chcpp = plant.methods.iter().find(|m| m.name == "chcpp").unwrap();
+        assert_eq!(fig8.methods[4].per_frame, chcpp.per_frame);
+        assert_ne!(fig8.methods[0].per_frame, chcpp.per_frame);
         assert!(
             result.text.contains("nohc / chcpp frame time") && result.text.contains("(paper 1.5)"),
             "{}",

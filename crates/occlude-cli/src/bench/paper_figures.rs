@@ -3,18 +3,26 @@
 //! state changes): one file per scene, `PATH`'s name with the scene's put
 //! before the extension (`--plot out/chc.svg` writes `out/chc-teapots.svg`,
 //! `out/chc-city.svg`, `out/chc-plant.svg`), one line per method of the
-//! paper's compared table (the variants of its other tables are not lines),
-//! titled with the paper's figure where it has one: the CHC paper's Figures
-//! 5, 6 and 7 (Figure 7 on a logarithmic axis, as the paper's), the CHC++
-//! paper's Figure 1 (the power plant's frame times) and Figure 10 (the
-//! city's queries, state changes and frame times), the occupancy-map
-//! paper's Figure 7 (the city; the paper plots frame rates, and rendered
-//! polygons, drawn here as triangles per frame below the frame times) and
-//! the IOC poster's Figure 4.
+//! paper's compared table, or only those its figure draws. Each is titled
+//! with the paper's figure where it has one:
+//!
+//! - the CHC paper's Figures 5, 6 and 7 (Figure 7 on a logarithmic axis,
+//!   as the paper's);
+//! - the CHC++ paper's Figure 1 (the power plant), Figure 7 (frame times in
+//!   Pompeii, which we lack: the teapots stand in, and the title says so),
+//!   Figure 10 (the city's queries, state changes and frame times), and
+//!   the figures with runs of their own: Figure 8 (the plant, CHC++'s
+//!   optimisations added one at a time, a line per step) and Figure 9 (a
+//!   plot per shading);
+//! - the occupancy-map paper's Figure 7 (the city; the paper plots frame
+//!   rates, and rendered polygons, drawn here as triangles per frame below
+//!   the frame times);
+//! - the IOC poster's Figure 4.
 
 use super::plot::{write_styled_plot, PlotKind, PlotStyle, TimeScale};
 use anyhow::{Context, Result};
 use occlude_bench::paper::{check_walkthroughs, PaperResult};
+use occlude_bench::summary::BenchReport;
 use std::path::{Path, PathBuf};
 
 /// One scene's figures in a paper.
@@ -27,6 +35,11 @@ struct SceneFigures {
     queries: Option<&'static str>,
     /// The frame-time axis: the paper's where it has a figure.
     time_scale: TimeScale,
+    /// The paper's own scene, where it plots the figure on one we lack.
+    paper_scene: Option<&'static str>,
+    /// The methods the paper's figure draws, in its order (empty: every
+    /// method of the compared table).
+    lines: &'static [&'static str],
 }
 
 /// Every paper's figures along its walkthroughs. A scene a paper plots
@@ -38,6 +51,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 5"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
     SceneFigures {
         paper: "chc",
@@ -45,6 +60,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 6"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
     SceneFigures {
         paper: "chc",
@@ -52,6 +69,17 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 7"),
         queries: None,
         time_scale: TimeScale::Log,
+        paper_scene: None,
+        lines: &[],
+    },
+    SceneFigures {
+        paper: "chcpp",
+        scene: "teapots",
+        frame_time: Some("Figure 7"),
+        queries: None,
+        time_scale: TimeScale::Linear,
+        paper_scene: Some("Pompeii"),
+        lines: &["nohc", "nohc-opt", "chcpp", "ideal-sorted"],
     },
     SceneFigures {
         paper: "chcpp",
@@ -59,6 +87,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 10"),
         queries: Some("Figure 10"),
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &["vfc", "chc", "nohc", "chcpp"],
     },
     SceneFigures {
         paper: "chcpp",
@@ -66,6 +96,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 1"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &["vfc", "chc", "nohc", "chcpp"],
     },
     SceneFigures {
         paper: "om",
@@ -73,6 +105,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 7"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
     SceneFigures {
         paper: "ioc",
@@ -80,6 +114,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 4"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
     SceneFigures {
         paper: "ioc",
@@ -87,6 +123,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 4"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
     SceneFigures {
         paper: "ioc",
@@ -94,6 +132,8 @@ const FIGURES: &[SceneFigures] = &[
         frame_time: Some("Figure 4"),
         queries: None,
         time_scale: TimeScale::Linear,
+        paper_scene: None,
+        lines: &[],
     },
 ];
 
@@ -117,13 +157,32 @@ pub fn style(paper: &str, scene: &str, kind: PlotKind) -> PlotStyle {
         PlotKind::QueriesAndStateChanges => (figures.and_then(|f| f.queries), "queries and state changes"),
     };
     let name = paper_name(paper);
-    let title = match figure {
-        Some(figure) => format!("{name}, {figure}: {what}"),
-        None => format!("{name}'s setting, {what} (no figure in the paper)"),
+    let title = match (figure, figures.and_then(|f| f.paper_scene)) {
+        (Some(figure), Some(theirs)) => format!("{name}, {figure} (the paper's on {theirs}): {what}"),
+        (Some(figure), None) => format!("{name}, {figure}: {what}"),
+        (None, _) => format!("{name}'s setting, {what} (no figure in the paper)"),
     };
     let time_scale = figures.filter(|_| figure.is_some()).map_or(TimeScale::Auto, |f| f.time_scale);
     let triangles = paper == "om" && kind == PlotKind::FrameTime;
     PlotStyle { title: Some(title), time_scale, triangles }
+}
+
+/// `report` with only the methods `paper`'s `kind` figure of its scene
+/// draws (all of them where the figure names none, or where the paper has
+/// no such figure).
+fn paper_lines(report: &BenchReport, paper: &str, kind: PlotKind) -> BenchReport {
+    let lines = FIGURES
+        .iter()
+        .find(|f| f.paper == paper && f.scene == report.scene)
+        .filter(|f| match kind {
+            PlotKind::FrameTime => f.frame_time.is_some(),
+            PlotKind::QueriesAndStateChanges => f.queries.is_some(),
+        })
+        .map_or(&[][..], |f| f.lines);
+    let drawn = |name: &str| lines.is_empty() || lines.contains(&name);
+    let mut methods: Vec<_> = report.methods.iter().filter(|m| drawn(&m.name)).cloned().collect();
+    methods.sort_by_key(|m| lines.iter().position(|&l| l == m.name));
+    BenchReport { methods, ..report.clone() }
 }
 
 /// The file of `scene`'s plot: `path` with `-SCENE` put before its extension.
@@ -147,15 +206,16 @@ pub fn write(result: &PaperResult, kind: PlotKind, path: &Path) -> Result<Vec<Pa
     for &i in &result.compared_runs {
         let report = result.tables.reports.get(i).context("a compared run's report is missing")?;
         let file = scene_path(path, &report.scene);
-        write_styled_plot(report, kind, &style(paper, &report.scene, kind), &file)?;
+        let style = style(paper, &report.scene, kind);
+        write_styled_plot(&paper_lines(report, paper, kind), kind, &style, &file)?;
         written.push(file);
     }
     // A figure's own runs plot frame times only.
     for run in result.figure_runs.iter().filter(|_| kind == PlotKind::FrameTime) {
-        let report = result.tables.reports.get(run.report).context("a figure's report is missing")?;
+        let report = result.figure_report(run).context("a figure's report is missing")?;
         let file = scene_path(path, &run.tag);
         let title = format!("{}, {}: frame times", paper_name(paper), run.figure);
-        write_styled_plot(report, kind, &PlotStyle { title: Some(title), ..PlotStyle::default() }, &file)?;
+        write_styled_plot(&report, kind, &PlotStyle { title: Some(title), ..PlotStyle::default() }, &file)?;
         written.push(file);
     }
     Ok(written)
@@ -163,6 +223,7 @@ pub fn write(result: &PaperResult, kind: PlotKind, path: &Path) -> Result<Vec<Pa
 
 #[cfg(test)]
 mod tests {
+    use super::super::plot::tests::method;
     use super::*;
 
     #[test]
@@ -193,6 +254,28 @@ mod tests {
         for f in FIGURES {
             assert!(occlude_bench::paper::PAPERS.contains(&f.paper), "{}", f.paper);
         }
+    }
+
+    #[test]
+    fn chcpp_figures_draw_the_papers_lines_and_name_a_stand_in_scene() {
+        let teapots = style("chcpp", "teapots", PlotKind::FrameTime);
+        assert_eq!(teapots.title.as_deref(), Some("CHC++ paper, Figure 7 (the paper's on Pompeii): frame times"));
+        let names = ["vfc", "sw", "chc", "chcpp", "nohc", "nohc-opt", "ideal-sorted", "opt"];
+        let mut plant = super::super::plot::tests::report(names.iter().map(|n| method(n, &[(1.0, 0, 0)])).collect());
+        plant.scene = "plant".into();
+        let drawn = |r: &BenchReport| r.methods.iter().map(|m| m.name.clone()).collect::<Vec<_>>();
+        // Figure 1 draws four of the eight, in the paper's legend order.
+        assert_eq!(drawn(&paper_lines(&plant, "chcpp", PlotKind::FrameTime)), ["vfc", "chc", "nohc", "chcpp"]);
+        // The plant has no figure of queries: every method is drawn.
+        assert_eq!(drawn(&paper_lines(&plant, "chcpp", PlotKind::QueriesAndStateChanges)), names);
+        let mut teapots = BenchReport { scene: "teapots".into(), ..plant.clone() };
+        assert_eq!(
+            drawn(&paper_lines(&teapots, "chcpp", PlotKind::FrameTime)),
+            ["nohc", "nohc-opt", "chcpp", "ideal-sorted"]
+        );
+        // A figure that names no lines draws them all.
+        teapots.methods.truncate(5);
+        assert_eq!(drawn(&paper_lines(&teapots, "chc", PlotKind::FrameTime)), names[..5]);
     }
 
     #[test]

@@ -286,7 +286,12 @@ impl Panel<'_> {
         let frames = self.series.iter().map(|s| s.values.len()).max().unwrap_or(0);
         let x_range = 0..frames.saturating_sub(1).max(1);
         let body = area.titled(&self.caption, (FONT, 18))?;
-        let (plot, legend) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(LEGEND_WIDTH));
+        // The legend widens to its longest name (Figure 8's steps are long).
+        let mut legend_width = LEGEND_WIDTH;
+        for s in &self.series {
+            legend_width = legend_width.max(40 + body.estimate_text_size(s.name, &(FONT, 15).into())?.0);
+        }
+        let (plot, legend) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(legend_width));
         self.legend(&legend)?;
         let mut builder = ChartBuilder::on(&plot);
         builder.margin(12).x_label_area_size(40).y_label_area_size(70);
@@ -360,13 +365,13 @@ fn count_label(v: &f64) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use occlude_bench::summary::SceneStats;
     use std::collections::BTreeMap;
 
     /// A method whose frames have the given frame times, queries and state changes.
-    fn method(name: &str, frames: &[(f64, u64, u64)]) -> MethodSummary {
+    pub(in crate::bench) fn method(name: &str, frames: &[(f64, u64, u64)]) -> MethodSummary {
         let per_frame: Vec<FrameStats> = frames
             .iter()
             .map(|&(frame_ms, queries, state_changes)| FrameStats {
@@ -401,7 +406,7 @@ mod tests {
     }
 
     /// A report on the soft backend with the given methods.
-    fn report(methods: Vec<MethodSummary>) -> BenchReport {
+    pub(in crate::bench) fn report(methods: Vec<MethodSummary>) -> BenchReport {
         let frames = methods.iter().map(|m| m.per_frame.len()).max().unwrap_or(0);
         BenchReport {
             scene: "city".into(),
