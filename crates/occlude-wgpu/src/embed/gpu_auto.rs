@@ -64,9 +64,10 @@ pub(super) struct GpuAuto {
 }
 
 impl GpuAuto {
-    /// A choice among `cold.len()` late tests (see [`Chooser::new`]),
-    /// timed by timestamps where `ctx`'s device has them.
-    pub fn new(ctx: &GpuContext, params: AutoParams, cold: &[u64]) -> Self {
+    /// A choice among `cold.len()` late tests, `baseline` the frustum's
+    /// alone (see [`Chooser::new`]), timed by timestamps where `ctx`'s
+    /// device has them.
+    pub fn new(ctx: &GpuContext, params: AutoParams, cold: &[u64], baseline: Option<usize>) -> Self {
         let clock = if ctx.device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
             Clock::Stamps {
                 set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -90,7 +91,7 @@ impl GpuAuto {
         } else {
             Clock::Wall { last: None }
         };
-        Self { chooser: Chooser::new(params, cold), clock, ticket: None }
+        Self { chooser: Chooser::new(params, cold, baseline), clock, ticket: None }
     }
 
     /// Begins a frame at its early phase: the times that have come back

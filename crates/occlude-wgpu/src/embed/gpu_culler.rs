@@ -392,7 +392,8 @@ impl GpuCuller {
         let auto = match method {
             Method::Auto(params) => {
                 let cold: Vec<u64> = methods.iter().map(cold_frames).collect();
-                Some(GpuAuto::new(&ctx, *params, &cold))
+                let frustum_only = methods.iter().position(|m| matches!(m, Method::Vfc));
+                Some(GpuAuto::new(&ctx, *params, &cold, frustum_only))
             }
             _ => None,
         };

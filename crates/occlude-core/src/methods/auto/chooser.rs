@@ -88,6 +88,9 @@ impl Ticket {
 pub struct Chooser {
     params: AutoParams,
     choices: Vec<Choice>,
+    /// The choice that culls nothing by occlusion (`vfc`), if among them:
+    /// the others must beat it by the margin to stay current.
+    baseline: Option<usize>,
     current: usize,
     /// The current choice's running mean frame time, ms.
     mean: Option<f64>,
@@ -102,8 +105,9 @@ impl Chooser {
     /// A chooser among `cold.len()` choices, tried first in that order (the
     /// first is current until measured), choice `i` running `cold[i]`
     /// frames from nothing before one is measured (0: it carries nothing
-    /// from frame to frame). At least one choice.
-    pub fn new(params: AutoParams, cold: &[u64]) -> Self {
+    /// from frame to frame); `baseline` is the choice without occlusion
+    /// culling, if any ([`Chooser::wins`]). At least one choice.
+    pub fn new(params: AutoParams, cold: &[u64], baseline: Option<usize>) -> Self {
         assert!(!cold.is_empty(), "a chooser needs a choice");
         let choices = cold
             .iter()
@@ -116,7 +120,17 @@ impl Chooser {
                 deferred: false,
             })
             .collect();
-        Self { params, choices, current: 0, mean: None, probe: None, probes_begun: 0, last_ran: None, begun: 0 }
+        Self {
+            params,
+            choices,
+            baseline,
+            current: 0,
+            mean: None,
+            probe: None,
+            probes_begun: 0,
+            last_ran: None,
+            begun: 0,
+        }
     }
 
     /// The choice frames run when no probe does.
@@ -143,9 +157,7 @@ impl Chooser {
                 let c = &self.choices[choice];
                 let first = c.last_time.is_none() && !c.deferred;
                 match bound(choice, mean) {
-                    Some(b) if b.measured >= mean * (1.0 - self.margin()) => {
-                        self.schedule(choice, b.measured, 0.0, frame)
-                    }
+                    Some(b) if !self.wins(choice, b.measured, mean) => self.schedule(choice, b.measured, 0.0, frame),
                     Some(b) if first && b.warm_up > mean && c.cold > 0 => {
                         let wait = self.budget_wait(c.cold as f64 * (b.warm_up - mean), mean);
                         let c = &mut self.choices[choice];
@@ -201,6 +213,21 @@ impl Chooser {
         f64::from(self.params.margin)
     }
 
+    /// Whether `choice`, measured at `time` ms, takes over from the current
+    /// choice at `mean` ms. Occlusion culling must pay for itself by the
+    /// margin: a choice beats the current one by the margin, except the
+    /// baseline, which takes over unless the current choice beats it by
+    /// the margin. Either way a choice with occlusion culling runs only
+    /// while it was measured faster than the baseline by the margin, and a
+    /// choice taken over is not taken back without a change of times.
+    fn wins(&self, choice: usize, time: f64, mean: f64) -> bool {
+        if Some(choice) == self.baseline {
+            mean > time * (1.0 - self.margin())
+        } else {
+            time < mean * (1.0 - self.margin())
+        }
+    }
+
     /// The latest frame begun.
     fn now(&self) -> u64 {
         self.begun.saturating_sub(1)
@@ -237,7 +264,7 @@ impl Chooser {
         let probed = probe.times.iter().sum::<f64>() / probe.times.len() as f64;
         let mean = self.mean.unwrap_or(probed);
         let now = self.now();
-        if probed < mean * (1.0 - self.margin()) {
+        if self.wins(probe.choice, probed, mean) {
             let previous = std::mem::replace(&mut self.current, probe.choice);
             self.mean = Some(probed);
             let frames = if self.choices[previous].cold == 0 { 1.0 } else { f64::from(PROBE_FRAMES + 1) };
@@ -272,7 +299,7 @@ mod tests {
     /// keeping state) for `frames` frames, each frame's time recorded
     /// `delay` frames after it began; returns the choice of each frame.
     fn run(costs: &[f64], frames: usize, delay: usize) -> Vec<usize> {
-        let mut chooser = Chooser::new(AutoParams::default(), &vec![2; costs.len()]);
+        let mut chooser = Chooser::new(AutoParams::default(), &vec![2; costs.len()], None);
         let mut pending = std::collections::VecDeque::new();
         let mut ran = Vec::new();
         for _ in 0..frames {
@@ -298,7 +325,7 @@ mod tests {
 
     #[test]
     fn a_late_time_of_an_ended_probe_counts_for_nothing() {
-        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0]);
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
         // Choice 1 is due at once (never measured): one frame probes it.
@@ -312,9 +339,42 @@ mod tests {
         assert_eq!((chooser.current(), chooser.mean()), (before.current(), before.mean()));
     }
 
+    /// Runs a chooser between an occlusion culler costing `culling` ms a
+    /// frame (tried first, warm after two frames) and the baseline costing
+    /// 1 ms for 400 frames; returns the frames the culler ran of the last
+    /// 300.
+    fn culler_frames(culling: f64) -> usize {
+        let mut chooser = Chooser::new(AutoParams::default(), &[2, 0], Some(1));
+        let ran: Vec<usize> = (0..400)
+            .map(|_| {
+                let t = chooser.begin(|_, _| None);
+                chooser.record(t, if t.choice == 0 { culling } else { 1.0 });
+                t.choice
+            })
+            .collect();
+        ran[100..].iter().filter(|&&c| c == 0).count()
+    }
+
+    #[test]
+    fn occlusion_culling_stays_only_while_it_beats_the_baseline_by_the_margin() {
+        // 2 % faster than the baseline: not worth keeping; the baseline
+        // runs but for its probes.
+        assert!(culler_frames(0.98) < 10, "{}", culler_frames(0.98));
+        // 10 % faster: it stays.
+        assert!(culler_frames(0.90) > 290, "{}", culler_frames(0.90));
+        // Without a baseline, a choice 2 % faster than the current one
+        // stays current.
+        let mut chooser = Chooser::new(AutoParams::default(), &[2, 0], None);
+        for _ in 0..400 {
+            let t = chooser.begin(|_, _| None);
+            chooser.record(t, if t.choice == 0 { 0.98 } else { 1.0 });
+        }
+        assert_eq!(chooser.current(), 0);
+    }
+
     #[test]
     fn a_bound_that_cannot_win_spares_the_probe() {
-        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0]);
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
         let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
@@ -327,7 +387,7 @@ mod tests {
         // Choice 1 might win once warm, but its warm-up frame costs at
         // least 3 ms where the current choice takes 1: its first probe
         // waits until 1 % of 1 ms a frame has paid the 2 ms beyond.
-        let mut chooser = Chooser::new(AutoParams::default(), &[0, 1]);
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 1], None);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
         let bound = Bound { measured: 0.5, warm_up: 3.0 };
