@@ -14,8 +14,8 @@
 //!   (`ideal-sorted`: S&W's visible nodes drawn without queries through
 //!   the material-sorted render queue) and `opt`, an ablation of
 //!   CHC++'s components, Figure 8 (the components added one at a time,
-//!   plotted along the plant's walkthrough) and Figure 9 (`vfc`, `chcpp` and `nohc` on the plant's first 350
-//!   frames under each [`Shading`]).
+//!   plotted along the plant's walkthrough) and Figure 9 (`vfc`, `chcpp`
+//!   and `nohc` on the plant's first 350 frames under each [`Shading`]).
 //!
 //! Each table of methods says under it which ideal it uses
 //! (`Experiment::ideals`).
