@@ -106,7 +106,8 @@ impl Chooser {
     /// first is current until measured), choice `i` running `cold[i]`
     /// frames from nothing before one is measured (0: it carries nothing
     /// from frame to frame); `baseline` is the choice without occlusion
-    /// culling, if any ([`Chooser::wins`]). At least one choice.
+    /// culling, if any, which the others must beat by the margin to stay
+    /// current. At least one choice.
     pub fn new(params: AutoParams, cold: &[u64], baseline: Option<usize>) -> Self {
         assert!(!cold.is_empty(), "a chooser needs a choice");
         let choices = cold
