@@ -87,10 +87,11 @@ fn the_chc_run_writes_the_papers_figures_one_file_per_scene() {
     assert!(plant.windows(2).all(|w| (w[1] / w[0] - 10.0).abs() < 1e-9), "plant's y labels: {plant:?}");
 }
 
-/// `--paper chcpp --scene plant`: the plant's Figure 1 and a plot per
+/// `--paper chcpp --scene plant`: the plant's Figure 1 with the paper's
+/// four lines, Figure 8 with a line per optimisation added, and a plot per
 /// setting of Figure 9, each titled with its shading.
 #[test]
-fn the_chcpp_run_plots_figure_9_a_file_per_shading() {
+fn the_chcpp_run_plots_figures_1_8_and_9() {
     let dir = tempfile::tempdir().unwrap();
     let plot = dir.path().join("c.svg");
     let out = occlude(&[
@@ -110,8 +111,20 @@ fn the_chcpp_run_plots_figure_9_a_file_per_shading() {
     ]);
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
     let names = file_names(dir.path());
-    assert_eq!(names, ["c-plant-fig9-dp.svg", "c-plant-fig9-fix.svg", "c-plant-fig9-sh.svg", "c-plant.svg"]);
-    assert!(read(&dir.path().join("c-plant.svg")).contains("CHC++ paper, Figure 1: frame times"));
+    assert_eq!(
+        names,
+        ["c-plant-fig8.svg", "c-plant-fig9-dp.svg", "c-plant-fig9-fix.svg", "c-plant-fig9-sh.svg", "c-plant.svg"]
+    );
+    let figure1 = read(&dir.path().join("c-plant.svg"));
+    assert!(figure1.contains("CHC++ paper, Figure 1: frame times"));
+    for (method, lines) in [("vfc", 1), ("chc", 1), ("nohc", 1), ("chcpp", 1), ("sw", 0), ("opt", 0)] {
+        assert_eq!(figure1.matches(&format!("\n{method}\n</text>")).count(), lines, "Figure 1: {method}");
+    }
+    let figure8 = read(&dir.path().join("c-plant-fig8.svg"));
+    assert!(figure8.contains("CHC++ paper, Figure 8: frame times"));
+    for step in ["CHC", "CHC+B", "CHC+B+R", "CHC+B+R+TB", "CHC+B+R+TB+MQ (CHC++)"] {
+        assert_eq!(figure8.matches(&format!("\n{step}\n</text>")).count(), 1, "Figure 8: {step}");
+    }
     for (file, setting, model) in [("dp", "DP", "modern+dp"), ("sh", "SH", "modern+sh")] {
         let svg = read(&dir.path().join(format!("c-plant-fig9-{file}.svg")));
         assert!(svg.contains(&format!("CHC++ paper, Figure 9, {setting}: frame times")), "{file}: no title");
