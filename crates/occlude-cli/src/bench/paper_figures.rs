@@ -150,35 +150,41 @@ fn paper_name(paper: &str) -> &str {
 
 /// The title and axis of `paper`'s `kind` plot of `scene`.
 pub fn style(paper: &str, scene: &str, kind: PlotKind) -> PlotStyle {
-    let figures = FIGURES.iter().find(|f| f.paper == paper && f.scene == scene);
-    let (figure, what) = match kind {
-        PlotKind::FrameTime if paper == "om" => (figures.and_then(|f| f.frame_time), "frame times and triangles drawn"),
-        PlotKind::FrameTime => (figures.and_then(|f| f.frame_time), "frame times"),
-        PlotKind::QueriesAndStateChanges => (figures.and_then(|f| f.queries), "queries and state changes"),
+    let what = match kind {
+        PlotKind::FrameTime if paper == "om" => "frame times and triangles drawn",
+        PlotKind::FrameTime => "frame times",
+        PlotKind::QueriesAndStateChanges => "queries and state changes",
     };
+    let found = figure(paper, scene, kind);
     let name = paper_name(paper);
-    let title = match (figure, figures.and_then(|f| f.paper_scene)) {
-        (Some(figure), Some(theirs)) => format!("{name}, {figure} (the paper's on {theirs}): {what}"),
-        (Some(figure), None) => format!("{name}, {figure}: {what}"),
-        (None, _) => format!("{name}'s setting, {what} (no figure in the paper)"),
+    let title = match found {
+        Some((f, figure)) => match f.paper_scene {
+            Some(theirs) => format!("{name}, {figure} (the paper's on {theirs}): {what}"),
+            None => format!("{name}, {figure}: {what}"),
+        },
+        None => format!("{name}'s setting, {what} (no figure in the paper)"),
     };
-    let time_scale = figures.filter(|_| figure.is_some()).map_or(TimeScale::Auto, |f| f.time_scale);
+    let time_scale = found.map_or(TimeScale::Auto, |(f, _)| f.time_scale);
     let triangles = paper == "om" && kind == PlotKind::FrameTime;
     PlotStyle { title: Some(title), time_scale, triangles }
+}
+
+/// `paper`'s `kind` figure of `scene`, if the paper has one: its scene's
+/// entry and the figure's name.
+fn figure(paper: &str, scene: &str, kind: PlotKind) -> Option<(&'static SceneFigures, &'static str)> {
+    let f = FIGURES.iter().find(|f| f.paper == paper && f.scene == scene)?;
+    let figure = match kind {
+        PlotKind::FrameTime => f.frame_time,
+        PlotKind::QueriesAndStateChanges => f.queries,
+    }?;
+    Some((f, figure))
 }
 
 /// `report` with only the methods `paper`'s `kind` figure of its scene
 /// draws (all of them where the figure names none, or where the paper has
 /// no such figure).
 fn paper_lines(report: &BenchReport, paper: &str, kind: PlotKind) -> BenchReport {
-    let lines = FIGURES
-        .iter()
-        .find(|f| f.paper == paper && f.scene == report.scene)
-        .filter(|f| match kind {
-            PlotKind::FrameTime => f.frame_time.is_some(),
-            PlotKind::QueriesAndStateChanges => f.queries.is_some(),
-        })
-        .map_or(&[][..], |f| f.lines);
+    let lines = figure(paper, &report.scene, kind).map_or(&[][..], |(f, _)| f.lines);
     let drawn = |name: &str| lines.is_empty() || lines.contains(&name);
     let mut methods: Vec<_> = report.methods.iter().filter(|m| drawn(&m.name)).cloned().collect();
     methods.sort_by_key(|m| lines.iter().position(|&l| l == m.name));
