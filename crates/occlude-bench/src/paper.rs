@@ -88,7 +88,8 @@ struct Experiment {
 }
 
 /// A figure of some methods' frame times under each [`Shading`]: each
-/// setting one run of its own, the GPU model's fragment cost changed.
+/// setting one run of its own, the GPU model's fragment cost changed, but
+/// the model's own (FIX), which is the first frames of the compared run.
 struct ShadingFigure {
     /// Its name in the paper.
     name: &'static str,
@@ -474,8 +475,17 @@ fn run_experiment(e: &Experiment, base: &BenchConfig, only: &[String], progress:
                     frames: if base.frames == ALL_FRAMES { figure.frames } else { base.frames },
                     ..config.clone()
                 };
-                progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
-                let report = run_scene(&scene, &config, progress)?.report(&config);
+                // The model's own shading is the compared run's: sampled at
+                // a frame rate, its first frames, not rendered again.
+                let report = match shading {
+                    Shading::Fixed if config.fps.is_some() => {
+                        run.first_frames(figure.methods, config.frames).report(&config)
+                    }
+                    _ => {
+                        progress.message(&format!("{scene_name} {}: {}, shading {shading}", config.size, figure.name));
+                        run_scene(&scene, &config, progress)?.report(&config)
+                    }
+                };
                 shaded.extend(report.methods.iter().map(|m| Row::new(scene_name, m, shading.paper_name(), None)));
                 let lines = report.methods.iter().enumerate().map(|(method, m)| FigureLine {
                     label: m.name.clone(),
@@ -693,6 +703,29 @@ mod tests {
         assert_eq!(first["published_frame_ms"], 310.42);
     }
 
+    /// Figure 9's FIX run, at a frame rate, is the compared run's frames
+    /// (`BenchRun::first_frames`, tested with fewer frames than the run's):
+    /// its rows are the compared run's.
+    #[test]
+    fn figure_9_takes_its_fix_run_from_the_compared_run() {
+        let experiment = Experiment { variant_tables: &[], ..CHCPP };
+        let base = BenchConfig { frames: 4, fps: Some(30.0), resolution: (96, 64), ..BenchConfig::default() };
+        let result = run_experiment(&experiment, &base, &["plant".to_string()], &()).unwrap();
+        let compared = &result.tables.reports[result.compared_runs[0]];
+        let fix = result.figure_runs.iter().find(|f| f.tag == "plant-fig9-fix").unwrap();
+        let fix = &result.tables.reports[fix.lines[0].report];
+        assert_eq!((fix.frames, fix.gpu_model.as_str(), fix.methods.len()), (4, "modern", 3));
+        for m in &fix.methods {
+            let whole = compared.methods.iter().find(|c| c.name == m.name).unwrap();
+            let frame_ms = |f: &[occlude_core::FrameStats]| f.iter().map(|f| f.frame_ms).collect::<Vec<_>>();
+            assert_eq!(frame_ms(&m.per_frame), frame_ms(&whole.per_frame), "{}", m.name);
+            assert_eq!(
+                (m.queries_per_frame, m.triangles_per_frame),
+                (whole.queries_per_frame, whole.triangles_per_frame)
+            );
+        }
+    }
+
     /// `--paper chcpp`: NOHC and NOHC-OPT beside CHC and CHC++, the
     /// ablation and Figure 8's optimisations added one at a time (its last
     /// row CHC++ itself), the claims of the paper's text beside our ratios.
@@ -720,8 +753,9 @@ mod tests {
         for t in [compared, ablation, figure8, figure9] {
             assert!(t.rows.iter().all(|r| r.missing_pixels == 0 && r.frame_ms > 0.0), "{}", t.name);
         }
-        // Figure 9: the plant under each shading, a run of its own with the
-        // model's fragment cost changed; shading never makes a frame cheaper.
+        // Figure 9: the plant under each shading, DP and SH a run of their
+        // own with the model's fragment cost changed, FIX the compared
+        // run's frames; shading never makes a frame cheaper.
         assert_eq!(figure9.rows.len(), 3 * 3);
         assert!(figure9.rows.iter().all(|r| r.scene == "plant"));
         for method in ["vfc", "chcpp", "nohc"] {

@@ -319,6 +319,23 @@ impl Lanes {
         }
     }
 
+    /// Sets every lane's `missing_pixels` but the reference's: the pixels
+    /// where its image differs from `expected`, the reference's. The lanes
+    /// are compared side by side when [`Self::parallel`].
+    fn count_missing(&mut self, expected: &[f32]) {
+        let reference = self.order[0];
+        let chain = |(c, lanes): (usize, &mut Vec<Lane>)| {
+            for (_, lane) in lanes.iter_mut().enumerate().filter(|&(at, _)| (c, at) != reference) {
+                lane.stats.missing_pixels = differing_pixels(expected, &lane.image);
+            }
+        };
+        if self.parallel {
+            self.chains.par_iter_mut().enumerate().for_each(chain);
+        } else {
+            self.chains.iter_mut().enumerate().for_each(chain);
+        }
+    }
+
     /// The lanes in report order.
     fn into_vec(self) -> Vec<Lane> {
         let mut chains: Vec<Vec<Option<Lane>>> =
@@ -468,13 +485,10 @@ fn run_scene_here(
         }
         // VFC's depth image, the one every other lane's must equal.
         let expected = std::mem::take(&mut lanes.get_mut(0).image);
+        lanes.count_missing(&expected);
         for i in 0..lanes.len() {
             let lane = lanes.get_mut(i);
-            let mut stats = lane.stats;
-            if i > 0 {
-                stats.missing_pixels = differing_pixels(&expected, &lane.image);
-            }
-            lane.frames.push(stats);
+            lane.frames.push(lane.stats);
             for w in lane.built.method.take_warnings() {
                 let w = format!("{}: {w}", lane.built.method.name());
                 progress.println(&format!("warning: {w}"));
@@ -571,6 +585,40 @@ impl BenchRun {
     pub fn report(&self, config: &BenchConfig) -> BenchReport {
         BenchReport::new(self, config)
     }
+
+    /// The run cut to its first `frames` frames and to `methods` (by name,
+    /// in that order), without variants or dumps. For a run that sampled
+    /// its walkthrough at a frame rate ([`BenchConfig::fps`]), whose first
+    /// frames are then those of a shorter run at that rate: a frame's
+    /// figures depend only on the frames before it and never on the lanes
+    /// beside it, so this is what a run of `methods` over those frames
+    /// measures (tested), but for wall times. CHC++'s Figure 9 takes its
+    /// FIX run from here instead of rendering it again.
+    ///
+    /// # Panics
+    /// If a name in `methods` is not one of the run's methods.
+    pub fn first_frames(&self, methods: &[&str], frames: usize) -> BenchRun {
+        let frames = frames.min(self.reference.len());
+        let cut = |name: &str| {
+            let m = self.methods.iter().find(|m| m.name == name).expect("a method of the run");
+            MethodRun {
+                name: m.name.clone(),
+                params: m.params.clone(),
+                frames: m.frames[..frames].to_vec(),
+                counters: m.counters.iter().map(|(k, v)| (k.clone(), v[..frames.min(v.len())].to_vec())).collect(),
+            }
+        };
+        BenchRun {
+            scene: SceneStats { frames, ..self.scene.clone() },
+            methods: methods.iter().map(|&name| cut(name)).collect(),
+            variants: Vec::new(),
+            reference: self.reference[..frames].to_vec(),
+            dumps: Vec::new(),
+            adapter: self.adapter.clone(),
+            aborted: self.aborted.clone(),
+            warnings: self.warnings.clone(),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -640,6 +688,30 @@ mod tests {
             drawn += side_by_side.iter().next().unwrap().image.iter().filter(|&&d| d < 1.0).count();
         }
         assert!(drawn > 0, "the walkthrough sees geometry");
+    }
+
+    /// A run cut to its first frames and to some of its methods has, frame
+    /// by frame, the simulated figures of a run of those methods over those
+    /// frames alone.
+    #[test]
+    fn the_first_frames_of_a_run_are_a_shorter_run_of_some_of_its_methods() {
+        let (config, _) = lanes_config();
+        let config = BenchConfig { dump_frame: None, fps: Some(30.0), ..config };
+        let scene = occlude_scenes::load("city", config.size, config.seed, &config.import).unwrap();
+        let methods = ["vfc", "chcpp", "chc"];
+        let shorter = BenchConfig { methods: methods.map(String::from).to_vec(), frames: 5, ..config.clone() };
+        let (whole, alone) = (run_scene(&scene, &config, &()).unwrap(), run_scene(&scene, &shorter, &()).unwrap());
+        let cut = whole.first_frames(&methods, 5);
+        let simulated = |frames: &[FrameStats]| frames.iter().copied().map(simulated).collect::<Vec<_>>();
+        assert_eq!((cut.scene.frames, cut.reference.len(), whole.reference.len()), (5, 5, 8));
+        assert_eq!(simulated(&cut.reference), simulated(&alone.reference));
+        assert_eq!(cut.methods.len(), 3);
+        for (a, b) in cut.methods.iter().zip(&alone.methods) {
+            assert_eq!((&a.name, &a.params), (&b.name, &b.params));
+            assert_eq!(simulated(&a.frames), simulated(&b.frames), "{}", a.name);
+            assert_eq!(a.counters, b.counters, "{}", a.name);
+        }
+        assert_ne!(simulated(&cut.methods[1].frames), simulated(&cut.methods[2].frames), "chcpp is not chc");
     }
 
     /// `ideal` on a backend replaying the counts of `sw`'s (as
