@@ -87,9 +87,10 @@ struct Experiment {
     shading_figure: Option<ShadingFigure>,
 }
 
-/// A figure of some methods' frame times under each [`Shading`]: each
-/// setting one run of its own, the GPU model's fragment cost changed, but
-/// the model's own (FIX), which is the first frames of the compared run.
+/// A figure of some methods' frames under each [`Shading`]: each setting
+/// one run of its own, the GPU model's fragment cost changed, but the
+/// model's own (FIX), which at a frame rate is the compared run's first
+/// frames.
 struct ShadingFigure {
     /// Its name in the paper.
     name: &'static str,

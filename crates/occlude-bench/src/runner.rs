@@ -325,8 +325,10 @@ impl Lanes {
     fn count_missing(&mut self, expected: &[f32]) {
         let reference = self.order[0];
         let chain = |(c, lanes): (usize, &mut Vec<Lane>)| {
-            for (_, lane) in lanes.iter_mut().enumerate().filter(|&(at, _)| (c, at) != reference) {
-                lane.stats.missing_pixels = differing_pixels(expected, &lane.image);
+            for (at, lane) in lanes.iter_mut().enumerate() {
+                if (c, at) != reference {
+                    lane.stats.missing_pixels = differing_pixels(expected, &lane.image);
+                }
             }
         };
         if self.parallel {
@@ -587,13 +589,14 @@ impl BenchRun {
     }
 
     /// The run cut to its first `frames` frames and to `methods` (by name,
-    /// in that order), without variants or dumps. For a run that sampled
-    /// its walkthrough at a frame rate ([`BenchConfig::fps`]), whose first
-    /// frames are then those of a shorter run at that rate: a frame's
-    /// figures depend only on the frames before it and never on the lanes
-    /// beside it, so this is what a run of `methods` over those frames
-    /// measures (tested), but for wall times. CHC++'s Figure 9 takes its
-    /// FIX run from here instead of rendering it again.
+    /// in that order) and their warnings, without variants or dumps. For a
+    /// run that sampled its walkthrough at a frame rate
+    /// ([`BenchConfig::fps`]), whose first frames are then those of a
+    /// shorter run at that rate: a frame's figures depend only on the
+    /// frames before it and never on the lanes beside it, so this is what
+    /// a run of `methods` over those frames measures (tested), but for wall
+    /// times. CHC++'s Figure 9 takes its FIX run from here instead of
+    /// rendering it again.
     ///
     /// # Panics
     /// If a name in `methods` is not one of the run's methods.
@@ -615,8 +618,14 @@ impl BenchRun {
             reference: self.reference[..frames].to_vec(),
             dumps: Vec::new(),
             adapter: self.adapter.clone(),
-            aborted: self.aborted.clone(),
-            warnings: self.warnings.clone(),
+            // Stopped early only if it stopped before those frames' end.
+            aborted: self.aborted.clone().filter(|_| frames == self.reference.len()),
+            warnings: self
+                .warnings
+                .iter()
+                .filter(|w| methods.iter().any(|m| w.strip_prefix(m).is_some_and(|rest| rest.starts_with(':'))))
+                .cloned()
+                .collect(),
         }
     }
 }
