@@ -68,7 +68,8 @@ struct Probe {
 pub struct Ticket {
     /// The choice that runs the frame.
     pub choice: usize,
-    /// Whether the frame only warms the choice up (not measured).
+    /// Whether the frame is not measured: it only warms the choice up, or
+    /// it also pays for finding a bound.
     warm_up: bool,
     /// The probe the frame belongs to, if any.
     probe: Option<u64>,
@@ -153,11 +154,14 @@ impl Chooser {
     /// first tried once the budget covers that much.
     pub fn begin(&mut self, bound: impl FnOnce(usize, f64) -> Option<Bound>) -> Ticket {
         let frame = self.begun;
+        let mut bounded = false;
         if self.probe.is_none() {
             if let Some((choice, mean)) = self.due().zip(self.mean) {
                 let c = &self.choices[choice];
                 let first = c.last_time.is_none() && !c.deferred;
-                match bound(choice, mean) {
+                let b = bound(choice, mean);
+                bounded = b.is_some();
+                match b {
                     Some(b) if !self.wins(choice, b.measured, mean) => self.schedule(choice, b.measured, 0.0, frame),
                     Some(b) if first && b.warm_up > mean && c.cold > 0 => {
                         let wait = self.budget_wait(c.cold as f64 * (b.warm_up - mean), mean);
@@ -175,7 +179,9 @@ impl Chooser {
         }
         let choice = self.probe.as_ref().map_or(self.current, |p| p.choice);
         let c = &mut self.choices[choice];
-        let warm_up = c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice));
+        // A frame that also pays for finding a bound (the caller's work,
+        // such as a walk of the hierarchy) measures no choice.
+        let warm_up = bounded || (c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice)));
         c.frames += 1;
         self.last_ran = Some(choice);
         self.begun += 1;
@@ -381,6 +387,25 @@ mod tests {
         let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
         let next = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
         assert_eq!((next.choice, next.is_probe()), (0, false));
+    }
+
+    #[test]
+    fn a_frame_that_finds_a_bound_measures_no_choice() {
+        // Choice 0 runs at 1 ms. Choice 1 comes due and its bound cannot
+        // win: the frame that found the bound costs 5 ms (the bound's
+        // walk), which is not choice 0's time.
+        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
+        let first = chooser.begin(|_, _| None);
+        chooser.record(first, 1.0);
+        let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
+        let bounded = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
+        assert_eq!((bounded.choice, bounded.is_probe()), (0, false));
+        chooser.record(bounded, 5.0);
+        assert_eq!(chooser.mean(), Some(1.0));
+        // The next frame is measured again.
+        let next = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
+        chooser.record(next, 2.0);
+        assert_eq!(chooser.mean(), Some(1.25));
     }
 
     #[test]
