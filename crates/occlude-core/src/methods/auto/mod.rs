@@ -35,12 +35,13 @@
 //! costs ([`Backend::cost_model`]), each choice's frames have lower bounds:
 //! `vfc`'s draws of the instances in view; the fixed passes of `roc` and
 //! `hiz` (dispatches, a depth pyramid); `chcpp`'s wait for its first query
-//! when it starts from nothing ([`CullingMethod::floor_ms`]). The first
-//! frame runs the choice whose frame from nothing costs least at best; a
-//! probe whose bound cannot beat the current mean by the margin is spared;
-//! a first try whose warm-up must cost more than the current mean waits
-//! until the budget covers that much. On a scene drawn in microseconds, no
-//! method whose fixed passes take longer is ever tried. A method is tried
+//! when it starts from nothing ([`CullingMethod::floor_ms`]); the frame
+//! that pays for finding a bound (`vfc`'s walk) measures no choice. The
+//! first frame runs the choice whose frame from nothing costs least at
+//! best; a probe whose bound cannot beat the current mean by the margin is
+//! spared; a first try whose warm-up must cost more than the current mean
+//! waits until the budget covers that much. On a scene drawn in
+//! microseconds, no method whose fixed passes take longer is ever tried. A method is tried
 //! at once, whatever its wait, when the current method's mean grows past
 //! that method's last measured time by the margin: a change of view that
 //! makes the current method stop paying is found without waiting. Every
