@@ -379,31 +379,37 @@ mod tests {
         assert_eq!(chooser.current(), 0);
     }
 
-    #[test]
-    fn a_bound_that_cannot_win_spares_the_probe() {
+    /// A chooser between two stateless choices whose first, choice 0, ran
+    /// one frame of 1 ms; choice 1 is due.
+    fn choice_0_at_1_ms() -> Chooser {
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
-        let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
-        let next = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
+        chooser
+    }
+
+    /// Choice 1's bound at twice the current mean: it cannot win.
+    fn choice_1_cannot_win(choice: usize, mean: f64) -> Option<Bound> {
+        (choice == 1).then_some(Bound { measured: mean * 2.0, warm_up: mean * 2.0 })
+    }
+
+    #[test]
+    fn a_bound_that_cannot_win_spares_the_probe() {
+        let next = choice_0_at_1_ms().begin(choice_1_cannot_win);
         assert_eq!((next.choice, next.is_probe()), (0, false));
     }
 
     #[test]
     fn a_frame_that_finds_a_bound_measures_no_choice() {
-        // Choice 0 runs at 1 ms. Choice 1 comes due and its bound cannot
-        // win: the frame that found the bound costs 5 ms (the bound's
+        // The frame that found choice 1's bound costs 5 ms (the bound's
         // walk), which is not choice 0's time.
-        let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
-        let first = chooser.begin(|_, _| None);
-        chooser.record(first, 1.0);
-        let bound = |mean: f64| Bound { measured: mean * 2.0, warm_up: mean * 2.0 };
-        let bounded = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
+        let mut chooser = choice_0_at_1_ms();
+        let bounded = chooser.begin(choice_1_cannot_win);
         assert_eq!((bounded.choice, bounded.is_probe()), (0, false));
         chooser.record(bounded, 5.0);
         assert_eq!(chooser.mean(), Some(1.0));
         // The next frame is measured again.
-        let next = chooser.begin(|choice, mean| (choice == 1).then_some(bound(mean)));
+        let next = chooser.begin(choice_1_cannot_win);
         chooser.record(next, 2.0);
         assert_eq!(chooser.mean(), Some(1.25));
     }

@@ -41,13 +41,13 @@
 //! best; a probe whose bound cannot beat the current mean by the margin is
 //! spared; a first try whose warm-up must cost more than the current mean
 //! waits until the budget covers that much. On a scene drawn in
-//! microseconds, no method whose fixed passes take longer is ever tried. A method is tried
-//! at once, whatever its wait, when the current method's mean grows past
-//! that method's last measured time by the margin: a change of view that
-//! makes the current method stop paying is found without waiting. Every
-//! method keeps its own state while another runs, as CHC++ keeps its
-//! classification from frame to frame (section 5.2): coming back, it
-//! starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
+//! microseconds, no method whose fixed passes take longer is ever tried. A
+//! method is tried at once, whatever its wait, when the current method's
+//! mean grows past that method's last measured time by the margin: a
+//! change of view that makes the current method stop paying is found
+//! without waiting. Every method keeps its own state while another runs,
+//! as CHC++ keeps its classification from frame to frame (section 5.2):
+//! coming back, it starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
 //! embedding's `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try once each method that might win
