@@ -47,8 +47,8 @@
 //! change of view that makes the current method stop paying is found
 //! without waiting. Every method keeps its own state while another runs,
 //! as CHC++ keeps its classification from frame to frame (section 5.2):
-//! coming back, it starts from what it knew. The rules are [`Chooser`]'s, which the wgpu
-//! embedding's `GpuCuller` shares.
+//! coming back, it starts from what it knew. The rules are
+//! [`Chooser`]'s, which the wgpu embedding's `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try once each method that might win
 //! (without a cost model, every method, the GPU-driven ones first, the
