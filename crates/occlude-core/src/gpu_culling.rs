@@ -128,6 +128,10 @@ pub trait GpuCulling {
     /// Sets every flag of `flags` to 0 (one dispatch).
     fn clear_flags(&mut self, flags: Flags);
 
+    /// Sets flag `k` of `flags` to `set[k]`, those past `set`'s end to 0:
+    /// one upload, landing after the work recorded so far.
+    fn write_flags(&mut self, flags: Flags, set: &[bool]);
+
     /// Tests the boxes of `boxes` named by `ids` against the current depth
     /// buffer, depth writes off (the boxes' front faces, pulled towards the
     /// eye by [`QUERY_DEPTH_BIAS`](crate::query_box::QUERY_DEPTH_BIAS)), and

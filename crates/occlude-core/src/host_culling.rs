@@ -92,6 +92,13 @@ impl HostResources {
         Flags(self.flags.len() as u32 - 1)
     }
 
+    /// [`GpuCulling::write_flags`](crate::GpuCulling::write_flags).
+    pub fn write_flags(&mut self, flags: Flags, set: &[bool]) {
+        for (k, flag) in self.flags[flags.0 as usize].iter_mut().enumerate() {
+            *flag = set.get(k).copied().unwrap_or(false);
+        }
+    }
+
     /// [`GpuCulling::create_list`](crate::GpuCulling::create_list).
     pub fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
         let mut list = HostList { ids: Vec::new(), capacity: capacity as usize };

@@ -411,6 +411,10 @@ impl GpuCulling for MockBackend {
         self.resources().flags[flags.0 as usize].fill(false);
     }
 
+    fn write_flags(&mut self, flags: Flags, set: &[bool]) {
+        self.resources().write_flags(flags, set);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.test(boxes, ids, flags, false);
     }

@@ -275,6 +275,10 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
         self.culling().clear_flags(flags);
     }
 
+    fn write_flags(&mut self, flags: Flags, set: &[bool]) {
+        self.culling().write_flags(flags, set);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.culling().test_boxes(boxes, ids, flags);
         self.record_test(boxes, ids, flags, None);

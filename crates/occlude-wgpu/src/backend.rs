@@ -729,6 +729,12 @@ impl GpuCulling for WgpuBackend {
         self.record_cull(CullOp::ClearFlags(flags));
     }
 
+    fn write_flags(&mut self, flags: Flags, set: &[bool]) {
+        // Submitted first, the work recorded so far runs before the write.
+        self.flush();
+        self.culling().write_flags(flags, set);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.record_indirect(CullOp::TestBoxes { boxes, ids, flags }, RenderState::Query);
     }

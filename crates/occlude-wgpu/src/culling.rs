@@ -394,6 +394,14 @@ impl Culling {
         Flags(self.flags.len() as u32 - 1)
     }
 
+    /// Sets the flags of `flags` to `set`, those past its end to 0 (a queue
+    /// write, before the next submission's commands).
+    pub fn write_flags(&self, flags: Flags, set: &[bool]) {
+        let f = &self.flags[flags.0 as usize];
+        let words: Vec<u32> = (0..f.len as usize).map(|k| u32::from(set.get(k).copied().unwrap_or(false))).collect();
+        self.ctx().queue.write_buffer(&f.buffer, 0, bytemuck::cast_slice(&words));
+    }
+
     /// A list of up to `capacity` ids holding `ids`; grows the scratch
     /// buffers to the capacity.
     pub fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {

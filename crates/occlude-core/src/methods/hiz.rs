@@ -213,6 +213,20 @@ impl CullingMethod for TwoPhaseHiZ {
         model.passes_ms(dispatches + reductions + 1, draws, texels)
     }
 
+    fn shares_visibility(&self) -> bool {
+        true
+    }
+
+    fn visible_set(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend) -> Option<Vec<bool>> {
+        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return None };
+        Some(r.temporal.read_visible(gpu))
+    }
+
+    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return };
+        r.temporal.seed(gpu, visible);
+    }
+
     /// A backend without [`GpuCulling`](crate::GpuCulling) or depth pyramids (which the runner
     /// refuses first) gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {

@@ -166,6 +166,30 @@ pub trait CullingMethod {
         0.0
     }
 
+    /// Whether [`CullingMethod::visible_set`] gives a set once the method
+    /// has rendered a frame: `auto` then seeds the method it switches to,
+    /// which does not start from nothing.
+    fn shares_visibility(&self) -> bool {
+        false
+    }
+
+    /// The instances this method found visible in the last frame it
+    /// rendered, one flag per instance of `ctx.scene`: for another method
+    /// to start from ([`CullingMethod::seed`]). `None` where it keeps no
+    /// visibility (`vfc`) or has rendered no frame. A GPU-driven method
+    /// reads its flags back, which the frame calling this pays for.
+    fn visible_set(&mut self, _ctx: &FrameContext<'_>, _backend: &mut dyn Backend) -> Option<Vec<bool>> {
+        None
+    }
+
+    /// Takes `visible` (one flag per instance, what another method found
+    /// visible last frame) as its own last frame's visibility, in place of
+    /// what it kept. Any set keeps the method exact: it only changes what
+    /// is drawn before testing. `auto` seeds a method it switches to, so
+    /// that its first frame costs what its later ones do rather than a
+    /// frame from nothing. Methods without temporal state ignore it.
+    fn seed(&mut self, _ctx: &FrameContext<'_>, _backend: &mut dyn Backend, _visible: &[bool]) {}
+
     /// Method-specific figures of the last frame it rendered, by name (for
     /// example `om`'s nodes decided in stage 1 without a query and its
     /// stage-2 rounds); reported per frame beside the common statistics.

@@ -138,6 +138,16 @@ impl TemporalSet {
         }
     }
 
+    /// Last frame's visible instances, read back.
+    pub(crate) fn read_visible(&self, gpu: &mut dyn GpuCulling) -> Vec<bool> {
+        gpu.read_flags(self.previous)
+    }
+
+    /// Makes `visible` last frame's visible instances (one upload).
+    pub(crate) fn seed(&self, gpu: &mut dyn GpuCulling, visible: &[bool]) {
+        gpu.write_flags(self.previous, visible);
+    }
+
     /// Steps 3 (when `draw_new`) and 4.
     pub(crate) fn finish(&mut self, gpu: &mut dyn GpuCulling, draw_new: bool) {
         if draw_new {
@@ -222,6 +232,20 @@ impl CullingMethod for RasterOcclusion {
         model.passes_ms(dispatches + 1, draws + 1, 0)
     }
 
+    fn shares_visibility(&self) -> bool {
+        true
+    }
+
+    fn visible_set(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend) -> Option<Vec<bool>> {
+        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return None };
+        Some(r.temporal.read_visible(gpu))
+    }
+
+    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return };
+        r.temporal.seed(gpu, visible);
+    }
+
     /// A backend without [`GpuCulling`] (which the runner refuses first)
     /// gets view-frustum culling.
     fn render(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
@@ -279,6 +303,27 @@ mod tests {
             let turned = &rig.run(&mut roc, &mut mock, 1)[0];
             assert_draws_exactly(turned, if drawn_late { &[0, 1, 3] } else { &[0, 1, 2, 3] });
             assert_draws_exactly(&rig.run(&mut roc, &mut mock, 1)[0], &[0, 1, 2, 3]);
+        }
+    }
+
+    /// Seeded, `roc` and `hiz` draw the seed first, as last frame's
+    /// visible set, and read back what their frame found.
+    #[test]
+    fn a_seed_is_drawn_first_and_the_visible_set_read_back() {
+        let rig = Rig::row(4);
+        for name in ["roc", "hiz"] {
+            let mut mock = rig.mock().with_gpu_culling();
+            mock.set_visible(2, false);
+            let mut m = method(name, &[]);
+            let mut drawn = crate::DrawnSet::default();
+            let mut ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn);
+            m.method.prepare(&mut ctx, &mut mock);
+            m.method.seed(&ctx, &mut mock, &[true, false, false, true, false]);
+            let first = rig.run(&mut m, &mut mock, 1).remove(0);
+            assert_eq!(culling_steps(&first)[0], ("draw", vec![0, 3]), "{name}");
+            assert_draws_exactly(&first, &[0, 1, 3]);
+            let visible = m.method.visible_set(&ctx, &mut mock);
+            assert_eq!(visible, Some(vec![true, true, false, true, false]), "{name}");
         }
     }
 }

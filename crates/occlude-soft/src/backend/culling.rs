@@ -120,6 +120,15 @@ impl GpuCulling for SoftBackend {
         self.device.flags[flags.0 as usize].fill(false);
     }
 
+    /// Charged as GPU work over every slot, as a clear's dispatch is,
+    /// without the dispatch.
+    fn write_flags(&mut self, flags: Flags, set: &[bool]) {
+        self.flush();
+        let len = self.device.flags[flags.0 as usize].len();
+        self.culling_work(self.model.compute_items_us(len as u64));
+        self.device.write_flags(flags, set);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         let count = self.device.lists[ids.0 as usize].ids.len();
         self.dispatch(count);

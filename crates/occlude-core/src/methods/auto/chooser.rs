@@ -46,6 +46,9 @@ pub struct Bound {
     /// Of a frame from nothing: what each of its warm-up frames costs at
     /// least.
     pub warm_up: f64,
+    /// Whether finding it added work to the frame (a walk of the
+    /// hierarchy): that frame then measures no choice.
+    pub costs_a_frame: bool,
 }
 
 /// A probe under way.
@@ -73,12 +76,21 @@ pub struct Ticket {
     warm_up: bool,
     /// The probe the frame belongs to, if any.
     probe: Option<u64>,
+    /// The choice that ran the frame before, whose visibility this one
+    /// starts from ([`Chooser::with_seeding`]).
+    seed_from: Option<usize>,
 }
 
 impl Ticket {
     /// Whether the frame runs a probe rather than the current choice.
     pub fn is_probe(&self) -> bool {
         self.probe.is_some()
+    }
+
+    /// The choice whose last frame's visibility the frame's choice starts
+    /// from, if any: the caller hands it over ([`Chooser::with_seeding`]).
+    pub fn seed_from(&self) -> Option<usize> {
+        self.seed_from
     }
 }
 
@@ -92,6 +104,9 @@ pub struct Chooser {
     /// The choice that culls nothing by occlusion (`vfc`), if among them:
     /// the others must beat it by the margin to stay current.
     baseline: Option<usize>,
+    /// Per choice, whether it hands its visibility over and starts from
+    /// another's ([`Chooser::with_seeding`]).
+    seeding: Vec<bool>,
     current: usize,
     /// The current choice's running mean frame time, ms.
     mean: Option<f64>,
@@ -111,7 +126,7 @@ impl Chooser {
     /// current. At least one choice.
     pub fn new(params: AutoParams, cold: &[u64], baseline: Option<usize>) -> Self {
         assert!(!cold.is_empty(), "a chooser needs a choice");
-        let choices = cold
+        let choices: Vec<Choice> = cold
             .iter()
             .map(|&cold| Choice {
                 cold,
@@ -124,6 +139,7 @@ impl Chooser {
             .collect();
         Self {
             params,
+            seeding: vec![false; choices.len()],
             choices,
             baseline,
             current: 0,
@@ -133,6 +149,25 @@ impl Chooser {
             last_ran: None,
             begun: 0,
         }
+    }
+
+    /// Marks the choices that carry visibility from frame to frame and can
+    /// take another's (`seeding[i]` for choice `i`). Run right after
+    /// another such choice, one starts from what that one found visible
+    /// last frame ([`Ticket::seed_from`]): it is warm, so that frame is
+    /// measured, where a choice run from nothing or from what it knew
+    /// before spends its first frame warming up.
+    pub fn with_seeding(mut self, seeding: &[bool]) -> Self {
+        assert_eq!(seeding.len(), self.choices.len(), "one flag per choice");
+        self.seeding = seeding.to_vec();
+        self
+    }
+
+    /// The choice whose visibility `choice`, were it run next, would start
+    /// from ([`Chooser::with_seeding`]): the one that ran the last frame, if
+    /// another and both carry visibility.
+    pub fn seed_source(&self, choice: usize) -> Option<usize> {
+        self.last_ran.filter(|&p| p != choice && self.seeding[p] && self.seeding[choice])
     }
 
     /// The choice frames run when no probe does.
@@ -160,7 +195,7 @@ impl Chooser {
                 let c = &self.choices[choice];
                 let first = c.last_time.is_none() && !c.deferred;
                 let b = bound(choice, mean);
-                bounded = b.is_some();
+                bounded = b.is_some_and(|b| b.costs_a_frame);
                 match b {
                     Some(b) if !self.wins(choice, b.measured, mean) => self.schedule(choice, b.measured, 0.0, frame),
                     Some(b) if first && b.warm_up > mean && c.cold > 0 => {
@@ -178,14 +213,20 @@ impl Chooser {
             }
         }
         let choice = self.probe.as_ref().map_or(self.current, |p| p.choice);
+        let seed_from = self.seed_source(choice);
         let c = &mut self.choices[choice];
+        if seed_from.is_some() {
+            // Seeded, it is as warm as after its frames from nothing.
+            c.frames = c.frames.max(c.cold);
+        }
         // A frame that also pays for finding a bound (the caller's work,
         // such as a walk of the hierarchy) measures no choice.
-        let warm_up = bounded || (c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice)));
+        let cold = c.frames < c.cold || (seed_from.is_none() && self.last_ran != Some(choice));
+        let warm_up = bounded || (c.cold > 0 && cold);
         c.frames += 1;
         self.last_ran = Some(choice);
         self.begun += 1;
-        Ticket { choice, warm_up, probe: self.probe.as_ref().map(|p| p.serial) }
+        Ticket { choice, warm_up, probe: self.probe.as_ref().map(|p| p.serial), seed_from }
     }
 
     /// Records `time` ms for the frame `ticket` began. A frame of a probe
@@ -390,7 +431,7 @@ mod tests {
 
     /// Choice 1's bound at twice the current mean: it cannot win.
     fn choice_1_cannot_win(choice: usize, mean: f64) -> Option<Bound> {
-        (choice == 1).then_some(Bound { measured: mean * 2.0, warm_up: mean * 2.0 })
+        (choice == 1).then_some(Bound { measured: mean * 2.0, warm_up: mean * 2.0, costs_a_frame: true })
     }
 
     #[test]
@@ -412,6 +453,11 @@ mod tests {
         let next = chooser.begin(choice_1_cannot_win);
         chooser.record(next, 2.0);
         assert_eq!(chooser.mean(), Some(1.25));
+        // A bound found without work leaves its frame measured.
+        let mut chooser = choice_0_at_1_ms();
+        let free = chooser.begin(|c, m| choice_1_cannot_win(c, m).map(|b| Bound { costs_a_frame: false, ..b }));
+        chooser.record(free, 2.0);
+        assert_eq!(chooser.mean(), Some(1.25));
     }
 
     #[test]
@@ -422,7 +468,7 @@ mod tests {
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 1], None);
         let first = chooser.begin(|_, _| None);
         chooser.record(first, 1.0);
-        let bound = Bound { measured: 0.5, warm_up: 3.0 };
+        let bound = Bound { measured: 0.5, warm_up: 3.0, costs_a_frame: false };
         let mut waited = 0;
         loop {
             let t = chooser.begin(|_, _| Some(bound));
@@ -433,5 +479,32 @@ mod tests {
             waited += 1;
         }
         assert_eq!(waited, 201, "the frame that put it off, then 2 ms of excess at 0.01 ms a frame");
+    }
+
+    #[test]
+    fn a_choice_started_from_anothers_visibility_is_measured_at_once() {
+        // Choices 0 and 1 carry visibility, the baseline 2 does not; all
+        // start cold for two frames.
+        let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 0], Some(2)).with_seeding(&[true, true, false]);
+        let mut tickets = Vec::new();
+        for _ in 0..8 {
+            let t = chooser.begin(|_, _| None);
+            chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
+            tickets.push((t.choice, t.warm_up, t.seed_from()));
+        }
+        // Choice 0 from nothing: two frames warm up. Choice 1, right after
+        // it, starts from its visibility: both probe frames measured. The
+        // baseline takes nothing; choice 0 after it warms up again.
+        let expected = [
+            (0, true, None),
+            (0, true, None),
+            (0, false, None),
+            (1, false, Some(0)),
+            (1, false, None),
+            (2, false, None),
+            (0, true, None),
+            (0, false, None),
+        ];
+        assert_eq!(tickets, expected);
     }
 }

@@ -16,14 +16,14 @@
 //! Guthe et al. 2006); `auto` says so once.
 //!
 //! **How.** The method in use is the current one; its frames keep a
-//! running mean. Another method is tried now and then for a probe: one
-//! frame to warm up its temporal state (two for `hiz` and `roc` the first
-//! time, when they start from nothing: their second frame draws early all
-//! that the first found against no depth), then two measured frames (a
-//! method's first frame after another ran is never measured, the current
-//! one's included); `vfc`, which carries no state, is probed by one
-//! measured frame, and a probe whose first measured frame takes twice the
-//! current mean ends there. If their mean beats the current mean by
+//! running mean. Another method is tried now and then for a probe: two
+//! measured frames. A method that starts from what the method before found
+//! visible (below) is warm at once; one that does not first warms up its
+//! temporal state for a frame (two for `hiz` and `roc` from nothing: their
+//! second frame draws early all that the first found against no depth),
+//! the current one's included when it comes back. `vfc`, which carries no
+//! state, is probed by one measured frame, and a probe whose first
+//! measured frame takes twice the current mean ends there. If their mean beats the current mean by
 //! `auto.margin` (5 %), the probed method becomes current; `vfc` becomes
 //! current unless the current mean beats it by the margin, so occlusion
 //! culling runs only while it pays for itself by the margin. The next probe
@@ -45,10 +45,16 @@
 //! method is tried at once, whatever its wait, when the current method's
 //! mean grows past that method's last measured time by the margin: a
 //! change of view that makes the current method stop paying is found
-//! without waiting. Every method keeps its own state while another runs,
-//! as CHC++ keeps its classification from frame to frame (section 5.2):
-//! coming back, it starts from what it knew. The rules are
-//! [`Chooser`]'s, which the wgpu embedding's `GpuCuller` shares.
+//! without waiting.
+//!
+//! A method that `auto` switches to starts from what the method before
+//! found visible in the frame before ([`CullingMethod::seed`]), as CHC++
+//! starts each frame from the last one's classification (section 3.1):
+//! `roc` and `hiz` draw it first, `chcpp` takes it as its classification.
+//! The set of a GPU-driven method is read back, which the switching frame
+//! pays for. `vfc` gives none: a method switched to from `vfc` starts from
+//! what it knew. The rules are [`Chooser`]'s, which the wgpu embedding's
+//! `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try once each method that might win
 //! (without a cost model, every method, the GPU-driven ones first, the
@@ -110,8 +116,9 @@ impl MethodParams for AutoParams {
 /// a fraction of a millisecond, it settles on frustum culling.
 ///
 /// **Cost.** Its first frames try each method that might win once (about
-/// ten frames, some of them slower than frustum culling: a method starting
-/// from nothing tests everything); where the backend models its costs, a
+/// ten frames, some of them slower than frustum culling: the first method
+/// starts from nothing and tests everything, the later ones from what the
+/// one before found visible, read back from the GPU); where the backend models its costs, a
 /// method whose fixed passes alone outlast the running method's frame is
 /// not tried. After that, probes cost about `auto.budget` (1 %) of the
 /// frame time. Memory: the state of every method it may choose.
@@ -196,7 +203,7 @@ impl Auto {
             let resolution = backend.resolution();
             let mut keyed = Vec::new();
             for (method, built) in methods {
-                let (bound, steps) = bounds(built.as_ref(), ctx, &model, resolution);
+                let (bound, steps) = bounds(built.as_ref(), ctx, &model, resolution, true);
                 self.estimate_steps += steps;
                 keyed.push((bound.warm_up, (method, built)));
             }
@@ -207,7 +214,8 @@ impl Auto {
         let cold: Vec<u64> = methods.iter().map(|(m, _)| cold_frames(m)).collect();
         let vfc = methods.iter().position(|(m, _)| *m == Method::Vfc);
         self.methods = methods.into_iter().map(|(_, built)| built).collect();
-        self.chooser = Some(Chooser::new(self.params, &cold, vfc));
+        let seeding: Vec<bool> = self.methods.iter().map(|m| m.shares_visibility()).collect();
+        self.chooser = Some(Chooser::new(self.params, &cold, vfc).with_seeding(&seeding));
     }
 
     /// The method running the frame under way (the first before any).
@@ -250,20 +258,22 @@ pub fn cold_frames(method: &Method) -> u64 {
 
 /// Lower bounds of `method`'s frame times under `model` at `resolution`
 /// ([`Bound`]): `vfc`'s from its draws ([`vfc_bound`]), the others' from
-/// their fixed passes ([`CullingMethod::floor_ms`]); and the nodes `vfc`'s
-/// walk visited, to be charged to the frame.
+/// their fixed passes ([`CullingMethod::floor_ms`]), its warm-up's as from
+/// nothing where it will not be seeded (`from_nothing`); and the nodes
+/// `vfc`'s walk visited, to be charged to the frame.
 fn bounds(
     method: &dyn CullingMethod,
     ctx: &FrameContext<'_>,
     model: &CostModel,
     resolution: (u32, u32),
+    from_nothing: bool,
 ) -> (Bound, u64) {
     if method.name() == "vfc" {
         let (bound, steps) = vfc_bound(ctx, model);
-        return (Bound { measured: bound, warm_up: bound }, steps);
+        return (Bound { measured: bound, warm_up: bound, costs_a_frame: steps > 0 }, steps);
     }
     let floor = |cold| method.floor_ms(ctx, model, resolution, cold);
-    (Bound { measured: floor(false), warm_up: floor(true) }, 0)
+    (Bound { measured: floor(false), warm_up: floor(from_nothing), costs_a_frame: false }, 0)
 }
 
 /// A lower bound of `vfc`'s frame time under `model`, ms: one draw call
@@ -298,13 +308,15 @@ impl CullingMethod for Auto {
         }
         let resolution = backend.resolution();
         let Self { methods, chooser, model, estimate_steps, .. } = self;
+        let chooser = chooser.as_mut().expect("made above");
+        let seeded: Vec<bool> = (0..methods.len()).map(|c| chooser.seed_source(c).is_some()).collect();
         // Where the backend models its costs, a due probe's frames cost at
         // least their bounds ([`bounds`]): a probe that cannot win is
         // spared, and with it frames of drawing everything in view where
         // occlusion culling wins by far, or of fixed passes dearer than a
         // whole frame of the method running.
-        let ticket = chooser.as_mut().expect("made above").begin(|choice, _| {
-            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, model.as_ref()?, resolution);
+        let ticket = chooser.begin(|choice, _| {
+            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, model.as_ref()?, resolution, !seeded[choice]);
             *estimate_steps += steps;
             Some(bound)
         });
@@ -318,6 +330,11 @@ impl CullingMethod for Auto {
             backend.traverse(steps);
         }
         let running = self.running();
+        if let Some(previous) = self.ticket.and_then(|t| t.seed_from()) {
+            if let Some(visible) = self.methods[previous].visible_set(ctx, backend) {
+                self.methods[running].seed(ctx, backend, &visible);
+            }
+        }
         self.methods[running].render(ctx, backend);
     }
 
@@ -349,9 +366,10 @@ impl CullingMethod for Auto {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_rig::Rig;
+    use super::super::test_rig::{culling_steps, method, queries, Rig, BEHIND, SIDE, WALL};
     use super::*;
     use crate::frame::render_frame;
+    use crate::mock::Call;
     use crate::DrawnSet;
 
     /// Runs `auto` for `frames` frames on the wall rig (GPU culling on),
@@ -370,14 +388,25 @@ mod tests {
         frames: u64,
         cost: impl Fn(u64, &str) -> f64,
     ) -> (Vec<&'static str>, Vec<&'static str>) {
+        let (ran, choices, _) = run_logged(model, frames, cost);
+        (ran, choices)
+    }
+
+    /// [`run_modelled`], with each frame's calls to the backend.
+    fn run_logged(
+        model: Option<CostModel>,
+        frames: u64,
+        cost: impl Fn(u64, &str) -> f64,
+    ) -> (Vec<&'static str>, Vec<&'static str>, Vec<Vec<Call>>) {
         let rig = Rig::wall();
         let mut backend = rig.mock().with_gpu_culling();
+        backend.set_visible(BEHIND, false);
         if let Some(model) = model {
             backend = backend.with_cost_model(model);
         }
         let mut auto = Auto::new(AutoParams::default());
         let mut drawn = DrawnSet::default();
-        let mut ran = Vec::new();
+        let (mut ran, mut logs) = (Vec::new(), Vec::new());
         for frame in 0..frames {
             let mut ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn);
             auto.prepare(&mut ctx, &mut backend);
@@ -387,8 +416,9 @@ mod tests {
             let name = auto.counters().into_iter().find(|&(n, on)| on == 1.0 && n != "probe").unwrap().0;
             auto.finish_frame(&FrameStats { frame_ms: cost(frame, name), ..FrameStats::default() });
             ran.push(name);
+            logs.push(backend.take_log());
         }
-        (ran, auto.choices())
+        (ran, auto.choices(), logs)
     }
 
     fn share(ran: &[&str], name: &str) -> f64 {
@@ -404,20 +434,20 @@ mod tests {
         };
         let ran = run(600, cost);
         // roc first (two frames from nothing, one measured), then probes of
-        // hiz (two frames from nothing, two measured), which loses, of chcpp
-        // (one from nothing), which takes over, and of vfc (one frame, no
-        // state), which loses.
-        let start = ["roc", "roc", "roc", "hiz", "hiz", "hiz", "hiz", "chcpp", "chcpp", "chcpp", "vfc", "chcpp"];
-        assert_eq!(ran[..12], start);
-        assert!(share(&ran[12..], "chcpp") > 0.97, "{}", share(&ran[12..], "chcpp"));
+        // hiz (starting from roc's visibility, two measured), which loses,
+        // of chcpp (from hiz's), which takes over, and of vfc (one frame, no
+        // state), which loses; chcpp, back from vfc, warms up a frame.
+        let start = ["roc", "roc", "roc", "hiz", "hiz", "chcpp", "chcpp", "vfc", "chcpp", "chcpp"];
+        assert_eq!(ran[..10], start);
+        assert!(share(&ran[10..], "chcpp") > 0.97, "{}", share(&ran[10..], "chcpp"));
         // Each probe of vfc costs 0.5 ms beyond chcpp's 0.5 ms: 1 % of the
         // time allows one in 100 frames.
         assert!(ran.iter().filter(|&&n| n == "vfc").count() <= 7);
         // roc and hiz, four times chcpp's time, wait past the 600 frames
         // once measured against chcpp (hiz, first measured against roc,
-        // equally slow, is probed once more: a warm-up frame and one
-        // measured frame, clearly slower, end that probe).
-        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 6);
+        // equally slow, is probed once more: one measured frame, started
+        // from chcpp's visibility and clearly slower, ends that probe).
+        assert_eq!(ran.iter().filter(|&&n| n == "hiz").count(), 3);
         assert_eq!(ran.iter().filter(|&&n| n == "roc").count(), 3);
     }
 
@@ -515,5 +545,31 @@ mod tests {
         // Without GPU-resident culling hiz is not among the choices.
         assert_eq!(auto.choices(), ["chcpp", "vfc"]);
         assert!(auto.chooser.as_ref().and_then(Chooser::mean).is_some_and(|m| m > 0.0));
+    }
+
+    #[test]
+    fn a_method_switched_to_starts_from_what_the_one_before_found() {
+        let cost = |_, name: &str| if name == "chcpp" { 0.5 } else { 1.0 };
+        let (ran, _, logs) = run_logged(None, 12, cost);
+        // roc from nothing draws nothing first; hiz, probed after it, draws
+        // first what roc read back as visible: the wall and the cube beside
+        // it, not the one behind.
+        assert_eq!((ran[0], ran[3], ran[2]), ("roc", "hiz", "roc"));
+        assert_eq!(culling_steps(&logs[0])[0], ("draw", vec![]));
+        assert!(logs[3].contains(&Call::ReadBack));
+        assert_eq!(culling_steps(&logs[3])[0], ("draw", vec![WALL, SIDE]));
+        // chcpp, probed after hiz, starts from what hiz found: it queries
+        // fewer nodes than from nothing.
+        let first = ran.iter().position(|&m| m == "chcpp").unwrap();
+        let rig = Rig::wall();
+        let mut mock = rig.mock();
+        mock.set_visible(BEHIND, false);
+        let from_nothing = rig.run(&mut method("chcpp", &[]), &mut mock, 1).remove(0);
+        assert!(
+            queries(&logs[first]).len() < queries(&from_nothing).len(),
+            "{} queries seeded, {} from nothing",
+            queries(&logs[first]).len(),
+            queries(&from_nothing).len()
+        );
     }
 }

@@ -26,7 +26,7 @@ use super::{
 use crate::backend::{Backend, QueryHandle};
 use crate::cost_model::CostModel;
 use crate::geometry::Aabb;
-use crate::hierarchy::{NodeId, Since};
+use crate::hierarchy::{Hierarchy, NodeId, Since};
 use crate::rng::mix64;
 use multiquery::{KeepCounts, KeepEstimate};
 use std::collections::VecDeque;
@@ -156,6 +156,22 @@ pub struct Chcpp {
 fn jitter(node: NodeId, frame: u32, n: u32) -> u32 {
     let z = mix64(u64::from(node) << 32 | u64::from(frame));
     1 + (z % u64::from(n.max(1))) as u32
+}
+
+/// The first frame after `frame` in which `node`, found visible then, is
+/// queried again: after `nav` frames, or a random delay of up to `nav`
+/// (section 5.2).
+fn first_retest(params: ChcppParams, node: NodeId, frame: u32) -> u32 {
+    frame + if params.random { jitter(node, frame, params.nav) } else { params.nav + 1 }
+}
+
+/// Calls `f` with every instance of the leaves in `node`'s subtree.
+fn for_each_instance_under(h: &Hierarchy, node: NodeId, f: &mut impl FnMut(u32)) {
+    if h.is_leaf(node) {
+        h.instances(node).iter().for_each(|&i| f(i));
+    } else {
+        h.children(node).iter().for_each(|&c| for_each_instance_under(h, c, f));
+    }
 }
 
 impl Chcpp {
@@ -329,7 +345,7 @@ impl Chcpp {
                         state.next_test = frame + nav + 1;
                     } else {
                         state.changed_at = frame;
-                        state.next_test = frame + if self.params.random { jitter(node, frame, nav) } else { nav + 1 };
+                        state.next_test = first_retest(self.params, node, frame);
                         self.traverse_node(ctx, backend, q, node);
                     }
                     pull_up_visibility(ctx.hierarchy, &mut self.nodes, node);
@@ -356,6 +372,47 @@ impl CullingMethod for Chcpp {
             model.query_round_trip_ms()
         } else {
             0.0
+        }
+    }
+
+    fn shares_visibility(&self) -> bool {
+        true
+    }
+
+    /// The instances of the (virtual) leaves classified visible in its
+    /// last frame: a CPU-side set, nothing read back.
+    fn visible_set(&mut self, ctx: &FrameContext<'_>, _: &mut dyn Backend) -> Option<Vec<bool>> {
+        let h = ctx.hierarchy;
+        // A tree rebuilt since (other node ids) leaves nothing to give.
+        if self.frame == 0 || self.nodes.len() != h.node_count() {
+            return None;
+        }
+        let mut visible = vec![false; ctx.scene.instances.len()];
+        for (node, state) in (0..).zip(&self.nodes) {
+            if self.is_leaf[node as usize] && state.visible && state.last_visited == self.frame {
+                for_each_instance_under(h, node, &mut |i| visible[i as usize] = true);
+            }
+        }
+        Some(visible)
+    }
+
+    /// Classifies every node visible where its subtree holds an instance of
+    /// `visible`, as seen in the frame before the next (persistence
+    /// restarts; a visible leaf's first re-query is drawn as for a newly
+    /// visible one). One visit of each node, charged as traversal.
+    fn seed(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+        self.prepare_state(ctx);
+        let (h, frame) = (ctx.hierarchy, self.frame);
+        backend.traverse(h.node_count() as u64);
+        // Children have higher ids than their parent: one backward sweep.
+        for node in (0..h.node_count() as NodeId).rev() {
+            let seen = if h.is_leaf(node) {
+                h.instances(node).iter().any(|&i| visible.get(i as usize).copied().unwrap_or(false))
+            } else {
+                h.children(node).iter().any(|&c| self.nodes[c as usize].visible)
+            };
+            let next_test = if seen { first_retest(self.params, node, frame) } else { 0 };
+            self.nodes[node as usize] = NodeState { visible: seen, last_visited: frame, changed_at: frame, next_test };
         }
     }
 
@@ -432,9 +489,10 @@ impl CullingMethod for Chcpp {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_rig::{assert_draws_exactly, method, queried_alone, Rig};
+    use super::super::test_rig::{assert_draws_exactly, drawn, method, queried_alone, queries, Rig};
     use super::*;
     use crate::mock::Call;
+    use crate::DrawnSet;
     use glam::Vec3;
 
     /// Without the random delay, a visible leaf goes `nav` frames without a
@@ -511,5 +569,37 @@ mod tests {
         assert!((2..=12).contains(&fit_largest), "{fit_largest}");
         assert!(measured_largest > fit_largest, "measured {measured_largest}, fit {fit_largest}");
         assert!(measured_count < fit_count, "measured {measured_count}, fit {fit_count}");
+    }
+
+    /// Seeded with what is visible, CHC++'s first frame runs as a warm
+    /// one: it draws the visible instances and queries fewer nodes than
+    /// from nothing, where every node on the way to a leaf is queried. It
+    /// gives the set back. A wrong seed costs time, never an instance: the
+    /// seeded frame still draws every visible one.
+    #[test]
+    fn a_seeded_first_frame_starts_from_the_seed() {
+        let rig = Rig::row(8);
+        let mut mock = rig.mock();
+        for hidden in [1, 3, 5, 7] {
+            mock.set_visible(hidden, false);
+        }
+        let options = ["chcpp.tight=off"];
+        let cold = rig.run(&mut method("chcpp", &options), &mut mock, 1).remove(0);
+        let truth: Vec<bool> = (0..9).map(|i| i < 8 && i % 2 == 0).collect();
+        for (seed, exact) in [(truth.clone(), true), (truth.iter().map(|v| !v).collect(), false)] {
+            let mut chcpp = method("chcpp", &options);
+            let mut drawn_set = DrawnSet::default();
+            let ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn_set);
+            chcpp.method.seed(&ctx, &mut mock, &seed);
+            let first = rig.run(&mut chcpp, &mut mock, 1).remove(0);
+            if exact {
+                assert_draws_exactly(&first, &[0, 2, 4, 6]);
+                assert!(queries(&first).len() < queries(&cold).len(), "{} queries", queries(&first).len());
+                assert_eq!(chcpp.method.visible_set(&ctx, &mut mock), Some(truth.clone()));
+            } else {
+                let got = drawn(&first);
+                assert!([0, 2, 4, 6].iter().all(|i| got.contains(i)), "drew {got:?}");
+            }
+        }
     }
 }
