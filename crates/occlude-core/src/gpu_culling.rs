@@ -132,6 +132,11 @@ pub trait GpuCulling {
     /// one upload, landing after the work recorded so far.
     fn write_flags(&mut self, flags: Flags, set: &[bool]);
 
+    /// Sets the flags of `dst` to those of `src` (slot for slot, those past
+    /// `src`'s end to 0): one copy on the device, counted as a dispatch, as
+    /// a clear is.
+    fn copy_flags(&mut self, src: Flags, dst: Flags);
+
     /// Tests the boxes of `boxes` named by `ids` against the current depth
     /// buffer, depth writes off (the boxes' front faces, pulled towards the
     /// eye by [`QUERY_DEPTH_BIAS`](crate::query_box::QUERY_DEPTH_BIAS)), and

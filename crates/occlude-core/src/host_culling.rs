@@ -99,6 +99,12 @@ impl HostResources {
         }
     }
 
+    /// [`GpuCulling::copy_flags`](crate::GpuCulling::copy_flags).
+    pub fn copy_flags(&mut self, src: Flags, dst: Flags) {
+        let set = self.flags[src.0 as usize].clone();
+        self.write_flags(dst, &set);
+    }
+
     /// [`GpuCulling::create_list`](crate::GpuCulling::create_list).
     pub fn create_list(&mut self, capacity: u32, ids: &[u32]) -> IdList {
         let mut list = HostList { ids: Vec::new(), capacity: capacity as usize };

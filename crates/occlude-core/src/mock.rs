@@ -415,6 +415,10 @@ impl GpuCulling for MockBackend {
         self.resources().write_flags(flags, set);
     }
 
+    fn copy_flags(&mut self, src: Flags, dst: Flags) {
+        self.resources().copy_flags(src, dst);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.test(boxes, ids, flags, false);
     }

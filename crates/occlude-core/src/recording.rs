@@ -279,6 +279,10 @@ impl<B: Backend> GpuCulling for RecordingBackend<B> {
         self.culling().write_flags(flags, set);
     }
 
+    fn copy_flags(&mut self, src: Flags, dst: Flags) {
+        self.culling().copy_flags(src, dst);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.culling().test_boxes(boxes, ids, flags);
         self.record_test(boxes, ids, flags, None);

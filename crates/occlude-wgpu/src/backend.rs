@@ -735,6 +735,10 @@ impl GpuCulling for WgpuBackend {
         self.culling().write_flags(flags, set);
     }
 
+    fn copy_flags(&mut self, src: Flags, dst: Flags) {
+        self.record_cull(CullOp::CopyFlags { src, dst });
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         self.record_indirect(CullOp::TestBoxes { boxes, ids, flags }, RenderState::Query);
     }

@@ -67,6 +67,7 @@ pub(crate) enum CullOp {
     Compact { flags: Flags, unless: Option<Flags>, dst: IdList },
     DropOutside { boxes: BoxSet, flags: Flags },
     ClearFlags(Flags),
+    CopyFlags { src: Flags, dst: Flags },
     DrawList(IdList),
 }
 
@@ -85,6 +86,7 @@ impl CullOp {
             Self::Expand { src, filter, table, into: ExpandInto::Flags(f) } => [2, src.0, filter.0, table.0, f.0, 0],
             Self::Compact { flags, unless, dst } => [3, flags.0, unless.map_or(u32::MAX, |u| u.0), dst.0, 0, 0],
             Self::ClearFlags(flags) => [4, flags.0, 0, 0, 0, 0],
+            Self::CopyFlags { src, dst } => [9, src.0, dst.0, 0, 0, 0],
             Self::DrawList(list) => [5, list.0, 0, 0, 0, 0],
             Self::DropOutside { boxes, flags } => [6, boxes.0, flags.0, 0, 0, 0],
             Self::BuildPyramid(pyramid) => level_key(pyramid, 0),
@@ -531,12 +533,24 @@ impl Culling {
 
     /// Encodes `op`'s compute work: the buffer clears it starts with, then
     /// its dispatch in a compute pass of its own (timed when `timer` is
-    /// given). Clearing flags is a buffer clear alone.
+    /// given). Clearing flags is a buffer clear alone, copying them a
+    /// buffer copy.
     pub fn encode_compute(&mut self, encoder: &mut wgpu::CommandEncoder, op: &CullOp, timer: Option<&mut PassTimer>) {
         let scene = Arc::clone(&self.scene);
         let (pipeline, threads) = match *op {
             CullOp::ClearFlags(flags) => {
                 encoder.clear_buffer(&self.flags[flags.0 as usize].buffer, 0, None);
+                return;
+            }
+            CullOp::CopyFlags { src, dst } => {
+                let (src, dst) = (&self.flags[src.0 as usize], &self.flags[dst.0 as usize]);
+                let bytes = 4 * u64::from(src.len.min(dst.len));
+                if src.len < dst.len {
+                    encoder.clear_buffer(&dst.buffer, bytes, None);
+                }
+                if bytes > 0 {
+                    encoder.copy_buffer_to_buffer(&src.buffer, 0, &dst.buffer, 0, bytes);
+                }
                 return;
             }
             CullOp::BuildPyramid(pyramid) => return self.encode_pyramid_build(encoder, pyramid, timer),
@@ -658,7 +672,7 @@ impl Culling {
                 entries.extend(reach.as_ref().map(|r| (16, r)));
                 entries
             }
-            CullOp::ClearFlags(_) | CullOp::BuildPyramid(_) => Vec::new(),
+            CullOp::ClearFlags(_) | CullOp::CopyFlags { .. } | CullOp::BuildPyramid(_) => Vec::new(),
         };
         let group = bind_group(self.ctx(), "culling", &pipeline.get_bind_group_layout(0), &entries);
         self.groups.insert(op.key(), group.clone());

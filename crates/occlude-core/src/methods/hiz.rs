@@ -51,7 +51,7 @@ use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::{AllInstances, TemporalSet};
 use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
+use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
 use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::depth_pyramid::level_sizes;
@@ -217,12 +217,11 @@ impl CullingMethod for TwoPhaseHiZ {
         true
     }
 
-    fn visible_set(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend) -> Option<Vec<bool>> {
-        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return None };
-        Some(r.temporal.read_visible(gpu))
+    fn visible_set(&self, _: &FrameContext<'_>) -> Option<VisibleSet> {
+        self.resources.as_ref().map(|r| r.temporal.visible())
     }
 
-    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &VisibleSet) {
         let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return };
         r.temporal.seed(gpu, visible);
     }

@@ -37,7 +37,7 @@ pub use options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
 use crate::cost_model::CostModel;
-use crate::gpu_culling::GpuCullingUnsupported;
+use crate::gpu_culling::{Flags, GpuCulling, GpuCullingUnsupported};
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
 use crate::stats::FrameStats;
@@ -174,21 +174,22 @@ pub trait CullingMethod {
     }
 
     /// The instances this method found visible in the last frame it
-    /// rendered, one flag per instance of `ctx.scene`: for another method
-    /// to start from ([`CullingMethod::seed`]). `None` where it keeps no
-    /// visibility (`vfc`) or has rendered no frame. A GPU-driven method
-    /// reads its flags back, which the frame calling this pays for.
-    fn visible_set(&mut self, _ctx: &FrameContext<'_>, _backend: &mut dyn Backend) -> Option<Vec<bool>> {
+    /// rendered, where it keeps them: for another method to start from
+    /// ([`CullingMethod::seed`]). `None` where it keeps no visibility
+    /// (`vfc`) or has rendered no frame.
+    fn visible_set(&self, _ctx: &FrameContext<'_>) -> Option<VisibleSet> {
         None
     }
 
-    /// Takes `visible` (one flag per instance, what another method found
-    /// visible last frame) as its own last frame's visibility, in place of
-    /// what it kept. Any set keeps the method exact: it only changes what
-    /// is drawn before testing. `auto` seeds a method it switches to, so
-    /// that its first frame costs what its later ones do rather than a
-    /// frame from nothing. Methods without temporal state ignore it.
-    fn seed(&mut self, _ctx: &FrameContext<'_>, _backend: &mut dyn Backend, _visible: &[bool]) {}
+    /// Takes `visible` (what another method found visible last frame) as
+    /// its own last frame's visibility, in place of what it kept. Any set
+    /// keeps the method exact: it only changes what is drawn before
+    /// testing. `auto` seeds a method it switches to, so that its first
+    /// frame does not start from nothing. Moving the set costs the frame
+    /// calling this: a GPU-driven method copies device flags or uploads a
+    /// CPU set, `chcpp` reads device flags back (a wait for the GPU).
+    /// Methods without temporal state ignore it.
+    fn seed(&mut self, _ctx: &FrameContext<'_>, _backend: &mut dyn Backend, _visible: &VisibleSet) {}
 
     /// Method-specific figures of the last frame it rendered, by name (for
     /// example `om`'s nodes decided in stage 1 without a query and its
@@ -201,6 +202,38 @@ pub trait CullingMethod {
     /// was on for that frame and the method has a view to give (only `om`).
     fn debug_view(&self) -> Option<DebugView> {
         None
+    }
+}
+
+/// What a method found visible in its last frame, one flag per instance,
+/// where it keeps them ([`CullingMethod::visible_set`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum VisibleSet {
+    /// On the CPU (`chcpp`'s classification).
+    Host(Vec<bool>),
+    /// In a flag buffer of the backend's GPU-resident culling (`roc`'s and
+    /// `hiz`'s), valid until that method's next frame.
+    Device(Flags),
+}
+
+impl VisibleSet {
+    /// The flags on the CPU: a device set is read back (the frame waits
+    /// for the GPU); `None` where the backend has no GPU-resident culling.
+    pub fn to_host(&self, backend: &mut dyn Backend) -> Option<Vec<bool>> {
+        match self {
+            VisibleSet::Host(set) => Some(set.clone()),
+            VisibleSet::Device(flags) => Some(backend.gpu_culling().ok()?.read_flags(*flags)),
+        }
+    }
+
+    /// Makes `dst`, a flag buffer on `gpu`, hold the set: a copy on the
+    /// device, or an upload.
+    pub fn write_to(&self, gpu: &mut dyn GpuCulling, dst: Flags) {
+        match self {
+            VisibleSet::Host(set) => gpu.write_flags(dst, set),
+            VisibleSet::Device(src) if *src != dst => gpu.copy_flags(*src, dst),
+            VisibleSet::Device(_) => {}
+        }
     }
 }
 

@@ -24,7 +24,7 @@
 
 use super::tracked::{update_instance_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor};
+use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
 use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
@@ -138,14 +138,14 @@ impl TemporalSet {
         }
     }
 
-    /// Last frame's visible instances, read back.
-    pub(crate) fn read_visible(&self, gpu: &mut dyn GpuCulling) -> Vec<bool> {
-        gpu.read_flags(self.previous)
+    /// Last frame's visible instances, on the device.
+    pub(crate) fn visible(&self) -> VisibleSet {
+        VisibleSet::Device(self.previous)
     }
 
-    /// Makes `visible` last frame's visible instances (one upload).
-    pub(crate) fn seed(&self, gpu: &mut dyn GpuCulling, visible: &[bool]) {
-        gpu.write_flags(self.previous, visible);
+    /// Makes `visible` last frame's visible instances.
+    pub(crate) fn seed(&self, gpu: &mut dyn GpuCulling, visible: &VisibleSet) {
+        visible.write_to(gpu, self.previous);
     }
 
     /// Steps 3 (when `draw_new`) and 4.
@@ -236,12 +236,11 @@ impl CullingMethod for RasterOcclusion {
         true
     }
 
-    fn visible_set(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend) -> Option<Vec<bool>> {
-        let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return None };
-        Some(r.temporal.read_visible(gpu))
+    fn visible_set(&self, _: &FrameContext<'_>) -> Option<VisibleSet> {
+        self.resources.as_ref().map(|r| r.temporal.visible())
     }
 
-    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+    fn seed(&mut self, _: &FrameContext<'_>, backend: &mut dyn Backend, visible: &VisibleSet) {
         let (Some(r), Ok(gpu)) = (self.resources.as_ref(), backend.gpu_culling()) else { return };
         r.temporal.seed(gpu, visible);
     }
@@ -307,7 +306,7 @@ mod tests {
     }
 
     /// Seeded, `roc` and `hiz` draw the seed first, as last frame's
-    /// visible set, and read back what their frame found.
+    /// visible set, and give what their frame found, on the device.
     #[test]
     fn a_seed_is_drawn_first_and_the_visible_set_read_back() {
         let rig = Rig::row(4);
@@ -318,11 +317,11 @@ mod tests {
             let mut drawn = crate::DrawnSet::default();
             let mut ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn);
             m.method.prepare(&mut ctx, &mut mock);
-            m.method.seed(&ctx, &mut mock, &[true, false, false, true, false]);
+            m.method.seed(&ctx, &mut mock, &VisibleSet::Host(vec![true, false, false, true, false]));
             let first = rig.run(&mut m, &mut mock, 1).remove(0);
             assert_eq!(culling_steps(&first)[0], ("draw", vec![0, 3]), "{name}");
             assert_draws_exactly(&first, &[0, 1, 3]);
-            let visible = m.method.visible_set(&ctx, &mut mock);
+            let visible = m.method.visible_set(&ctx).and_then(|v| v.to_host(&mut mock));
             assert_eq!(visible, Some(vec![true, true, false, true, false]), "{name}");
         }
     }

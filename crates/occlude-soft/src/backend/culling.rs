@@ -129,6 +129,12 @@ impl GpuCulling for SoftBackend {
         self.device.write_flags(flags, set);
     }
 
+    fn copy_flags(&mut self, src: Flags, dst: Flags) {
+        let len = self.device.flags[dst.0 as usize].len();
+        self.dispatch(len);
+        self.device.copy_flags(src, dst);
+    }
+
     fn test_boxes(&mut self, boxes: BoxSet, ids: IdList, flags: Flags) {
         let count = self.device.lists[ids.0 as usize].ids.len();
         self.dispatch(count);

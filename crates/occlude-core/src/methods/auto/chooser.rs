@@ -154,9 +154,9 @@ impl Chooser {
     /// Marks the choices that carry visibility from frame to frame and can
     /// take another's (`seeding[i]` for choice `i`). Run right after
     /// another such choice, one starts from what that one found visible
-    /// last frame ([`Ticket::seed_from`]): it is warm, so that frame is
-    /// measured, where a choice run from nothing or from what it knew
-    /// before spends its first frame warming up.
+    /// last frame ([`Ticket::seed_from`]): one frame warms it up, as after
+    /// any switch (another's set can be coarser than its own), where one
+    /// from nothing may need more.
     pub fn with_seeding(mut self, seeding: &[bool]) -> Self {
         assert_eq!(seeding.len(), self.choices.len(), "one flag per choice");
         self.seeding = seeding.to_vec();
@@ -216,13 +216,12 @@ impl Chooser {
         let seed_from = self.seed_source(choice);
         let c = &mut self.choices[choice];
         if seed_from.is_some() {
-            // Seeded, it is as warm as after its frames from nothing.
+            // Seeded, it has what its frames from nothing would have found.
             c.frames = c.frames.max(c.cold);
         }
         // A frame that also pays for finding a bound (the caller's work,
         // such as a walk of the hierarchy) measures no choice.
-        let cold = c.frames < c.cold || (seed_from.is_none() && self.last_ran != Some(choice));
-        let warm_up = bounded || (c.cold > 0 && cold);
+        let warm_up = bounded || (c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice)));
         c.frames += 1;
         self.last_ran = Some(choice);
         self.begun += 1;
@@ -482,24 +481,25 @@ mod tests {
     }
 
     #[test]
-    fn a_choice_started_from_anothers_visibility_is_measured_at_once() {
-        // Choices 0 and 1 carry visibility, the baseline 2 does not; all
-        // start cold for two frames.
+    fn a_choice_started_from_anothers_visibility_warms_up_one_frame() {
+        // Choices 0 and 1 carry visibility, the baseline 2 does not; 0 and
+        // 1 need two frames from nothing.
         let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 0], Some(2)).with_seeding(&[true, true, false]);
         let mut tickets = Vec::new();
-        for _ in 0..8 {
+        for _ in 0..9 {
             let t = chooser.begin(|_, _| None);
             chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
             tickets.push((t.choice, t.warm_up, t.seed_from()));
         }
         // Choice 0 from nothing: two frames warm up. Choice 1, right after
-        // it, starts from its visibility: both probe frames measured. The
-        // baseline takes nothing; choice 0 after it warms up again.
+        // it, starts from its visibility: one. The baseline takes nothing;
+        // choice 0 after it warms up one frame from what it knew.
         let expected = [
             (0, true, None),
             (0, true, None),
             (0, false, None),
-            (1, false, Some(0)),
+            (1, true, Some(0)),
+            (1, false, None),
             (1, false, None),
             (2, false, None),
             (0, true, None),

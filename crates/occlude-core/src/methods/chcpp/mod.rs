@@ -21,7 +21,7 @@ pub mod tight;
 use super::tracked::Tracked;
 use super::{
     pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, MethodParams,
-    OptionError, ParamVisitor,
+    OptionError, ParamVisitor, VisibleSet,
 };
 use crate::backend::{Backend, QueryHandle};
 use crate::cost_model::CostModel;
@@ -380,8 +380,8 @@ impl CullingMethod for Chcpp {
     }
 
     /// The instances of the (virtual) leaves classified visible in its
-    /// last frame: a CPU-side set, nothing read back.
-    fn visible_set(&mut self, ctx: &FrameContext<'_>, _: &mut dyn Backend) -> Option<Vec<bool>> {
+    /// last frame.
+    fn visible_set(&self, ctx: &FrameContext<'_>) -> Option<VisibleSet> {
         let h = ctx.hierarchy;
         // A tree rebuilt since (other node ids) leaves nothing to give.
         if self.frame == 0 || self.nodes.len() != h.node_count() {
@@ -393,14 +393,16 @@ impl CullingMethod for Chcpp {
                 for_each_instance_under(h, node, &mut |i| visible[i as usize] = true);
             }
         }
-        Some(visible)
+        Some(VisibleSet::Host(visible))
     }
 
     /// Classifies every node visible where its subtree holds an instance of
     /// `visible`, as seen in the frame before the next (persistence
     /// restarts; a visible leaf's first re-query is drawn as for a newly
-    /// visible one). One visit of each node, charged as traversal.
-    fn seed(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend, visible: &[bool]) {
+    /// visible one). One visit of each node, charged as traversal; a set
+    /// on the device is read back first.
+    fn seed(&mut self, ctx: &FrameContext<'_>, backend: &mut dyn Backend, visible: &VisibleSet) {
+        let Some(visible) = visible.to_host(backend) else { return };
         self.prepare_state(ctx);
         let (h, frame) = (ctx.hierarchy, self.frame);
         backend.traverse(h.node_count() as u64);
@@ -590,12 +592,12 @@ mod tests {
             let mut chcpp = method("chcpp", &options);
             let mut drawn_set = DrawnSet::default();
             let ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn_set);
-            chcpp.method.seed(&ctx, &mut mock, &seed);
+            chcpp.method.seed(&ctx, &mut mock, &VisibleSet::Host(seed));
             let first = rig.run(&mut chcpp, &mut mock, 1).remove(0);
             if exact {
                 assert_draws_exactly(&first, &[0, 2, 4, 6]);
                 assert!(queries(&first).len() < queries(&cold).len(), "{} queries", queries(&first).len());
-                assert_eq!(chcpp.method.visible_set(&ctx, &mut mock), Some(truth.clone()));
+                assert_eq!(chcpp.method.visible_set(&ctx), Some(VisibleSet::Host(truth.clone())));
             } else {
                 let got = drawn(&first);
                 assert!([0, 2, 4, 6].iter().all(|i| got.contains(i)), "drew {got:?}");
