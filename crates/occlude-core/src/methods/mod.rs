@@ -37,7 +37,7 @@ pub use options::{MethodOptions, MethodParams, OptionError, ParamVisitor};
 use crate::backend::Backend;
 use crate::camera::{Camera, Frustum};
 use crate::cost_model::CostModel;
-use crate::gpu_culling::{Flags, GpuCulling, GpuCullingUnsupported};
+use crate::gpu_culling::{Flags, GpuCullingUnsupported};
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
 use crate::stats::FrameStats;
@@ -228,7 +228,7 @@ impl VisibleSet {
 
     /// Makes `dst`, a flag buffer on `gpu`, hold the set: a copy on the
     /// device, or an upload.
-    pub fn write_to(&self, gpu: &mut dyn GpuCulling, dst: Flags) {
+    pub fn write_to(&self, gpu: &mut dyn crate::GpuCulling, dst: Flags) {
         match self {
             VisibleSet::Host(set) => gpu.write_flags(dst, set),
             VisibleSet::Device(src) if *src != dst => gpu.copy_flags(*src, dst),
