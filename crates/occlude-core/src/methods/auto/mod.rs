@@ -53,8 +53,9 @@
 //! `roc` and `hiz` draw it first, `chcpp` takes it as its classification.
 //! The set of a GPU-driven method is read back, which the switching frame
 //! pays for. `vfc` gives none: a method switched to from `vfc` starts from
-//! what it knew. The rules are [`Chooser`]'s, which the wgpu embedding's
-//! `GpuCuller` shares.
+//! what it knew. After a rebuild of the hierarchy (other node ids) every
+//! method starts anew. The rules are [`Chooser`]'s, which the wgpu
+//! embedding's `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try once each method that might win
 //! (without a cost model, every method, the GPU-driven ones first, the
@@ -64,9 +65,11 @@
 
 use super::chcpp::ChcppParams;
 use super::options::{MethodParams, OptionError, ParamVisitor};
+use super::tracked::Tracked;
 use super::{CullingMethod, FrameContext, Method};
 use crate::backend::Backend;
 use crate::cost_model::CostModel;
+use crate::hierarchy::Since;
 use crate::stats::FrameStats;
 
 mod chooser;
@@ -140,6 +143,10 @@ pub struct Auto {
     /// The methods it chooses among; empty until the first frame, when the
     /// backend is known.
     methods: Vec<Box<dyn CullingMethod + Send>>,
+    /// What each was built from, to build it anew.
+    kinds: Vec<Method>,
+    /// The hierarchy the methods' state is for.
+    tracked: Tracked,
     /// Which of them runs each frame; made with them.
     chooser: Option<Chooser>,
     /// The frame under way: the method running it.
@@ -162,6 +169,8 @@ impl Auto {
         Self {
             params,
             methods: Vec::new(),
+            kinds: Vec::new(),
+            tracked: Tracked::default(),
             chooser: None,
             ticket: None,
             model: None,
@@ -213,7 +222,7 @@ impl Auto {
         }
         let cold: Vec<u64> = methods.iter().map(|(m, _)| cold_frames(m)).collect();
         let vfc = methods.iter().position(|(m, _)| *m == Method::Vfc);
-        self.methods = methods.into_iter().map(|(_, built)| built).collect();
+        (self.kinds, self.methods) = methods.into_iter().unzip();
         let seeding: Vec<bool> = self.methods.iter().map(|m| m.shares_visibility()).collect();
         self.chooser = Some(Chooser::new(self.params, &cold, vfc).with_seeding(&seeding));
     }
@@ -303,8 +312,17 @@ impl CullingMethod for Auto {
     }
 
     fn prepare(&mut self, ctx: &mut FrameContext<'_>, backend: &mut dyn Backend) {
+        let rebuilt = matches!(self.tracked.since(ctx.hierarchy), Since::New);
         if self.methods.is_empty() {
             self.choose_among(ctx, backend);
+        } else if rebuilt {
+            // A method seeing a rebuilt tree would release every device
+            // resource, the other methods' too: instead all are released
+            // here and every method starts anew, making its own.
+            if let Ok(gpu) = backend.gpu_culling() {
+                gpu.release_all();
+            }
+            self.methods = self.kinds.iter().map(|m| m.build().expect("default parameters are valid")).collect();
         }
         let resolution = backend.resolution();
         let Self { methods, chooser, model, estimate_steps, .. } = self;
@@ -366,7 +384,8 @@ impl CullingMethod for Auto {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_rig::{culling_steps, method, queries, Rig, BEHIND, SIDE, WALL};
+    use super::super::test_rig::{culling_steps, drawn as drawn_by, method, queries, Rig, BEHIND, SIDE, WALL};
+    use super::super::VisibleSet;
     use super::*;
     use crate::frame::render_frame;
     use crate::mock::Call;
@@ -572,5 +591,44 @@ mod tests {
             queries(&logs[first]).len(),
             queries(&from_nothing).len()
         );
+    }
+
+    /// After a rebuild of the tree, the methods `auto` runs each make
+    /// device resources of their own: a method seeing the rebuild alone
+    /// would release the others' and leave them handles into its own.
+    #[test]
+    fn after_a_rebuild_each_method_makes_its_own_device_resources() {
+        let (rig, rebuilt) = (Rig::wall(), Rig::wall().hierarchy);
+        let mut backend = rig.mock().with_gpu_culling();
+        backend.set_visible(BEHIND, false);
+        let mut auto = Auto::new(AutoParams::default());
+        let mut drawn = DrawnSet::default();
+        let mut ran = Vec::new();
+        for frame in 0..60 {
+            // roc is fastest until the rebuild, hiz after it.
+            let h = if frame < 20 { &rig.hierarchy } else { &rebuilt };
+            let mut ctx = FrameContext::new(&rig.scene, h, rig.camera, &mut drawn);
+            auto.prepare(&mut ctx, &mut backend);
+            backend.begin_frame(&rig.camera);
+            auto.render(&mut ctx, &mut backend);
+            backend.end_frame();
+            let drew = drawn_by(&backend.take_log());
+            assert!(drew.contains(&WALL) && drew.contains(&SIDE), "frame {frame} drew {drew:?}");
+            let name = auto.counters().into_iter().find(|&(n, on)| on == 1.0 && n != "probe").unwrap().0;
+            let cost = match (name, frame < 20) {
+                ("roc", true) | ("hiz", false) => 1.0,
+                ("hiz", true) => 1.2,
+                _ => 3.0,
+            };
+            auto.finish_frame(&FrameStats { frame_ms: cost, ..FrameStats::default() });
+            ran.push((frame, name));
+        }
+        let ran_after = |m: &str| ran.iter().any(|&(f, n)| f >= 20 && n == m);
+        assert!(ran_after("roc") && ran_after("hiz"), "{ran:?}");
+        let ctx = FrameContext::new(&rig.scene, &rebuilt, rig.camera, &mut drawn);
+        let flags: Vec<_> = auto.methods.iter().filter_map(|m| m.visible_set(&ctx)).collect();
+        let device: Vec<_> = flags.iter().filter(|v| matches!(v, VisibleSet::Device(_))).collect();
+        assert_eq!(device.len(), 2, "{flags:?}");
+        assert_ne!(device[0], device[1], "roc and hiz hold the same flags");
     }
 }
