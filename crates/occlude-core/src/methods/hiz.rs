@@ -51,7 +51,7 @@ use super::node_walk::{NodeTest, NodeWalk};
 use super::roc::{AllInstances, TemporalSet};
 use super::tracked::{update_instance_boxes, update_node_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
+use super::{Carried, CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
 use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::depth_pyramid::level_sizes;
@@ -213,8 +213,8 @@ impl CullingMethod for TwoPhaseHiZ {
         model.passes_ms(dispatches + reductions + 1, draws, texels)
     }
 
-    fn shares_visibility(&self) -> bool {
-        true
+    fn carried_visibility(&self) -> Carried {
+        Carried::Instances
     }
 
     fn visible_set(&self, _: &FrameContext<'_>) -> Option<VisibleSet> {

@@ -166,11 +166,11 @@ pub trait CullingMethod {
         0.0
     }
 
-    /// Whether [`CullingMethod::visible_set`] gives a set once the method
-    /// has rendered a frame: `auto` then seeds the method it switches to,
-    /// which does not start from nothing.
-    fn shares_visibility(&self) -> bool {
-        false
+    /// What [`CullingMethod::visible_set`] gives once the method has
+    /// rendered a frame: `auto` seeds a method it switches to from it, if
+    /// both carry visibility.
+    fn carried_visibility(&self) -> Carried {
+        Carried::Nothing
     }
 
     /// The instances this method found visible in the last frame it
@@ -203,6 +203,20 @@ pub trait CullingMethod {
     fn debug_view(&self) -> Option<DebugView> {
         None
     }
+}
+
+/// What a method carries from frame to frame and hands over
+/// ([`CullingMethod::carried_visibility`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Carried {
+    /// Nothing (`vfc`): it gives no set and takes none.
+    Nothing,
+    /// Every instance of the leaves it found visible (`chcpp`): a superset
+    /// of the instances visible, as coarse as its leaves.
+    Leaves,
+    /// Exactly the instances whose own test found them visible (`roc`,
+    /// `hiz`).
+    Instances,
 }
 
 /// What a method found visible in its last frame, one flag per instance,

@@ -24,7 +24,7 @@
 
 use super::tracked::{update_instance_boxes, Tracked};
 use super::vfc::ViewFrustumCulling;
-use super::{CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
+use super::{Carried, CullingMethod, FrameContext, MethodParams, OptionError, ParamVisitor, VisibleSet};
 use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::gpu_culling::{BoxSet, Flags, GpuCulling, IdList};
@@ -232,8 +232,8 @@ impl CullingMethod for RasterOcclusion {
         model.passes_ms(dispatches + 1, draws + 1, 0)
     }
 
-    fn shares_visibility(&self) -> bool {
-        true
+    fn carried_visibility(&self) -> Carried {
+        Carried::Instances
     }
 
     fn visible_set(&self, _: &FrameContext<'_>) -> Option<VisibleSet> {

@@ -4,6 +4,7 @@
 //! by the same rules, with frame times read back some frames late. The
 //! rules are described in [`super`]'s documentation.
 
+use super::super::Carried;
 use super::AutoParams;
 
 /// Measured frames of a probe, after its warm-up frame.
@@ -104,9 +105,9 @@ pub struct Chooser {
     /// The choice that culls nothing by occlusion (`vfc`), if among them:
     /// the others must beat it by the margin to stay current.
     baseline: Option<usize>,
-    /// Per choice, whether it hands its visibility over and starts from
-    /// another's ([`Chooser::with_seeding`]).
-    seeding: Vec<bool>,
+    /// Per choice, the visibility it hands over and takes
+    /// ([`Chooser::with_seeding`]).
+    seeding: Vec<Carried>,
     current: usize,
     /// The current choice's running mean frame time, ms.
     mean: Option<f64>,
@@ -139,7 +140,7 @@ impl Chooser {
             .collect();
         Self {
             params,
-            seeding: vec![false; choices.len()],
+            seeding: vec![Carried::Nothing; choices.len()],
             choices,
             baseline,
             current: 0,
@@ -151,14 +152,16 @@ impl Chooser {
         }
     }
 
-    /// Marks the choices that carry visibility from frame to frame and can
-    /// take another's (`seeding[i]` for choice `i`). Run right after
-    /// another such choice, one starts from what that one found visible
-    /// last frame ([`Ticket::seed_from`]): one frame warms it up, as after
-    /// any switch (another's set can be coarser than its own), where one
-    /// from nothing may need more.
-    pub fn with_seeding(mut self, seeding: &[bool]) -> Self {
-        assert_eq!(seeding.len(), self.choices.len(), "one flag per choice");
+    /// Says what visibility each choice carries from frame to frame
+    /// (`seeding[i]` for choice `i`). Run right after another choice that
+    /// carries some, one that carries some too starts from what that one
+    /// found visible last frame ([`Ticket::seed_from`]). From a set of
+    /// exactly the instances found visible ([`Carried::Instances`]) it is
+    /// warm at once: that frame is measured. From a coarser set (by leaf),
+    /// which draws more than a warm frame would, one frame warms it up, as
+    /// after any other switch; from nothing a choice may need more.
+    pub fn with_seeding(mut self, seeding: &[Carried]) -> Self {
+        assert_eq!(seeding.len(), self.choices.len(), "one entry per choice");
         self.seeding = seeding.to_vec();
         self
     }
@@ -167,7 +170,8 @@ impl Chooser {
     /// from ([`Chooser::with_seeding`]): the one that ran the last frame, if
     /// another and both carry visibility.
     pub fn seed_source(&self, choice: usize) -> Option<usize> {
-        self.last_ran.filter(|&p| p != choice && self.seeding[p] && self.seeding[choice])
+        let carries = |c: usize| self.seeding[c] != Carried::Nothing;
+        self.last_ran.filter(|&p| p != choice && carries(p) && carries(choice))
     }
 
     /// The choice frames run when no probe does.
@@ -214,14 +218,16 @@ impl Chooser {
         }
         let choice = self.probe.as_ref().map_or(self.current, |p| p.choice);
         let seed_from = self.seed_source(choice);
+        let warm_seed = seed_from.is_some_and(|s| self.seeding[s] == Carried::Instances);
         let c = &mut self.choices[choice];
         if seed_from.is_some() {
             // Seeded, it has what its frames from nothing would have found.
             c.frames = c.frames.max(c.cold);
         }
+        let cold = c.frames < c.cold || (self.last_ran != Some(choice) && !warm_seed);
         // A frame that also pays for finding a bound (the caller's work,
         // such as a walk of the hierarchy) measures no choice.
-        let warm_up = bounded || (c.cold > 0 && (c.frames < c.cold || self.last_ran != Some(choice)));
+        let warm_up = bounded || (c.cold > 0 && cold);
         c.frames += 1;
         self.last_ran = Some(choice);
         self.begun += 1;
@@ -480,31 +486,39 @@ mod tests {
         assert_eq!(waited, 201, "the frame that put it off, then 2 ms of excess at 0.01 ms a frame");
     }
 
+    /// Runs a chooser among choices 0 and 1, carrying `carried`, and the
+    /// baseline 2 (nothing), 0 and 1 needing two frames from nothing, for
+    /// nine frames; returns each frame's choice, whether it warmed up, and
+    /// its seed's source.
+    fn seeded_run(carried: [Carried; 2]) -> Vec<(usize, bool, Option<usize>)> {
+        let seeding = [carried[0], carried[1], Carried::Nothing];
+        let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 0], Some(2)).with_seeding(&seeding);
+        (0..9)
+            .map(|_| {
+                let t = chooser.begin(|_, _| None);
+                chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
+                (t.choice, t.warm_up, t.seed_from())
+            })
+            .collect()
+    }
+
     #[test]
-    fn a_choice_started_from_anothers_visibility_warms_up_one_frame() {
-        // Choices 0 and 1 carry visibility, the baseline 2 does not; 0 and
-        // 1 need two frames from nothing.
-        let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 0], Some(2)).with_seeding(&[true, true, false]);
-        let mut tickets = Vec::new();
-        for _ in 0..9 {
-            let t = chooser.begin(|_, _| None);
-            chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
-            tickets.push((t.choice, t.warm_up, t.seed_from()));
-        }
+    fn a_choice_seeded_from_exact_visibility_is_measured_at_once() {
         // Choice 0 from nothing: two frames warm up. Choice 1, right after
-        // it, starts from its visibility: one. The baseline takes nothing;
-        // choice 0 after it warms up one frame from what it knew.
-        let expected = [
-            (0, true, None),
-            (0, true, None),
-            (0, false, None),
-            (1, true, Some(0)),
-            (1, false, None),
-            (1, false, None),
-            (2, false, None),
-            (0, true, None),
-            (0, false, None),
-        ];
-        assert_eq!(tickets, expected);
+        // it, starts from the instances it found visible: measured at once.
+        // The baseline takes nothing; choice 0 after it warms up one frame
+        // from what it knew.
+        let run = seeded_run([Carried::Instances, Carried::Instances]);
+        let expected = [(0, true, None), (0, true, None), (0, false, None), (1, false, Some(0)), (1, false, None)];
+        assert_eq!(run[..5], expected);
+        assert_eq!(run[5..7], [(2, false, None), (0, true, None)]);
+    }
+
+    #[test]
+    fn a_choice_seeded_from_coarser_visibility_warms_up_one_frame() {
+        // Choice 0's set is by leaf: choice 1 warms up one frame from it.
+        let run = seeded_run([Carried::Leaves, Carried::Instances]);
+        let expected = [(0, true, None), (0, true, None), (0, false, None), (1, true, Some(0)), (1, false, None)];
+        assert_eq!(run[..5], expected);
     }
 }

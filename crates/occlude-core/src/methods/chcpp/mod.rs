@@ -20,7 +20,7 @@ pub mod tight;
 
 use super::tracked::Tracked;
 use super::{
-    pull_up_visibility, subtree_triangles, Classified, CullingMethod, FrameContext, FrontToBack, MethodParams,
+    pull_up_visibility, subtree_triangles, Carried, Classified, CullingMethod, FrameContext, FrontToBack, MethodParams,
     OptionError, ParamVisitor, VisibleSet,
 };
 use crate::backend::{Backend, QueryHandle};
@@ -375,8 +375,8 @@ impl CullingMethod for Chcpp {
         }
     }
 
-    fn shares_visibility(&self) -> bool {
-        true
+    fn carried_visibility(&self) -> Carried {
+        Carried::Leaves
     }
 
     /// The instances of the (virtual) leaves classified visible in its
