@@ -57,8 +57,8 @@
 //! and read back for `chcpp`, which the switching frame pays for. `vfc`
 //! gives none: a method switched to from `vfc` starts from what it knew.
 //! After a rebuild of the hierarchy (other node ids) every method starts
-//! anew. The rules are [`Chooser`]'s, which the wgpu
-//! embedding's `GpuCuller` shares.
+//! anew. The rules are [`Chooser`]'s, which the wgpu embedding's
+//! `GpuCuller` shares.
 //!
 //! **What it costs.** The first frames try once each method that might win
 //! (without a cost model, every method, the GPU-driven ones first, the
@@ -124,9 +124,9 @@ impl MethodParams for AutoParams {
 /// **Cost.** Its first frames try each method that might win once (about
 /// ten frames, some of them slower than frustum culling: the first method
 /// starts from nothing and tests everything, the later ones from what the
-/// one before found visible, read back from the GPU); where the backend models its costs, a
-/// method whose fixed passes alone outlast the running method's frame is
-/// not tried. After that, probes cost about `auto.budget` (1 %) of the
+/// one before found visible); where the backend models its costs, a method
+/// whose fixed passes alone outlast the running method's frame is not
+/// tried. After that, probes cost about `auto.budget` (1 %) of the
 /// frame time. Memory: the state of every method it may choose.
 ///
 /// **Requirements.** Frame times from the backend
