@@ -215,7 +215,7 @@ impl Auto {
             let resolution = backend.resolution();
             let mut keyed = Vec::new();
             for (method, built) in methods {
-                let (bound, steps) = bounds(built.as_ref(), ctx, &model, resolution, true);
+                let (bound, steps) = bounds(built.as_ref(), ctx, &model, resolution, true, f64::INFINITY);
                 self.estimate_steps += steps;
                 keyed.push((bound.warm_up, (method, built)));
             }
@@ -272,16 +272,18 @@ pub fn cold_frames(method: &Method) -> u64 {
 /// ([`Bound`]): `vfc`'s from its draws ([`vfc_bound`]), the others' from
 /// their fixed passes ([`CullingMethod::floor_ms`]), its warm-up's as from
 /// nothing where it will not be seeded (`from_nothing`); and the nodes
-/// `vfc`'s walk visited, to be charged to the frame.
+/// `vfc`'s walk visited, to be charged to the frame. `vfc`'s walk stops
+/// once its bound reaches `enough` ms.
 fn bounds(
     method: &dyn CullingMethod,
     ctx: &FrameContext<'_>,
     model: &CostModel,
     resolution: (u32, u32),
     from_nothing: bool,
+    enough: f64,
 ) -> (Bound, u64) {
     if method.name() == "vfc" {
-        let (bound, steps) = vfc_bound(ctx, model);
+        let (bound, steps) = vfc_bound(ctx, model, enough);
         return (Bound { measured: bound, warm_up: bound, costs_a_frame: steps > 0 }, steps);
     }
     let floor = |cold| method.floor_ms(ctx, model, resolution, cold);
@@ -292,21 +294,39 @@ fn bounds(
 /// for each shown instance in the leaves in view, its triangles, the CPU's
 /// and the GPU's share overlapping (fragments and material switches left
 /// out); and the nodes its walk visited, to be charged as `vfc`'s walk is.
-fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel) -> (f64, u64) {
-    let mut leaves = Vec::new();
-    let visited = ctx.leaves_in_view(ctx.hierarchy.root(), &mut leaves);
+/// The walk stops once the bound reaches `enough` ms: part of the draws
+/// bounds the whole from below too.
+fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel, enough: f64) -> (f64, u64) {
+    let h = ctx.hierarchy;
     let mut counted = vec![false; ctx.scene.instances.len()];
-    let (mut draws, mut triangles) = (0u64, 0u64);
-    for i in leaves.iter().flat_map(|&leaf| ctx.hierarchy.instances(leaf)) {
-        let i = *i as usize;
-        if ctx.scene.instances[i].enabled && !std::mem::replace(&mut counted[i], true) {
-            draws += 1;
-            triangles += ctx.scene.instance_triangles(i);
+    let (mut draws, mut triangles, mut visited) = (0u64, 0u64, 0u64);
+    let bound = |draws: u64, triangles: u64| {
+        let cpu = draws as f64 * model.cpu_draw_call_us;
+        let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
+        cpu.max(gpu) * 1e-3
+    };
+    let mut stack = vec![h.root()];
+    while let Some(n) = stack.pop() {
+        visited += 1;
+        if !ctx.in_frustum(n) {
+            continue;
+        }
+        if !h.is_leaf(n) {
+            stack.extend_from_slice(h.children(n));
+            continue;
+        }
+        for &i in h.instances(n) {
+            let i = i as usize;
+            if ctx.scene.instances[i].enabled && !std::mem::replace(&mut counted[i], true) {
+                draws += 1;
+                triangles += ctx.scene.instance_triangles(i);
+            }
+        }
+        if bound(draws, triangles) >= enough {
+            break;
         }
     }
-    let cpu = draws as f64 * model.cpu_draw_call_us;
-    let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
-    (cpu.max(gpu) * 1e-3, visited)
+    (bound(draws, triangles), visited)
 }
 
 impl CullingMethod for Auto {
@@ -328,7 +348,7 @@ impl CullingMethod for Auto {
             self.methods = self.kinds.iter().map(|m| m.build().expect("default parameters are valid")).collect();
         }
         let resolution = backend.resolution();
-        let Self { methods, chooser, model, estimate_steps, .. } = self;
+        let Self { methods, chooser, model, estimate_steps, params, .. } = self;
         let chooser = chooser.as_mut().expect("made above");
         let seeded: Vec<bool> = (0..methods.len()).map(|c| chooser.seed_source(c).is_some()).collect();
         // Where the backend models its costs, a due probe's frames cost at
@@ -336,8 +356,13 @@ impl CullingMethod for Auto {
         // spared, and with it frames of drawing everything in view where
         // occlusion culling wins by far, or of fixed passes dearer than a
         // whole frame of the method running.
-        let ticket = chooser.begin(|choice, _| {
-            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, model.as_ref()?, resolution, !seeded[choice]);
+        // A bound of the current mean over 1 - margin already shows that the
+        // baseline cannot take over: no need to walk further.
+        let margin = f64::from(params.margin);
+        let ticket = chooser.begin(|choice, mean| {
+            let enough = mean / (1.0 - margin);
+            let m = model.as_ref()?;
+            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, m, resolution, !seeded[choice], enough);
             *estimate_steps += steps;
             Some(bound)
         });
@@ -635,5 +660,18 @@ mod tests {
         let device: Vec<_> = flags.iter().filter(|v| matches!(v, VisibleSet::Device(_))).collect();
         assert_eq!(device.len(), 2, "{flags:?}");
         assert_ne!(device[0], device[1], "roc and hiz hold the same flags");
+    }
+
+    #[test]
+    fn the_walk_bounding_vfc_stops_once_the_bound_is_enough() {
+        let rig = Rig::row(8);
+        let mut drawn = DrawnSet::default();
+        let ctx = FrameContext::new(&rig.scene, &rig.hierarchy, rig.camera, &mut drawn);
+        let model = CostModel::default();
+        let (whole, all_nodes) = vfc_bound(&ctx, &model, f64::INFINITY);
+        assert!(whole > 0.0);
+        let (part, some_nodes) = vfc_bound(&ctx, &model, whole / 4.0);
+        assert!(part >= whole / 4.0 && part < whole, "{part} of {whole}");
+        assert!(some_nodes < all_nodes, "{some_nodes} of {all_nodes} nodes");
     }
 }
