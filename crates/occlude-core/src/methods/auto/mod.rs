@@ -34,10 +34,11 @@
 //! than one within a few percent. The wait also doubles with each lost
 //! probe, from `auto.probe` frames (32). Where the backend models its
 //! costs ([`Backend::cost_model`]), each choice's frames have lower bounds:
-//! `vfc`'s draws of the instances in view; the fixed passes of `roc` and
-//! `hiz` (dispatches, a depth pyramid); `chcpp`'s wait for its first query
-//! when it starts from nothing ([`CullingMethod::floor_ms`]); the frame
-//! that pays for finding a bound (`vfc`'s walk) measures no choice. The
+//! `vfc`'s draws of the instances in view, walked until they show that
+//! `vfc` cannot take over; the fixed passes of `roc` and `hiz`
+//! (dispatches, a depth pyramid); `chcpp`'s wait for its first query when
+//! it starts from nothing ([`CullingMethod::floor_ms`]). The frame that
+//! pays for finding a bound (`vfc`'s walk) measures no choice. The
 //! first frame runs the choice whose frame from nothing costs least at
 //! best; a probe whose bound cannot beat the current mean by the margin is
 //! spared; a first try whose warm-up must cost more than the current mean
