@@ -356,9 +356,8 @@ impl CullingMethod for Auto {
         // least their bounds ([`bounds`]): a probe that cannot win is
         // spared, and with it frames of drawing everything in view where
         // occlusion culling wins by far, or of fixed passes dearer than a
-        // whole frame of the method running.
-        // A bound of the current mean over 1 - margin already shows that the
-        // baseline cannot take over: no need to walk further.
+        // whole frame of the method running. `vfc`'s walk stops at the
+        // current mean over 1 - margin: past it, `vfc` cannot take over.
         let margin = f64::from(params.margin);
         let ticket = chooser.begin(|choice, mean| {
             let enough = mean / (1.0 - margin);
