@@ -41,6 +41,7 @@ use crate::gpu_culling::{Flags, GpuCullingUnsupported};
 use crate::hierarchy::{Hierarchy, NodeId};
 use crate::scene::Scene;
 use crate::stats::FrameStats;
+use std::ops::ControlFlow;
 use thiserror::Error;
 
 /// Names accepted by [`create`], in the order tables list them.
@@ -386,6 +387,15 @@ impl<'a> FrameContext<'a> {
     /// Appends the leaves in view under `node` (itself if it is a leaf), in
     /// no particular order; returns the nodes visited.
     pub fn leaves_in_view(&self, node: NodeId, out: &mut Vec<NodeId>) -> u64 {
+        self.walk_leaves_in_view(node, |leaf| {
+            out.push(leaf);
+            ControlFlow::Continue(())
+        })
+    }
+
+    /// Calls `visit` with each leaf under `node` in the view frustum, depth
+    /// first, until it breaks; returns the number of nodes visited.
+    pub fn walk_leaves_in_view(&self, node: NodeId, mut visit: impl FnMut(NodeId) -> ControlFlow<()>) -> u64 {
         let h = self.hierarchy;
         let mut stack = vec![node];
         let mut visited = 0;
@@ -394,10 +404,10 @@ impl<'a> FrameContext<'a> {
             if !self.in_frustum(n) {
                 continue;
             }
-            if h.is_leaf(n) {
-                out.push(n);
-            } else {
+            if !h.is_leaf(n) {
                 stack.extend_from_slice(h.children(n));
+            } else if visit(n).is_break() {
+                break;
             }
         }
         visited

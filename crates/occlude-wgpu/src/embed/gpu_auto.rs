@@ -113,7 +113,7 @@ impl GpuAuto {
                         }
                     }
                 }
-                let ticket = self.chooser.begin(|_, _| None);
+                let ticket = self.chooser.begin(|_, _, _| None);
                 *closing = timed.take();
                 let k = *frame % SLOTS;
                 *frame = frame.wrapping_add(1);
@@ -131,7 +131,7 @@ impl GpuAuto {
                 if let Some((start, ticket)) = last.take() {
                     self.chooser.record(ticket, now.duration_since(start).as_secs_f64() * 1e3);
                 }
-                let ticket = self.chooser.begin(|_, _| None);
+                let ticket = self.chooser.begin(|_, _, _| None);
                 *last = Some((now, ticket));
                 ticket
             }

@@ -185,20 +185,22 @@ impl Chooser {
     }
 
     /// Begins a frame: the choice due for a probe, if any, else the
-    /// current one. `bound(choice, mean)` may give lower bounds of a due
-    /// choice's frame times ([`Bound`]), where the caller knows them. A
+    /// current one. `bound(choice, mean, seeded)` may give lower bounds of
+    /// a due choice's frame times ([`Bound`]), where the caller knows them;
+    /// `seeded`: the choice would start from another's visibility
+    /// ([`Chooser::seed_source`]), not from nothing. A
     /// measured bound no faster than the current `mean` by the margin puts
     /// the probe off as if it had lost at that time, sparing its frames;
     /// a choice never tried whose warm-up must cost more than `mean` is
     /// first tried once the budget covers that much.
-    pub fn begin(&mut self, bound: impl FnOnce(usize, f64) -> Option<Bound>) -> Ticket {
+    pub fn begin(&mut self, bound: impl FnOnce(usize, f64, bool) -> Option<Bound>) -> Ticket {
         let frame = self.begun;
         let mut bounded = false;
         if self.probe.is_none() {
             if let Some((choice, mean)) = self.due().zip(self.mean) {
                 let c = &self.choices[choice];
                 let first = c.last_time.is_none() && !c.deferred;
-                let b = bound(choice, mean);
+                let b = bound(choice, mean, self.seed_source(choice).is_some());
                 bounded = b.is_some_and(|b| b.costs_a_frame);
                 match b {
                     Some(b) if !self.wins(choice, b.measured, mean) => self.schedule(choice, b.measured, 0.0, frame),
@@ -356,7 +358,7 @@ mod tests {
         let mut pending = std::collections::VecDeque::new();
         let mut ran = Vec::new();
         for _ in 0..frames {
-            let ticket = chooser.begin(|_, _| None);
+            let ticket = chooser.begin(|_, _, _| None);
             ran.push(ticket.choice);
             pending.push_back(ticket);
             if pending.len() > delay {
@@ -379,10 +381,10 @@ mod tests {
     #[test]
     fn a_late_time_of_an_ended_probe_counts_for_nothing() {
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
-        let first = chooser.begin(|_, _| None);
+        let first = chooser.begin(|_, _, _| None);
         chooser.record(first, 1.0);
         // Choice 1 is due at once (never measured): one frame probes it.
-        let probe = chooser.begin(|_, _| None);
+        let probe = chooser.begin(|_, _, _| None);
         assert!(probe.is_probe() && probe.choice == 1);
         chooser.record(probe, 3.0);
         assert_eq!(chooser.current(), 0);
@@ -400,7 +402,7 @@ mod tests {
         let mut chooser = Chooser::new(AutoParams::default(), &[2, 0], Some(1));
         let ran: Vec<usize> = (0..400)
             .map(|_| {
-                let t = chooser.begin(|_, _| None);
+                let t = chooser.begin(|_, _, _| None);
                 chooser.record(t, if t.choice == 0 { culling } else { 1.0 });
                 t.choice
             })
@@ -419,7 +421,7 @@ mod tests {
         // stays current.
         let mut chooser = Chooser::new(AutoParams::default(), &[2, 0], None);
         for _ in 0..400 {
-            let t = chooser.begin(|_, _| None);
+            let t = chooser.begin(|_, _, _| None);
             chooser.record(t, if t.choice == 0 { 0.98 } else { 1.0 });
         }
         assert_eq!(chooser.current(), 0);
@@ -429,13 +431,13 @@ mod tests {
     /// one frame of 1 ms; choice 1 is due.
     fn choice_0_at_1_ms() -> Chooser {
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 0], None);
-        let first = chooser.begin(|_, _| None);
+        let first = chooser.begin(|_, _, _| None);
         chooser.record(first, 1.0);
         chooser
     }
 
     /// Choice 1's bound at twice the current mean: it cannot win.
-    fn choice_1_cannot_win(choice: usize, mean: f64) -> Option<Bound> {
+    fn choice_1_cannot_win(choice: usize, mean: f64, _: bool) -> Option<Bound> {
         (choice == 1).then_some(Bound { measured: mean * 2.0, warm_up: mean * 2.0, costs_a_frame: true })
     }
 
@@ -460,7 +462,7 @@ mod tests {
         assert_eq!(chooser.mean(), Some(1.25));
         // A bound found without work leaves its frame measured.
         let mut chooser = choice_0_at_1_ms();
-        let free = chooser.begin(|c, m| choice_1_cannot_win(c, m).map(|b| Bound { costs_a_frame: false, ..b }));
+        let free = chooser.begin(|c, m, s| choice_1_cannot_win(c, m, s).map(|b| Bound { costs_a_frame: false, ..b }));
         chooser.record(free, 2.0);
         assert_eq!(chooser.mean(), Some(1.25));
     }
@@ -471,12 +473,12 @@ mod tests {
         // least 3 ms where the current choice takes 1: its first probe
         // waits until 1 % of 1 ms a frame has paid the 2 ms beyond.
         let mut chooser = Chooser::new(AutoParams::default(), &[0, 1], None);
-        let first = chooser.begin(|_, _| None);
+        let first = chooser.begin(|_, _, _| None);
         chooser.record(first, 1.0);
         let bound = Bound { measured: 0.5, warm_up: 3.0, costs_a_frame: false };
         let mut waited = 0;
         loop {
-            let t = chooser.begin(|_, _| Some(bound));
+            let t = chooser.begin(|_, _, _| Some(bound));
             if t.is_probe() {
                 break;
             }
@@ -495,7 +497,7 @@ mod tests {
         let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 0], Some(2)).with_seeding(&seeding);
         (0..9)
             .map(|_| {
-                let t = chooser.begin(|_, _| None);
+                let t = chooser.begin(|_, _, _| None);
                 chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
                 (t.choice, t.warm_up, t.seed_from())
             })

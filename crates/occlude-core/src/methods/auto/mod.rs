@@ -75,6 +75,7 @@ use crate::backend::Backend;
 use crate::cost_model::CostModel;
 use crate::hierarchy::Since;
 use crate::stats::FrameStats;
+use std::ops::ControlFlow;
 
 mod chooser;
 
@@ -300,23 +301,14 @@ fn bounds(
 fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel, enough: f64) -> (f64, u64) {
     let h = ctx.hierarchy;
     let mut counted = vec![false; ctx.scene.instances.len()];
-    let (mut draws, mut triangles, mut visited) = (0u64, 0u64, 0u64);
+    let (mut draws, mut triangles) = (0u64, 0u64);
     let bound = |draws: u64, triangles: u64| {
         let cpu = draws as f64 * model.cpu_draw_call_us;
         let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
         cpu.max(gpu) * 1e-3
     };
-    let mut stack = vec![h.root()];
-    while let Some(n) = stack.pop() {
-        visited += 1;
-        if !ctx.in_frustum(n) {
-            continue;
-        }
-        if !h.is_leaf(n) {
-            stack.extend_from_slice(h.children(n));
-            continue;
-        }
-        for &i in h.instances(n) {
+    let visited = ctx.walk_leaves_in_view(h.root(), |leaf| {
+        for &i in h.instances(leaf) {
             let i = i as usize;
             if ctx.scene.instances[i].enabled && !std::mem::replace(&mut counted[i], true) {
                 draws += 1;
@@ -324,9 +316,11 @@ fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel, enough: f64) -> (f64, u6
             }
         }
         if bound(draws, triangles) >= enough {
-            break;
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
-    }
+    });
     (bound(draws, triangles), visited)
 }
 
@@ -351,7 +345,6 @@ impl CullingMethod for Auto {
         let resolution = backend.resolution();
         let Self { methods, chooser, model, estimate_steps, params, .. } = self;
         let chooser = chooser.as_mut().expect("made above");
-        let seeded: Vec<bool> = (0..methods.len()).map(|c| chooser.seed_source(c).is_some()).collect();
         // Where the backend models its costs, a due probe's frames cost at
         // least their bounds ([`bounds`]): a probe that cannot win is
         // spared, and with it frames of drawing everything in view where
@@ -359,10 +352,10 @@ impl CullingMethod for Auto {
         // whole frame of the method running. `vfc`'s walk stops at the
         // current mean over 1 - margin: past it, `vfc` cannot take over.
         let margin = f64::from(params.margin);
-        let ticket = chooser.begin(|choice, mean| {
+        let ticket = chooser.begin(|choice, mean, seeded| {
             let enough = mean / (1.0 - margin);
             let m = model.as_ref()?;
-            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, m, resolution, !seeded[choice], enough);
+            let (bound, steps) = bounds(methods[choice].as_ref(), ctx, m, resolution, !seeded, enough);
             *estimate_steps += steps;
             Some(bound)
         });
