@@ -10,9 +10,6 @@ use super::AutoParams;
 /// Measured frames of a probe, after its warm-up frame.
 const PROBE_FRAMES: u32 = 2;
 
-/// A probe's measured frame this many times the current mean ends it.
-const CLEARLY_SLOWER: f64 = 2.0;
-
 /// Weight of the newest frame in the current choice's running mean.
 const MEAN_WEIGHT: f64 = 0.25;
 
@@ -64,6 +61,9 @@ struct Probe {
     /// Its frames' time beyond the current choice's mean, warm-up
     /// included, ms.
     excess: f64,
+    /// The least its measured frames cost ([`Bound::measured`]; 0 where
+    /// unknown), ms.
+    floor: f64,
 }
 
 /// What runs one frame ([`Chooser::begin`]); handed back with the frame's
@@ -213,7 +213,8 @@ impl Chooser {
                     _ => {
                         self.probes_begun += 1;
                         let serial = self.probes_begun;
-                        self.probe = Some(Probe { choice, serial, times: Vec::new(), excess: 0.0 });
+                        let floor = b.map_or(0.0, |b| b.measured);
+                        self.probe = Some(Probe { choice, serial, times: Vec::new(), excess: 0.0, floor });
                     }
                 }
             }
@@ -255,10 +256,13 @@ impl Chooser {
         }
         let Some(probe) = &self.probe else { return };
         let needed = if self.choices[probe.choice].cold == 0 { 1 } else { PROBE_FRAMES };
-        // A measured frame at twice the current mean cannot be made up by
-        // the next: the probe ends at once.
-        let lost = probe.times.last().zip(mean).is_some_and(|(&t, m)| t > CLEARLY_SLOWER * m);
-        if probe.times.len() as u32 >= needed || lost {
+        // A probe that cannot win even if its frames to come cost their
+        // least is decided: it ends at once.
+        let measured = probe.times.len() as u32;
+        let to_come = f64::from(needed.saturating_sub(measured)) * probe.floor;
+        let best = (probe.times.iter().sum::<f64>() + to_come) / f64::from(needed.max(measured));
+        let lost = measured > 0 && mean.is_some_and(|m| !self.wins(probe.choice, best, m));
+        if measured >= needed || lost {
             let probe = self.probe.take().expect("checked above");
             self.end_probe(probe);
         }
@@ -329,9 +333,11 @@ impl Chooser {
         }
     }
 
-    /// The choice due for a probe now, if any (the earliest due first):
-    /// one whose wait is over, or one last measured faster than the
-    /// current choice is now (the current one has stopped paying).
+    /// The choice due for a probe now, if any: one whose wait is over, or
+    /// one last measured faster than the current choice is now (the
+    /// current one has stopped paying). One that would start from another's
+    /// visibility goes first, its try being the shorter; then the earliest
+    /// due.
     fn due(&self) -> Option<usize> {
         let mean = self.mean?;
         // A lost probe left the mean at most `1 / (1 - margin)` of the
@@ -342,7 +348,7 @@ impl Chooser {
         (0..self.choices.len())
             .filter(|&c| c != self.current)
             .filter(|&c| self.choices[c].next_probe <= self.begun || overtaken(&self.choices[c]))
-            .min_by_key(|&c| self.choices[c].next_probe)
+            .min_by_key(|&c| (self.seed_source(c).is_none(), self.choices[c].next_probe))
     }
 }
 
@@ -488,6 +494,49 @@ mod tests {
         assert_eq!(waited, 201, "the frame that put it off, then 2 ms of excess at 0.01 ms a frame");
     }
 
+    /// Choice 1 (two frames from nothing) probed against choice 0 at 1 ms,
+    /// its measured frames bounded below by `floor` ms (none: `None`), its
+    /// first measured frame taking `first` ms: whether the frame after that
+    /// one still probes it.
+    fn probe_goes_on(floor: Option<f64>, first: f64) -> bool {
+        let mut chooser = choice_0_at_1_ms();
+        chooser.choices[1].cold = 2;
+        let bound = |_, _, _| floor.map(|f| Bound { measured: f, warm_up: f, costs_a_frame: false });
+        for time in [3.0, 3.0, first] {
+            let t = chooser.begin(bound);
+            assert!(t.is_probe() && t.choice == 1);
+            chooser.record(t, time);
+        }
+        chooser.begin(bound).is_probe()
+    }
+
+    #[test]
+    fn a_probe_ends_once_its_frames_to_come_cannot_make_it_win() {
+        // Two measured frames must average under 0.95 ms. After 1 ms, a
+        // second frame of at least 0.9 cannot do it; one of 0.5 can.
+        assert!(!probe_goes_on(Some(0.9), 1.0));
+        assert!(probe_goes_on(Some(0.5), 1.0));
+        // Without a bound, the next frame might take no time at all.
+        assert!(probe_goes_on(None, 1.8));
+        assert!(!probe_goes_on(None, 1.9));
+    }
+
+    #[test]
+    fn a_choice_that_would_start_seeded_is_tried_before_one_from_nothing() {
+        // Choices 1 and 2 are both due after choice 0's first frames; 2
+        // would start from choice 0's visibility, 1 from nothing.
+        let seeding = [Carried::Instances, Carried::Nothing, Carried::Instances];
+        let mut chooser = Chooser::new(AutoParams::default(), &[2, 2, 2], None).with_seeding(&seeding);
+        let ran: Vec<_> = (0..4)
+            .map(|_| {
+                let t = chooser.begin(|_, _, _| None);
+                chooser.record(t, 1.0);
+                (t.choice, t.seed_from())
+            })
+            .collect();
+        assert_eq!(ran, [(0, None), (0, None), (0, None), (2, Some(0))]);
+    }
+
     /// Runs a chooser among choices 0 and 1, carrying `carried`, and the
     /// baseline 2 (nothing), 0 and 1 needing two frames from nothing, for
     /// nine frames; returns each frame's choice, whether it warmed up, and
@@ -498,7 +547,7 @@ mod tests {
         (0..9)
             .map(|_| {
                 let t = chooser.begin(|_, _, _| None);
-                chooser.record(t, [1.0, 2.0, 3.0][t.choice]);
+                chooser.record(t, [1.0, 1.5, 3.0][t.choice]);
                 (t.choice, t.warm_up, t.seed_from())
             })
             .collect()

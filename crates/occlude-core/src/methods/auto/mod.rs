@@ -22,11 +22,14 @@
 //! against no depth), then two measured frames (a method's first frame
 //! after another ran is not measured, the current one's included, unless
 //! it starts from exactly the instances the one before found visible:
-//! below); `vfc`, which carries no state, is probed by one measured frame,
-//! and a probe whose first measured frame takes twice the current mean
-//! ends there. If their mean beats the current mean by
-//! `auto.margin` (5 %), the probed method becomes current; `vfc` becomes
-//! current unless the current mean beats it by the margin, so occlusion
+//! below); `vfc`, which carries no state, is probed by one measured frame.
+//! A probe ends as soon as it cannot win even if its frames to come cost
+//! their lower bound (below; none where the backend models no costs). A
+//! method that would start from another's visibility is tried before one
+//! that would start from nothing, its try being the shorter. If the
+//! probe's mean beats the current mean by `auto.margin` (5 %), the probed
+//! method becomes current; `vfc` becomes current unless the current mean
+//! beats it by the margin, so occlusion
 //! culling runs only while it pays for itself by the margin. The next probe
 //! of a method waits long enough for all probes together to cost at most
 //! `auto.budget` (1 %) of the frame time, each method an equal share: a
