@@ -15,42 +15,40 @@
 //! NOHC decides per node from a cost model (CHC++ paper, section 3.2, after
 //! Guthe et al. 2006); `auto` says so once.
 //!
-//! **How.** The method in use is the current one; its frames keep a
-//! running mean. Another method is tried now and then for a probe: one
-//! frame to warm up its temporal state (two for `hiz` and `roc` from
-//! nothing: their second frame draws early all that the first found
-//! against no depth), then two measured frames (a method's first frame
-//! after another ran is not measured, the current one's included, unless
-//! it starts from exactly the instances the one before found visible:
-//! below); `vfc`, which carries no state, is probed by one measured frame.
-//! A probe ends as soon as it cannot win even if its frames to come cost
-//! their lower bound (below; none where the backend models no costs). A
-//! method that would start from another's visibility is tried before one
-//! that would start from nothing, its try being the shorter. If the
-//! probe's mean beats the current mean by `auto.margin` (5 %), the probed
-//! method becomes current; `vfc` becomes current unless the current mean
-//! beats it by the margin, so occlusion
+//! **How.** The method in use is the current one; its frames keep a running
+//! mean. Another method is tried now and then for a probe: one frame to
+//! warm up its temporal state (two for `hiz` and `roc` from nothing: their
+//! second frame draws early all that the first found against no depth),
+//! then two measured frames (a method's first frame after another ran is
+//! not measured, the current one's included, unless it starts from exactly
+//! the instances the one before found visible: below); `vfc`, which carries
+//! no state, is probed by one measured frame. A probe ends as soon as it
+//! cannot win even if its frames to come cost their lower bound (below;
+//! none where the backend models no costs). A method that would start from
+//! another's visibility is tried before one that would start from nothing,
+//! its try being the shorter. If the probe's mean beats the current mean by
+//! `auto.margin` (5 %), the probed method becomes current; `vfc` becomes
+//! current unless the current mean beats it by the margin, so occlusion
 //! culling runs only while it pays for itself by the margin. The next probe
 //! of a method waits long enough for all probes together to cost at most
 //! `auto.budget` (1 %) of the frame time, each method an equal share: a
 //! method measured at three times the current one's time waits far longer
 //! than one within a few percent. The wait also doubles with each lost
-//! probe, from `auto.probe` frames (32). Where the backend models its
-//! costs ([`Backend::cost_model`]), each choice's frames have lower bounds:
+//! probe, from `auto.probe` frames (32). Where the backend models its costs
+//! ([`Backend::cost_model`]), each choice's frames have lower bounds:
 //! `vfc`'s draws of the instances in view, walked until they show that
-//! `vfc` cannot take over; the fixed passes of `roc` and `hiz`
-//! (dispatches, a depth pyramid); `chcpp`'s wait for its first query when
-//! it starts from nothing ([`CullingMethod::floor_ms`]). The frame that
-//! pays for finding a bound (`vfc`'s walk) measures no choice. The
-//! first frame runs the choice whose frame from nothing costs least at
-//! best; a probe whose bound cannot beat the current mean by the margin is
-//! spared; a first try whose warm-up must cost more than the current mean
-//! waits until the budget covers that much. On a scene drawn in
-//! microseconds, no method whose fixed passes take longer is ever tried. A
-//! method is tried at once, whatever its wait, when the current method's
-//! mean grows past that method's last measured time by the margin: a
-//! change of view that makes the current method stop paying is found
-//! without waiting.
+//! `vfc` cannot take over; the fixed passes of `roc` and `hiz` (dispatches,
+//! a depth pyramid); `chcpp`'s wait for its first query when it starts from
+//! nothing ([`CullingMethod::floor_ms`]). The frame that pays for finding a
+//! bound (`vfc`'s walk) measures no choice. The first frame runs the choice
+//! whose frame from nothing costs least at best; a probe whose bound cannot
+//! beat the current mean by the margin is spared; a first try whose warm-up
+//! must cost more than the current mean waits until the budget covers that
+//! much. On a scene drawn in microseconds, no method whose fixed passes
+//! take longer is ever tried. A method is tried at once, whatever its wait,
+//! when the current method's mean grows past that method's last measured
+//! time by the margin: a change of view that makes the current method stop
+//! paying is found without waiting.
 //!
 //! A method that `auto` switches to starts from what the method before
 //! found visible in the frame before ([`CullingMethod::seed`]), as CHC++
