@@ -78,6 +78,16 @@ impl CostModel {
         self.cpu_query_us + boxes as f64 * self.gpu_query_box_us + pixels * self.gpu_query_fragment_ns * 1e-3
     }
 
+    /// The least time a frame takes that issues `draws` draw calls of
+    /// `triangles` triangles, ms: the CPU issues them while the GPU draws,
+    /// and the frame ends after both (fragments and state changes left
+    /// out).
+    pub fn draws_floor_ms(&self, draws: u64, triangles: u64) -> f64 {
+        let cpu = draws as f64 * self.cpu_draw_call_us;
+        let gpu = draws as f64 * self.gpu_draw_call_us + triangles as f64 * self.gpu_triangle_ns * 1e-3;
+        cpu.max(gpu) * 1e-3
+    }
+
     /// The least time a frame takes that records `dispatches` compute
     /// dispatches and `draws` indirect draws and has the GPU write
     /// `pyramid_texels` depth-pyramid texels, ms: the CPU records them all,
@@ -107,9 +117,11 @@ mod tests {
         assert!((m.query_us(1, 1000.0) - (0.5 + 0.3 + 0.005)).abs() < 1e-12);
         assert!(m.render_us(1, 10, 100.0) < m.render_us(1, 10, 1000.0));
         // Six dispatches on the GPU (18 µs) outlast nine recordings on the
-        // CPU (9 µs); a pyramid's texels add GPU time.
+        // CPU (9 µs); a pyramid's texels add GPU time. Two draws of 10,000
+        // triangles: the GPU's 5 µs outlast the CPU's 2.
         assert!((m.passes_ms(6, 3, 0) - 0.018).abs() < 1e-12);
         assert!((m.passes_ms(6, 3, 20_000) - 0.019).abs() < 1e-12);
+        assert!((m.draws_floor_ms(2, 10_000) - 0.005).abs() < 1e-12);
         assert!((m.query_round_trip_ms() - 0.030).abs() < 1e-12);
     }
 }

@@ -294,20 +294,15 @@ fn bounds(
 }
 
 /// A lower bound of `vfc`'s frame time under `model`, ms: one draw call
-/// for each shown instance in the leaves in view, its triangles, the CPU's
-/// and the GPU's share overlapping (fragments and material switches left
-/// out); and the nodes its walk visited, to be charged as `vfc`'s walk is.
+/// for each shown instance in the leaves in view and its triangles
+/// ([`CostModel::draws_floor_ms`]); and the nodes its walk visited, to be
+/// charged as `vfc`'s walk is.
 /// The walk stops once the bound reaches `enough` ms: part of the draws
 /// bounds the whole from below too.
 fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel, enough: f64) -> (f64, u64) {
     let h = ctx.hierarchy;
     let mut counted = vec![false; ctx.scene.instances.len()];
     let (mut draws, mut triangles) = (0u64, 0u64);
-    let bound = |draws: u64, triangles: u64| {
-        let cpu = draws as f64 * model.cpu_draw_call_us;
-        let gpu = draws as f64 * model.gpu_draw_call_us + triangles as f64 * model.gpu_triangle_ns * 1e-3;
-        cpu.max(gpu) * 1e-3
-    };
     let visited = ctx.walk_leaves_in_view(h.root(), |leaf| {
         for &i in h.instances(leaf) {
             let i = i as usize;
@@ -316,13 +311,13 @@ fn vfc_bound(ctx: &FrameContext<'_>, model: &CostModel, enough: f64) -> (f64, u6
                 triangles += ctx.scene.instance_triangles(i);
             }
         }
-        if bound(draws, triangles) >= enough {
+        if model.draws_floor_ms(draws, triangles) >= enough {
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
         }
     });
-    (bound(draws, triangles), visited)
+    (model.draws_floor_ms(draws, triangles), visited)
 }
 
 impl CullingMethod for Auto {
